@@ -1,0 +1,1 @@
+"""Inputs to the table: profile design, feedforward and feedback (later issues)."""

@@ -1,0 +1,1 @@
+"""Pneumatic vibration-isolation tables carrying moving stages."""

@@ -1,0 +1,21 @@
+"""Errors the toolkit raises for bad input and numerical trouble."""
+
+from __future__ import annotations
+
+__all__ = ["IsolatorError", "ScenarioError", "UnstableTableError", "SimulationError"]
+
+
+class IsolatorError(Exception):
+    """Base class of every error the toolkit reports to a user."""
+
+
+class ScenarioError(IsolatorError, ValueError):
+    """A scenario file or argument is invalid; the message names the key path."""
+
+
+class UnstableTableError(IsolatorError):
+    """The table has no stable static equilibrium (it would tip or drift away)."""
+
+
+class SimulationError(IsolatorError):
+    """A run diverged or produced non-finite values."""

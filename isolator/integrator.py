@@ -1,0 +1,150 @@
+"""Fixed-grid Runge-Kutta integration of a model, compiled, restarted at breakpoints.
+
+The time grid is the union of the output sample times and the profiles'
+breakpoints, so no step straddles a jump in a carriage's acceleration. Each
+grid interval is split into ``substeps`` classical RK4 steps; the carriages'
+coordinates are evaluated (in numpy) at every stage time with the polynomial
+piece of the interval, i.e. one-sided at breakpoints. The stepping loop runs
+in compiled code, in chunks of a fixed number of intervals.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+import casadi as ca
+import numpy as np
+
+from .model import Model
+from .native import NativeFunction
+from .scenario import Scenario
+
+__all__ = ["TimeGrid", "Stepper", "time_grid", "carriage_inputs"]
+
+CHUNK = 512
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """Integration grid.
+
+    Attributes
+    ----------
+    nodes : ndarray
+        Grid times [s], increasing, from 0 to the duration.
+    is_sample : ndarray of bool
+        Which nodes are output samples.
+    """
+
+    nodes: np.ndarray
+    is_sample: np.ndarray
+
+    @property
+    def samples(self) -> np.ndarray:
+        return self.nodes[self.is_sample]
+
+
+def time_grid(duration: float, sample_rate: float, breakpoints: tuple[float, ...]) -> TimeGrid:
+    """Output samples ``k / sample_rate`` up to ``duration`` merged with breakpoints [s]."""
+    n = int(np.floor(duration * sample_rate * (1 + 1e-12))) + 1
+    samples = np.arange(n) / sample_rate
+    extra = np.array([b for b in breakpoints if 0.0 < b < samples[-1]], dtype=float)
+    if extra.size:
+        nearest = np.abs(samples[np.clip(np.rint(extra * sample_rate).astype(int), 0, n - 1)] - extra)
+        extra = extra[nearest > 1e-9 * np.maximum(1.0, extra)]
+    nodes = np.concatenate([samples, extra])
+    flags = np.concatenate([np.ones(n, bool), np.zeros(extra.size, bool)])
+    order = np.argsort(nodes, kind="stable")
+    return TimeGrid(nodes[order], flags[order])
+
+
+def carriage_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarray:
+    """Carriage (q, q', q'') at every RK stage time of every grid interval.
+
+    Returns
+    -------
+    ndarray, shape (intervals, 2 substeps + 1, 3 n)
+        One-sided within each interval: the profile piece is chosen by the
+        interval's midpoint.
+    """
+    t0, t1 = grid.nodes[:-1], grid.nodes[1:]
+    frac = np.arange(2 * substeps + 1) / (2 * substeps)
+    times = t0[:, None] + (t1 - t0)[:, None] * frac[None, :]
+    mid = np.broadcast_to(((t0 + t1) / 2)[:, None], times.shape)
+    n = len(scenario.carriages)
+    out = np.empty(times.shape + (3 * n,))
+    for i, carriage in enumerate(scenario.carriages):
+        q, v, a = carriage.profile.evaluate(times, mid)
+        out[..., i] = q
+        out[..., n + i] = v
+        out[..., 2 * n + i] = a
+    return out
+
+
+class Stepper:
+    """Compiled RK4 stepping of one model with a fixed number of substeps."""
+
+    def __init__(self, model: Model, substeps: int, compile: bool = True) -> None:
+        self.model = model
+        self.substeps = substeps
+        nx = model.n_states
+        nc = 3 * model.layout.n_carriages
+        npar = model.layout.size
+        stages = 2 * substeps + 1
+        x = ca.MX.sym("x", nx)
+        cin = ca.MX.sym("c", nc, stages)
+        h = ca.MX.sym("h")
+        p = ca.MX.sym("p", npar)
+        dt = h / substeps
+        xk = x
+        for j in range(substeps):
+            c0, c1, c2 = cin[:, 2 * j], cin[:, 2 * j + 1], cin[:, 2 * j + 2]
+            k1 = model.rhs(xk, c0, p)
+            k2 = model.rhs(xk + dt / 2 * k1, c1, p)
+            k3 = model.rhs(xk + dt / 2 * k2, c1, p)
+            k4 = model.rhs(xk + dt * k3, c2, p)
+            xk = xk + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        step = ca.Function("step", [x, cin, h, p], [xk])
+        acc = step.mapaccum("acc", CHUNK)
+        x0 = ca.MX.sym("x0", nx)
+        cc = ca.MX.sym("C", cin.shape[0], stages * CHUNK)
+        hh = ca.MX.sym("H", 1, CHUNK)
+        pp = ca.MX.sym("p", npar)
+        xs = acc(x0, cc, hh, ca.repmat(pp, 1, CHUNK))
+        name = f"isolator_{model.kind}_c{model.layout.n_carriages}_i{model.layout.n_isolators}_s{substeps}"
+        self.chunk = NativeFunction(ca.Function(name, [x0, cc, hh, pp], [xs]), compile=compile)
+
+    def run(self, x0: np.ndarray, inputs: np.ndarray, steps: np.ndarray, p: np.ndarray) -> np.ndarray:
+        """States at the end of every interval.
+
+        Parameters
+        ----------
+        x0 : ndarray (n_states,)
+        inputs : ndarray (intervals, 2 substeps + 1, 3 n)
+        steps : ndarray (intervals,)
+            Interval lengths [s].
+        p : ndarray
+            Parameter vector.
+
+        Returns
+        -------
+        ndarray (intervals, n_states)
+        """
+        n = steps.size
+        nx = self.model.n_states
+        out = np.empty((n, nx))
+        x = np.asarray(x0, dtype=float)
+        stage_shape = inputs.shape[1:]
+        for start in range(0, n, CHUNK):
+            stop = min(start + CHUNK, n)
+            cin = inputs[start:stop]
+            hs = steps[start:stop]
+            if stop - start < CHUNK:
+                pad = CHUNK - (stop - start)
+                cin = np.concatenate([cin, np.repeat(cin[-1:], pad, axis=0)])
+                hs = np.concatenate([hs, np.zeros(pad)])
+            if stage_shape[-1] == 0:
+                cin = np.zeros((CHUNK, 0))
+            (xs,) = self.chunk(x, cin, hs, p)
+            out[start:stop] = xs[: stop - start]
+            x = xs[stop - start - 1]
+        return out

@@ -1,0 +1,427 @@
+"""Equations of motion of the table and its carriages, written once in casadi.
+
+One function, :func:`newton_euler_residual`, states Newton's and Euler's laws
+for the rigid table carrying point-mass carriages whose motion relative to the
+table is prescribed. Every model is built from it:
+
+* the exact model (:func:`build_model` with ``kind="exact"``) solves the
+  residual for the table's accelerations: finite rotations (quaternion state),
+  the carriages' full absolute accelerations (Coriolis and centripetal terms),
+  isolator forces along the world axes at the moving attachment points, with
+  the isolators' static preload;
+* the paper's small-angle model (``kind="paper"``) is its first-order
+  expansion in the table's pose about the unloaded reference pose, with
+  unloaded isolators, ``M(t) x'' + C(t) x' + K(t) x = F(t)`` as in Shin, Sun
+  and Kim, eq. (11) and appendix; it drops the preload's rocking term.
+
+Design parameters (masses, inertia, geometry, stiffness, damping, gravity) are
+symbolic inputs ``p``, and the carriages' coordinates, velocities and
+accelerations are inputs ``c``, so that sweeps and optimisers change numbers,
+not models. Frames and signals follow ``docs/scenario-format.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import casadi as ca
+import numpy as np
+
+from .scenario import Scenario
+
+__all__ = [
+    "ParameterLayout",
+    "Model",
+    "build_model",
+    "newton_euler_residual",
+    "carriage_kinematics",
+    "MODEL_KINDS",
+]
+
+MODEL_KINDS = ("exact", "paper")
+
+
+# -- small rotation helpers (casadi) -----------------------------------------
+def skew(v: ca.SX) -> ca.SX:
+    """Cross-product matrix [v]x of a 3-vector."""
+    return ca.vertcat(
+        ca.horzcat(0, -v[2], v[1]),
+        ca.horzcat(v[2], 0, -v[0]),
+        ca.horzcat(-v[1], v[0], 0),
+    )
+
+
+def quaternion_to_matrix(qt: ca.SX) -> ca.SX:
+    """Rotation matrix of a quaternion (w, x, y, z), normalised on the fly."""
+    w, x, y, z = qt[0], qt[1], qt[2], qt[3]
+    s = 2.0 / (w * w + x * x + y * y + z * z)
+    return ca.vertcat(
+        ca.horzcat(1 - s * (y * y + z * z), s * (x * y - w * z), s * (x * z + w * y)),
+        ca.horzcat(s * (x * y + w * z), 1 - s * (x * x + z * z), s * (y * z - w * x)),
+        ca.horzcat(s * (x * z - w * y), s * (y * z + w * x), 1 - s * (x * x + y * y)),
+    )
+
+
+def quaternion_rate(qt: ca.SX, w_body: ca.SX) -> ca.SX:
+    """d/dt of a quaternion (w, x, y, z) for a body-frame angular velocity [rad/s]."""
+    w, x, y, z = qt[0], qt[1], qt[2], qt[3]
+    p, q, r = w_body[0], w_body[1], w_body[2]
+    return 0.5 * ca.vertcat(
+        -x * p - y * q - z * r,
+        w * p + y * r - z * q,
+        w * q + z * p - x * r,
+        w * r + x * q - y * p,
+    )
+
+
+def cardan_matrix(th: ca.SX) -> ca.SX:
+    """R = Rz(th[2]) Ry(th[1]) Rx(th[0]); equal to I + [th]x to first order."""
+    cx, sx = ca.cos(th[0]), ca.sin(th[0])
+    cy, sy = ca.cos(th[1]), ca.sin(th[1])
+    cz, sz = ca.cos(th[2]), ca.sin(th[2])
+    rx = ca.vertcat(ca.horzcat(1, 0, 0), ca.horzcat(0, cx, -sx), ca.horzcat(0, sx, cx))
+    ry = ca.vertcat(ca.horzcat(cy, 0, sy), ca.horzcat(0, 1, 0), ca.horzcat(-sy, 0, cy))
+    rz = ca.vertcat(ca.horzcat(cz, -sz, 0), ca.horzcat(sz, cz, 0), ca.horzcat(0, 0, 1))
+    return rz @ ry @ rx
+
+
+# -- parameters ---------------------------------------------------------------
+@dataclass(frozen=True)
+class ParameterLayout:
+    """Names and order of the design-parameter vector ``p`` of a model structure.
+
+    Attributes
+    ----------
+    n_carriages, n_isolators : int
+    parents : tuple of int
+        Parent index of each carriage (-1: the table); the structure of the chain.
+    names : tuple of str
+        One name per entry of ``p``, e.g. ``isolators[2].stiffness.z``.
+    """
+
+    n_carriages: int
+    n_isolators: int
+    parents: tuple[int, ...]
+    names: tuple[str, ...] = field(init=False)
+
+    def __post_init__(self) -> None:
+        names = ["gravity", "table.mass", "table.inertia.x", "table.inertia.y", "table.inertia.z"]
+        names += [f"carriages[{i}].mass" for i in range(self.n_carriages)]
+        for key in ("axis", "origin"):
+            names += [f"carriages[{i}].{key}.{a}" for i in range(self.n_carriages) for a in "xyz"]
+        for key in ("position", "stiffness", "damping"):
+            names += [f"isolators[{i}].{key}.{a}" for i in range(self.n_isolators) for a in "xyz"]
+        object.__setattr__(self, "names", tuple(names))
+
+    @property
+    def size(self) -> int:
+        return len(self.names)
+
+    @classmethod
+    def of(cls, scenario: Scenario) -> ParameterLayout:
+        return cls(len(scenario.carriages), len(scenario.isolators), scenario.parent_indices())
+
+    def pack(self, scenario: Scenario) -> np.ndarray:
+        """The parameter vector of a scenario with this structure."""
+        if ParameterLayout.of(scenario) != self:
+            raise ValueError("scenario does not have this model's structure")
+        values = [scenario.gravity, scenario.table.mass, *scenario.table.inertia]
+        values += [c.mass for c in scenario.carriages]
+        values += [v for c in scenario.carriages for v in c.axis]
+        values += [v for c in scenario.carriages for v in c.origin]
+        for key in ("position", "stiffness", "damping"):
+            values += [v for iso in scenario.isolators for v in getattr(iso, key)]
+        return np.array(values, dtype=float)
+
+    def unpack(self, p: ca.SX) -> dict[str, ca.SX]:
+        """Split a symbolic parameter vector into named blocks."""
+        n, m = self.n_carriages, self.n_isolators
+        out: dict[str, ca.SX] = {}
+        i = 0
+
+        def take(name: str, size: int, cols: int = 1) -> None:
+            nonlocal i
+            block = p[i : i + size * cols]
+            out[name] = ca.reshape(block, size, cols) if cols > 1 else block
+            i += size * cols
+
+        take("gravity", 1)
+        take("table_mass", 1)
+        take("inertia", 3)
+        take("masses", n)
+        take("axes", 3, n)
+        take("origins", 3, n)
+        take("positions", 3, m)
+        take("stiffness", 3, m)
+        take("damping", 3, m)
+        for k in ("axes", "origins", "positions", "stiffness", "damping"):
+            if (n if k in ("axes", "origins") else m) == 1:
+                out[k] = ca.reshape(out[k], 3, 1)
+        return out
+
+
+# -- the physics --------------------------------------------------------------
+def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...]) -> dict[str, ca.SX]:
+    """Mass moments of the carriages in the table frame.
+
+    Parameters
+    ----------
+    c : SX, (3 n,)
+        Carriage coordinates q [m], velocities [m/s], accelerations [m/s^2].
+    prm : dict
+        Unpacked parameters (masses, axes, origins).
+    parents : tuple of int
+        Parent index per carriage (-1: table).
+
+    Returns
+    -------
+    dict
+        ``m`` total carriage mass [kg]; ``S, Sd, Sdd`` first mass moment and its
+        table-frame rates [kg m, kg m/s, kg m/s^2]; ``Jc`` point-mass inertia
+        about the table's mass centre [kg m^2]; ``Hd`` sum m d x d'' [N m];
+        ``B`` the matrix with sum m d x (2 w x d') = B w [kg m^2/s].
+    """
+    n = len(parents)
+    zero = ca.SX.zeros(3, 1)
+    out = {"m": ca.SX(0), "S": zero, "Sd": zero, "Sdd": zero, "Jc": ca.SX.zeros(3, 3),
+           "Hd": zero, "B": ca.SX.zeros(3, 3)}
+    d: dict[int, tuple[ca.SX, ca.SX, ca.SX]] = {}
+    remaining = list(range(n))
+    while remaining:
+        for i in list(remaining):
+            if parents[i] != -1 and parents[i] not in d:
+                continue
+            remaining.remove(i)
+            base = d[parents[i]] if parents[i] != -1 else (zero, zero, zero)
+            axis = prm["axes"][:, i]
+            pos = base[0] + prm["origins"][:, i] + axis * c[i]
+            vel = base[1] + axis * c[n + i]
+            acc = base[2] + axis * c[2 * n + i]
+            d[i] = (pos, vel, acc)
+            m = prm["masses"][i]
+            out["m"] += m
+            out["S"] += m * pos
+            out["Sd"] += m * vel
+            out["Sdd"] += m * acc
+            out["Jc"] += m * (ca.dot(pos, pos) * ca.SX.eye(3) - pos @ pos.T)
+            out["Hd"] += m * ca.cross(pos, acc)
+            out["B"] += 2 * m * (ca.dot(pos, vel) * ca.SX.eye(3) - vel @ pos.T)
+    return out
+
+
+def isolator_preloads(prm: dict[str, ca.SX], carriage_mass: ca.SX) -> ca.SX:
+    """Vertical static force of each isolator at the reference pose [N], (3, m).
+
+    Every isolator has the same free height: its zero-force point lies
+    ``delta = g m_total / sum(k_z)`` above its attachment point at the
+    reference pose (table mass centre at the origin, axes level), so the
+    isolators together carry the whole weight there.
+    """
+    kz = prm["stiffness"][2, :]
+    weight = prm["gravity"] * (prm["table_mass"] + carriage_mass)
+    delta = weight / ca.fmax(ca.sum2(kz), 1e-300)
+    m = kz.shape[1]
+    return ca.vertcat(ca.SX.zeros(2, m), kz * delta)
+
+
+def newton_euler_residual(
+    pos: ca.SX,
+    rot: ca.SX,
+    vel: ca.SX,
+    w_body: ca.SX,
+    acc_body: ca.SX,
+    alpha_body: ca.SX,
+    c: ca.SX,
+    prm: dict[str, ca.SX],
+    parents: tuple[int, ...],
+    preload: bool = True,
+) -> ca.SX:
+    """Newton's and Euler's laws for the table with its carriages, table frame.
+
+    Parameters
+    ----------
+    pos : SX (3,)
+        Table mass centre from the reference pose, world [m].
+    rot : SX (3, 3)
+        Table orientation (table to world).
+    vel : SX (3,)
+        Velocity of the mass centre, world [m/s].
+    w_body, alpha_body : SX (3,)
+        Angular velocity [rad/s] and acceleration [rad/s^2], table frame.
+    acc_body : SX (3,)
+        Acceleration of the mass centre in table-frame components, R^T a [m/s^2].
+    c : SX (3 n,)
+        Carriage coordinates, velocities, accelerations.
+    prm : dict
+        Unpacked parameters.
+    parents : tuple of int
+        Carriage chain structure.
+    preload : bool
+        Whether isolators carry their static preload (False: unloaded springs).
+
+    Returns
+    -------
+    SX (6,)
+        Table-frame components of [sum of m a - forces (N); moment balance
+        about the table's mass centre (N m)]; zero when the motion obeys the
+        laws. Linear in ``acc_body`` and ``alpha_body`` with the constant-form
+        mass matrix [[m I, -[S]x], [[S]x, J + Jc]].
+    """
+    kin = carriage_kinematics(c, prm, parents)
+    m_tot = prm["table_mass"] + kin["m"]
+    g_world = ca.vertcat(0, 0, -prm["gravity"])
+    J = ca.diag(prm["inertia"])
+    S, w = kin["S"], w_body
+
+    force = m_tot * g_world
+    moment = ca.SX.zeros(3, 1)
+    load = isolator_preloads(prm, kin["m"]) if preload else None
+    w_world = rot @ w
+    for k in range(prm["positions"].shape[1]):
+        s = prm["positions"][:, k]
+        arm = rot @ s
+        f = -prm["stiffness"][:, k] * (pos + arm - s) - prm["damping"][:, k] * (vel + ca.cross(w_world, arm))
+        if load is not None:
+            f = f + load[:, k]
+        force += f
+        moment += ca.cross(arm, f)
+    g_body = rot.T @ g_world
+    rel = kin["Sdd"] + 2 * ca.cross(w, kin["Sd"]) + ca.cross(alpha_body, S) + ca.cross(w, ca.cross(w, S))
+    translation = m_tot * acc_body + rel - rot.T @ force
+    rotation = (
+        (J + kin["Jc"]) @ alpha_body
+        + ca.cross(w, (J + kin["Jc"]) @ w)
+        + ca.cross(S, acc_body)
+        + kin["Hd"]
+        + kin["B"] @ w
+        - rot.T @ moment
+        - ca.cross(S, g_body)
+    )
+    return ca.vertcat(translation, rotation)
+
+
+# -- models -------------------------------------------------------------------
+@dataclass(frozen=True)
+class Model:
+    """A model's casadi functions for one scenario structure.
+
+    Attributes
+    ----------
+    kind : str
+        "exact" or "paper".
+    layout : ParameterLayout
+    n_states : int
+    rhs : casadi.Function
+        ``(x, c, p) -> dx/dt``.
+    static_residual : casadi.Function
+        ``(z, c, p) -> (r, dr/dz)`` with z = (position, Cardan angles) of the
+        table at rest: zero at a static equilibrium.
+    pose_state : casadi.Function
+        ``(z) -> x`` the state at rest in pose z.
+    """
+
+    kind: str
+    layout: ParameterLayout
+    n_states: int
+    rhs: ca.Function
+    static_residual: ca.Function
+    pose_state: ca.Function
+    state_jacobian: ca.Function
+    linear_matrices: ca.Function | None = None
+
+
+def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
+    """Build the casadi functions of a model for a scenario structure.
+
+    Parameters
+    ----------
+    layout : ParameterLayout
+        Structure (numbers of carriages and isolators, carriage chain).
+    kind : {"exact", "paper"}
+
+    Returns
+    -------
+    Model
+    """
+    if kind not in MODEL_KINDS:
+        raise ValueError(f"model: must be one of {', '.join(MODEL_KINDS)}, got '{kind}'")
+    n = layout.n_carriages
+    p = ca.SX.sym("p", layout.size)
+    c = ca.SX.sym("c", 3 * n)
+    prm = layout.unpack(p)
+    parents = layout.parents
+    z = ca.SX.sym("z", 6)
+    zero3 = ca.SX.zeros(3, 1)
+    rest = ca.vertcat(c[:n], ca.SX.zeros(2 * n, 1))
+
+    if kind == "exact":
+        x = ca.SX.sym("x", 13)
+        pos, qt, vel, w = x[0:3], x[3:7], x[7:10], x[10:13]
+        rot = quaternion_to_matrix(qt)
+        acc_vars = ca.SX.sym("a", 6)
+        res = newton_euler_residual(pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c, prm, parents)
+        mass = ca.jacobian(res, acc_vars)
+        bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
+        accel = _solve_blocks(mass, -bias)
+        xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
+        static = newton_euler_residual(
+            z[:3], cardan_matrix(z[3:]), zero3, zero3, zero3, zero3, rest, prm, parents
+        )
+        pose = ca.vertcat(z[:3], _cardan_to_quaternion(z[3:]), ca.SX.zeros(6, 1))
+        linear = None
+    else:
+        x = ca.SX.sym("x", 12)
+        gen = ca.SX.sym("g", 18)  # position/angles, rates, accelerations
+        pos, th = gen[0:3], gen[3:6]
+        rot = cardan_matrix(th)
+        body = newton_euler_residual(
+            pos, rot, gen[6:9], gen[9:12], rot.T @ gen[12:15], gen[15:18], c, prm, parents,
+            preload=False,
+        )
+        res = ca.vertcat(rot @ body[:3], rot @ body[3:])  # world frame, as the paper writes it
+        at_zero = {"x": ca.SX.zeros(18, 1)}
+        mass = ca.substitute(ca.jacobian(res, gen[12:18]), gen, at_zero["x"])
+        damp = ca.substitute(ca.jacobian(res, gen[6:12]), gen, at_zero["x"])
+        stiff = ca.substitute(ca.jacobian(res, gen[0:6]), gen, at_zero["x"])
+        force = -ca.substitute(res, gen, at_zero["x"])
+        accel = ca.solve(mass, force - damp @ x[6:12] - stiff @ x[0:6])
+        xdot = ca.vertcat(x[6:12], accel)
+        rest_stiff = ca.substitute(stiff, c, rest)
+        rest_force = ca.substitute(force, c, rest)
+        static = rest_stiff @ z - rest_force
+        pose = ca.vertcat(z, ca.SX.zeros(6, 1))
+        linear = ca.Function(
+            "paper_matrices", [c, p], [mass, damp, stiff, force], ["c", "p"], ["M", "C", "K", "F"]
+        )
+
+    rhs = ca.Function("rhs", [x, c, p], [xdot], ["x", "c", "p"], ["xdot"])
+    static_fn = ca.Function(
+        "static", [z, c, p], [static, ca.jacobian(static, z)], ["z", "c", "p"], ["r", "drdz"]
+    )
+    pose_fn = ca.Function("pose_state", [z], [pose], ["z"], ["x"])
+    jac = ca.Function("state_jacobian", [x, c, p], [ca.jacobian(xdot, x)], ["x", "c", "p"], ["A"])
+    return Model(kind, layout, int(x.shape[0]), rhs, static_fn, pose_fn, jac, linear)
+
+
+def _solve_blocks(mass: ca.SX, rhs: ca.SX) -> ca.SX:
+    """Solve the 6x6 (translation, rotation) system by its 3x3 Schur complement."""
+    a_tt, a_tr = mass[:3, :3], mass[:3, 3:]
+    a_rt, a_rr = mass[3:, :3], mass[3:, 3:]
+    inv_tt = ca.inv(a_tt)
+    schur = a_rr - a_rt @ inv_tt @ a_tr
+    alpha = ca.solve(schur, rhs[3:] - a_rt @ inv_tt @ rhs[:3])
+    acc = inv_tt @ (rhs[:3] - a_tr @ alpha)
+    return ca.vertcat(acc, alpha)
+
+
+def _cardan_to_quaternion(th: ca.SX) -> ca.SX:
+    """Quaternion (w, x, y, z) of Rz(th2) Ry(th1) Rx(th0)."""
+    cr, sr = ca.cos(th[0] / 2), ca.sin(th[0] / 2)
+    cp, sp = ca.cos(th[1] / 2), ca.sin(th[1] / 2)
+    cy, sy = ca.cos(th[2] / 2), ca.sin(th[2] / 2)
+    return ca.vertcat(
+        cr * cp * cy + sr * sp * sy,
+        sr * cp * cy - cr * sp * sy,
+        cr * sp * cy + sr * cp * sy,
+        cr * cp * sy - sr * sp * cy,
+    )

@@ -1,0 +1,159 @@
+"""Compiling casadi functions to native code, cached on disk, called through ctypes.
+
+casadi generates C for a function; it is compiled once with the system C
+compiler into ``$ISOLATOR_CACHE`` (default ``~/.cache/isolator``) under a name
+derived from the source's hash, and loaded with ctypes. Calls pass numpy
+buffers without copies and release the GIL, so threads run in parallel. When no
+compiler is available the casadi function itself is evaluated instead (slower,
+same numbers).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import warnings
+from pathlib import Path
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["NativeFunction", "cache_dir"]
+
+_FLAGS = ["-O3", "-fPIC", "-shared"]
+
+
+def cache_dir() -> Path:
+    """Folder holding compiled models (``$ISOLATOR_CACHE`` or ``~/.cache/isolator``)."""
+    env = os.environ.get("ISOLATOR_CACHE")
+    base = Path(env) if env else Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "isolator"
+    return base
+
+
+def _compiler() -> str | None:
+    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
+        if name and shutil.which(name):
+            return name
+    return None
+
+
+class NativeFunction:
+    """A casadi function evaluated from compiled C when possible.
+
+    Parameters
+    ----------
+    function : casadi.Function
+        Dense inputs and outputs.
+    compile : bool
+        Try to compile (True) or always use casadi's evaluator (False).
+    """
+
+    def __init__(self, function: ca.Function, compile: bool = True) -> None:
+        self.function = function
+        self.name = function.name()
+        self.in_shapes = [function.size_in(i) for i in range(function.n_in())]
+        self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
+        self.library: Path | None = None
+        self._lib = None
+        if compile:
+            try:
+                self.library = self._build()
+            except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
+                warnings.warn(
+                    f"could not compile the model ({exc}); using casadi's evaluator (slower)",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+        if self.library is not None:
+            self._load(self.library)
+
+    @property
+    def native(self) -> bool:
+        """True when calls run compiled code."""
+        return self._lib is not None
+
+    def _build(self) -> Path:
+        compiler = _compiler()
+        if compiler is None:
+            raise RuntimeError("no C compiler found (set CC)")
+        with tempfile.TemporaryDirectory() as tmp:
+            cwd = os.getcwd()
+            os.chdir(tmp)
+            try:
+                self.function.generate(f"{self.name}.c", {"with_header": False})
+            finally:
+                os.chdir(cwd)
+            source = Path(tmp, f"{self.name}.c").read_text()
+        digest = hashlib.sha256(
+            (source + " ".join(_FLAGS) + ca.__version__ + compiler).encode()
+        ).hexdigest()[:20]
+        folder = cache_dir()
+        folder.mkdir(parents=True, exist_ok=True)
+        target = folder / f"{self.name}-{digest}.so"
+        if target.exists():
+            return target
+        src = folder / f"{self.name}-{digest}.c"
+        src.write_text(source)
+        fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
+        os.close(fd)
+        try:
+            subprocess.run(
+                [compiler, *_FLAGS, "-o", tmp_so, str(src), "-lm"],
+                check=True,
+                capture_output=True,
+            )
+            os.replace(tmp_so, target)
+        finally:
+            if os.path.exists(tmp_so):
+                os.unlink(tmp_so)
+            src.unlink(missing_ok=True)
+        return target
+
+    def _load(self, path: Path) -> None:
+        lib = ctypes.CDLL(str(path))
+        fn = getattr(lib, self.name)
+        fn.restype = ctypes.c_int
+        fn.argtypes = [ctypes.c_void_p] * 4 + [ctypes.c_int]
+        work = getattr(lib, f"{self.name}_work")
+        sizes = [ctypes.c_longlong() for _ in range(4)]
+        work(*[ctypes.byref(s) for s in sizes])
+        self._sz = [s.value for s in sizes]
+        self._fn = fn
+        self._lib = lib
+
+    def __call__(self, *inputs: np.ndarray) -> list[np.ndarray]:
+        """Evaluate; inputs and outputs are arrays in casadi's column-major layout.
+
+        Each input is given as an array whose memory (C order) is the
+        column-major content of the casadi input; outputs are returned as
+        float arrays of shape ``(columns, rows)``.
+        """
+        if self._lib is None:
+            out = self.function(*[self._as_dm(x, shape) for x, shape in zip(inputs, self.in_shapes)])
+            out = out if isinstance(out, tuple | list) else [out]
+            return [np.asarray(o, dtype=float).T.copy() for o in out]
+        ins = [np.ascontiguousarray(x, dtype=np.float64) for x in inputs]
+        for x, (r, c) in zip(ins, self.in_shapes):
+            if x.size != r * c:
+                raise ValueError(f"{self.name}: input of {x.size} values, expected {r}x{c}")
+        outs = [np.empty((c, r)) for (r, c) in self.out_shapes]
+        sz_arg, sz_res, sz_iw, sz_w = self._sz
+        arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
+        res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
+        iw = np.empty(max(sz_iw, 1), dtype=np.int64)
+        w = np.empty(max(sz_w, 1), dtype=np.float64)
+        status = self._fn(
+            ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0
+        )
+        if status != 0:
+            raise RuntimeError(f"{self.name}: native evaluation failed ({status})")
+        return outs
+
+    @staticmethod
+    def _as_dm(x: np.ndarray, shape: tuple[int, int]) -> ca.DM:
+        r, c = shape
+        return ca.DM(np.asarray(x, dtype=float).reshape(c, r).T)

@@ -1,0 +1,261 @@
+"""The scenario: a table on isolators carrying carriages, as frozen dataclasses.
+
+Read one with :func:`isolator.load_scenario`; the file format is described in
+``docs/scenario-format.md``. All quantities are SI (m, kg, s, N, rad).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .errors import ScenarioError
+from .profiles import Profile
+
+__all__ = [
+    "Table",
+    "Isolator",
+    "Carriage",
+    "Actuator",
+    "Settling",
+    "SimulationSettings",
+    "Scenario",
+    "SIGNALS",
+]
+
+#: names of the six table signals, in order
+SIGNALS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
+
+Vector3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Table:
+    """The rigid table.
+
+    Attributes
+    ----------
+    mass : float
+        [kg]
+    inertia : tuple of float
+        Principal moments about the mass centre along the table axes [kg m^2].
+    size : tuple of float or None
+        Box length, width, thickness [m], if given.
+    """
+
+    mass: float
+    inertia: Vector3
+    size: Vector3 | None = None
+
+
+@dataclass(frozen=True)
+class Isolator:
+    """A spring-damper between ground and table, acting along the world axes.
+
+    Attributes
+    ----------
+    position : tuple of float
+        Attachment point in the table frame [m].
+    stiffness : tuple of float
+        Along world x, y, z [N/m].
+    damping : tuple of float
+        Along world x, y, z [N s/m].
+    name : str
+    """
+
+    position: Vector3
+    stiffness: Vector3
+    damping: Vector3
+    name: str = ""
+
+
+@dataclass(frozen=True)
+class Carriage:
+    """A point mass translating along an axis of its parent.
+
+    Attributes
+    ----------
+    name : str
+    mass : float
+        [kg]
+    parent : str
+        "table" or another carriage's name.
+    axis : tuple of float
+        Unit direction of travel in the table frame.
+    origin : tuple of float
+        Position of the mass at q = 0 relative to the parent's point [m].
+    profile : Profile
+        q(t) [m].
+    """
+
+    name: str
+    mass: float
+    parent: str
+    axis: Vector3
+    origin: Vector3
+    profile: Profile
+
+
+@dataclass(frozen=True)
+class Actuator:
+    """A force actuator between ground and table.
+
+    Attributes
+    ----------
+    name : str
+    position : tuple of float
+        Point of action in the table frame [m].
+    direction : tuple of float
+        Unit line of action in the world frame.
+    max_force : float
+        Symmetric limit [N].
+    bandwidth : float or None
+        First-order lag corner [Hz], if any.
+    """
+
+    name: str
+    position: Vector3
+    direction: Vector3
+    max_force: float
+    bandwidth: float | None = None
+
+
+@dataclass(frozen=True)
+class Settling:
+    """The settling band: a fraction of each signal's peak, or absolute tolerances.
+
+    Attributes
+    ----------
+    fraction : float or None
+        Band as a fraction of the signal's peak (0.05: the paper's criterion).
+    tolerance : tuple of float or None
+        Absolute band: (translation [m], rotation [rad]).
+    """
+
+    fraction: float | None = 0.05
+    tolerance: tuple[float, float] | None = None
+
+    def band(self, signal: str, peak: float) -> float:
+        """Half-width of the band for ``signal`` whose peak is ``peak``."""
+        if self.tolerance is not None:
+            return self.tolerance[1] if signal.startswith("r") else self.tolerance[0]
+        return float(self.fraction) * peak  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    """Time span and output sampling.
+
+    Attributes
+    ----------
+    duration : float
+        Simulated time from t = 0 [s].
+    sample_rate : float
+        Output samples per second [Hz].
+    """
+
+    duration: float = 10.0
+    sample_rate: float = 1000.0
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated, immutable scenario. Build one with :func:`isolator.load_scenario`."""
+
+    name: str
+    table: Table
+    isolators: tuple[Isolator, ...]
+    carriages: tuple[Carriage, ...] = ()
+    actuators: tuple[Actuator, ...] = ()
+    simulation: SimulationSettings = SimulationSettings()
+    settling: Settling = Settling()
+    gravity: float = 9.81
+
+    # -- derived quantities -------------------------------------------------
+    @property
+    def total_mass(self) -> float:
+        """Table plus carriages [kg]."""
+        return self.table.mass + sum(c.mass for c in self.carriages)
+
+    @property
+    def stop_time(self) -> float:
+        """Latest time any carriage stops [s]; inf when one never stops; 0 with none."""
+        return max((c.profile.stop_time for c in self.carriages), default=0.0)
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Sorted times [s] where some carriage's acceleration may jump."""
+        return tuple(sorted({b for c in self.carriages for b in c.profile.breakpoints}))
+
+    def parent_indices(self) -> tuple[int, ...]:
+        """Index of each carriage's parent carriage, -1 for the table."""
+        index = {c.name: i for i, c in enumerate(self.carriages)}
+        return tuple(-1 if c.parent == "table" else index[c.parent] for c in self.carriages)
+
+    def carriage_order(self) -> tuple[int, ...]:
+        """Carriage indices ordered so that every parent comes before its children."""
+        parents = self.parent_indices()
+        order: list[int] = []
+        placed: set[int] = set()
+        while len(order) < len(parents):
+            for i, p in enumerate(parents):
+                if i not in placed and (p == -1 or p in placed):
+                    order.append(i)
+                    placed.add(i)
+        return tuple(order)
+
+    def carriage_positions(self, q: np.ndarray) -> np.ndarray:
+        """Mass positions of all carriages in the table frame [m].
+
+        Parameters
+        ----------
+        q : ndarray, shape (n_carriages, ...)
+            Carriage coordinates [m].
+
+        Returns
+        -------
+        ndarray, shape (n_carriages, 3, ...)
+        """
+        q = np.asarray(q, dtype=float)
+        parents = self.parent_indices()
+        out = np.zeros((len(self.carriages), 3) + q.shape[1:])
+        for i in self.carriage_order():
+            c = self.carriages[i]
+            base = out[parents[i]] if parents[i] >= 0 else 0.0
+            axis = np.asarray(c.axis).reshape((3,) + (1,) * (q.ndim - 1))
+            origin = np.asarray(c.origin).reshape(axis.shape)
+            out[i] = base + origin + axis * q[i]
+        return out
+
+    def initial_positions(self) -> np.ndarray:
+        """Carriage coordinates at t = 0 [m]."""
+        return np.array([c.profile.position(0.0) for c in self.carriages])
+
+    def final_positions(self) -> np.ndarray | None:
+        """Carriage coordinates once all have stopped [m], None if one never stops."""
+        finals = [c.profile.final_position for c in self.carriages]
+        if any(f is None for f in finals):
+            return None
+        return np.array(finals, dtype=float)
+
+    def with_changes(self, **changes: object) -> Scenario:
+        """A copy with top-level fields replaced (see :func:`dataclasses.replace`)."""
+        return replace(self, **changes)  # type: ignore[arg-type]
+
+    def scaled(self, stiffness: float = 1.0, damping: float = 1.0) -> Scenario:
+        """A copy with every isolator's stiffness and damping multiplied."""
+        if not (math.isfinite(stiffness) and stiffness > 0):
+            raise ScenarioError(f"stiffness: scale must be a finite number > 0, got {stiffness}")
+        if not (math.isfinite(damping) and damping >= 0):
+            raise ScenarioError(f"damping: scale must be a finite number >= 0, got {damping}")
+        isolators = tuple(
+            replace(
+                iso,
+                stiffness=tuple(stiffness * k for k in iso.stiffness),  # type: ignore[arg-type]
+                damping=tuple(damping * c for c in iso.damping),  # type: ignore[arg-type]
+            )
+            for iso in self.isolators
+        )
+        return replace(self, isolators=isolators)

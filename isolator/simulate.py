@@ -1,0 +1,292 @@
+"""Transient simulation of a scenario: from the initial equilibrium through the moves."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+
+import numpy as np
+
+from .equilibrium import Equilibrium, static_equilibrium
+from .errors import ScenarioError, SimulationError
+from .integrator import Stepper, TimeGrid, carriage_inputs, time_grid
+from .model import MODEL_KINDS, Model, ParameterLayout, build_model
+from .profiles import SineProfile
+from .response import Response
+from .scenario import Scenario
+from .settling import settling_metrics
+
+__all__ = ["simulate", "Simulator", "BatchResult", "get_model"]
+
+#: largest |lambda| h per RK4 step; keeps the relative error well below 1e-6
+STEP_ANGLE = 0.05
+
+_MODELS: dict[tuple[ParameterLayout, str], Model] = {}
+_STEPPERS: dict[tuple[ParameterLayout, str, int], Stepper] = {}
+
+
+def get_model(layout: ParameterLayout, kind: str = "exact") -> Model:
+    """The (cached) model of a structure."""
+    if kind not in MODEL_KINDS:
+        raise ScenarioError(f"model: must be one of {', '.join(MODEL_KINDS)}, got '{kind}'")
+    key = (layout, kind)
+    if key not in _MODELS:
+        _MODELS[key] = build_model(layout, kind)
+    return _MODELS[key]
+
+
+def _stepper(model: Model, substeps: int) -> Stepper:
+    key = (model.layout, model.kind, substeps)
+    if key not in _STEPPERS:
+        _STEPPERS[key] = Stepper(model, substeps)
+    return _STEPPERS[key]
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Metrics of many runs of one scenario with varied parameters.
+
+    Attributes
+    ----------
+    settling_time : ndarray (runs, 6)
+        Per signal [s]; NaN where a run cannot show it.
+    settling_time_max : ndarray (runs,)
+        [s]; NaN where unavailable.
+    peak : ndarray (runs, 6)
+        [m or rad].
+    """
+
+    settling_time: np.ndarray
+    settling_time_max: np.ndarray
+    peak: np.ndarray
+
+
+class Simulator:
+    """A scenario's model built once, run many times.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    model : {"exact", "paper"}
+        The exact rigid-body model, or the paper's small-angle model.
+
+    Examples
+    --------
+    >>> from isolator import load_scenario, Simulator
+    >>> sim = Simulator(load_scenario("paper-table-3-2"))
+    >>> response = sim.run()
+    >>> response.settling_time_max  # doctest: +SKIP
+    """
+
+    def __init__(self, scenario: Scenario, model: str = "exact") -> None:
+        self.scenario = scenario
+        self.layout = ParameterLayout.of(scenario)
+        self.model = get_model(self.layout, model)
+        self.parameters = self.layout.pack(scenario)
+        self.stop_time = scenario.stop_time
+        settings = scenario.simulation
+        self.grid: TimeGrid = time_grid(settings.duration, settings.sample_rate, scenario.breakpoints)
+        self._inputs: dict[int, np.ndarray] = {}
+        self._forcing = max(
+            (abs(c.profile.omega) for c in scenario.carriages if isinstance(c.profile, SineProfile)),
+            default=0.0,
+        )
+
+    # -- parameters ------------------------------------------------------------
+    def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
+        """The parameter vector with named entries changed (names: ``layout.names``)."""
+        p = self.parameters.copy()
+        for name, value in (changes or {}).items():
+            if name not in self.layout.names:
+                raise ScenarioError(f"{name}: not a parameter of this scenario")
+            if not math.isfinite(float(value)):
+                raise ScenarioError(f"{name}: must be finite, got {value}")
+            p[self.layout.names.index(name)] = float(value)
+        return p
+
+    def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
+        """Parameter vector with all isolator stiffness and damping scaled."""
+        p = self.parameters.copy()
+        names = self.layout.names
+        for i, n in enumerate(names):
+            if ".stiffness." in n:
+                p[i] *= stiffness
+            elif ".damping." in n:
+                p[i] *= damping
+        return p
+
+    # -- pieces ----------------------------------------------------------------
+    def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
+        """Initial and final static equilibria (final None if a carriage never stops)."""
+        start = static_equilibrium(
+            self.model, p, self.scenario.initial_positions(), "with the carriages at their start"
+        )
+        finals = self.scenario.final_positions()
+        end = None
+        if finals is not None:
+            end = static_equilibrium(self.model, p, finals, "with the carriages at their final positions")
+        return start, end
+
+    def substeps_for(self, omega_max: float) -> int:
+        """RK4 steps per grid interval for a fastest eigenvalue ``omega_max`` [rad/s]."""
+        dt = float(np.max(np.diff(self.grid.nodes))) if self.grid.nodes.size > 1 else 0.0
+        omega = max(omega_max, self._forcing)
+        return max(1, math.ceil(omega * dt / STEP_ANGLE))
+
+    def _carriage_inputs(self, substeps: int) -> np.ndarray:
+        if substeps not in self._inputs:
+            self._inputs[substeps] = carriage_inputs(self.scenario, self.grid, substeps)
+        return self._inputs[substeps]
+
+    # -- runs --------------------------------------------------------------------
+    def run(self, changes: Mapping[str, float] | None = None, p: np.ndarray | None = None) -> Response:
+        """Simulate once.
+
+        Parameters
+        ----------
+        changes : mapping, optional
+            Parameter values by name, e.g. ``{"isolators[0].stiffness.z": 6e5}``.
+        p : ndarray, optional
+            A whole parameter vector (overrides ``changes``).
+
+        Returns
+        -------
+        Response
+
+        Raises
+        ------
+        UnstableTableError
+            The table has no stable equilibrium.
+        SimulationError
+            The run diverged.
+        """
+        p = self.parameter_vector(changes) if p is None else np.asarray(p, dtype=float)
+        start, end = self.equilibria(p)
+        substeps = self.substeps_for(max(start.max_frequency, end.max_frequency if end else 0.0))
+        return self._run(p, start, end, substeps)
+
+    def _run(
+        self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, substeps: int
+    ) -> Response:
+        grid = self.grid
+        inputs = self._carriage_inputs(substeps)
+        states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+        states = np.vstack([start.state, states])[grid.is_sample]
+        t = grid.samples
+        bad = ~np.all(np.isfinite(states), axis=1)
+        if bad.any():
+            raise SimulationError(f"the run diverged: non-finite state at t = {t[np.argmax(bad)]:.4g} s")
+        signals = self.signals(states, start)
+        too_far = np.max(np.abs(signals[3:]), axis=0) > 0.2
+        if too_far.any():
+            raise SimulationError(
+                f"the run diverged: the table turned by more than 0.2 rad at t = {t[np.argmax(too_far)]:.4g} s"
+            )
+        final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
+        hold = _slowest_period(end.eigenvalues) if end is not None else 0.0
+        metrics = settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold)
+        q = np.array([c.profile.evaluate(t)[0] for c in self.scenario.carriages]).reshape(-1, t.size)
+        return Response(
+            name=self.scenario.name,
+            model=self.model.kind,
+            t=t,
+            signals=signals,
+            carriage_names=tuple(c.name for c in self.scenario.carriages),
+            q=q,
+            stop_time=self.stop_time,
+            final=final,
+            settling=metrics,
+            states=states,
+        )
+
+    def signals(self, states: np.ndarray, start: Equilibrium) -> np.ndarray:
+        """The six table signals (6, N) of model states (N, n_states), relative to ``start``."""
+        if self.model.kind == "exact":
+            angles = relative_rotation_vector(states[:, 3:7], start.state[3:7])
+            return np.vstack([(states[:, 0:3] - start.state[0:3]).T, angles.T])
+        return (states[:, 0:6] - start.state[0:6]).T
+
+    def run_batch(
+        self,
+        stiffness: Sequence[float],
+        damping: Sequence[float],
+        workers: int = 2,
+        progress: bool = False,
+    ) -> BatchResult:
+        """Many runs with isolator stiffness and damping scaled per run.
+
+        Parameters
+        ----------
+        stiffness, damping : sequence of float
+            Scale factors on every isolator's stiffness and damping, one per run.
+        workers : int
+            Threads (the compiled stepping releases the GIL).
+        progress : bool
+            Print a progress line every 10 %.
+        """
+        if len(stiffness) != len(damping):
+            raise ScenarioError("damping: needs one scale per stiffness scale")
+        params = [self.scaled_parameters(k, c) for k, c in zip(stiffness, damping)]
+        eqs = [self.equilibria(p) for p in params]
+        omega = max(max(s.max_frequency, e.max_frequency if e else 0.0) for s, e in eqs)
+        substeps = self.substeps_for(omega)
+        self._carriage_inputs(substeps)
+        n = len(params)
+        done = [0]
+
+        def one(i: int) -> Response:
+            r = self._run(params[i], eqs[i][0], eqs[i][1], substeps)
+            done[0] += 1
+            if progress and n >= 10 and done[0] % max(1, n // 10) == 0:
+                print(f"  batch: {done[0]}/{n} runs", flush=True)
+            return r
+
+        with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+            responses = list(pool.map(one, range(n)))
+        nan = float("nan")
+        st = np.array([[nan if v is None else v for v in r.settling_time.values()] for r in responses])
+        smax = np.array([nan if r.settling_time_max is None else r.settling_time_max for r in responses])
+        peak = np.array([list(r.peak.values()) for r in responses])
+        return BatchResult(st.reshape(n, 6), smax, peak.reshape(n, 6))
+
+
+def relative_rotation_vector(quats: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """Rotation vectors [rad] of R(q) R(q0)^T for quaternions (w, x, y, z), shape (N, 3)."""
+    q = quats / np.linalg.norm(quats, axis=1, keepdims=True)
+    r = np.asarray(reference, dtype=float) / np.linalg.norm(reference)
+    w0, v0 = r[0], -r[1:]  # conjugate of the reference
+    w, v = q[:, 0], q[:, 1:]
+    rel_w = w * w0 - v @ v0
+    rel_v = w[:, None] * v0 + w0 * v + np.cross(v, v0)
+    sign = np.where(rel_w < 0, -1.0, 1.0)
+    rel_w, rel_v = rel_w * sign, rel_v * sign[:, None]
+    norm = np.linalg.norm(rel_v, axis=1)
+    angle = 2.0 * np.arctan2(norm, rel_w)
+    scale = np.where(norm > 1e-12, angle / np.where(norm > 1e-12, norm, 1.0), 2.0 / rel_w)
+    return rel_v * scale[:, None]
+
+
+def _slowest_period(eigenvalues: np.ndarray) -> float:
+    """Period [s] of the slowest oscillating mode (0 if none)."""
+    im = np.abs(np.imag(eigenvalues))
+    im = im[im > 1e-6]
+    return float(2 * math.pi / im.min()) if im.size else 0.0
+
+
+def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, float] | None = None) -> Response:
+    """Simulate a scenario's carriage transients from the initial static equilibrium.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    model : {"exact", "paper"}
+    changes : mapping, optional
+        Parameter values by name (see :attr:`ParameterLayout.names`).
+
+    Returns
+    -------
+    Response
+    """
+    return Simulator(scenario, model).run(changes)

@@ -1,0 +1,1 @@
+"""Reproducible studies built on the public API of isolator and controllers."""
