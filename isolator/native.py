@@ -24,7 +24,21 @@ import numpy as np
 
 __all__ = ["NativeFunction", "cache_dir"]
 
-_FLAGS = ["-O3", "-fPIC", "-shared"]
+# fast-math without the finite-math assumption: NaN and infinity still propagate,
+# so a diverging run is still detected; -march=native is safe because the cache
+# key includes the CPU's identity.
+_FLAGS = ["-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared"]
+
+
+def _cpu_identity() -> str:
+    try:
+        with open("/proc/cpuinfo") as handle:
+            lines = [ln for ln in handle if ln.startswith(("model name", "flags"))]
+        return "".join(sorted(set(lines)))
+    except OSError:
+        import platform
+
+        return platform.processor() + platform.machine()
 
 
 def cache_dir() -> Path:
@@ -89,7 +103,7 @@ class NativeFunction:
                 os.chdir(cwd)
             source = Path(tmp, f"{self.name}.c").read_text()
         digest = hashlib.sha256(
-            (source + " ".join(_FLAGS) + ca.__version__ + compiler).encode()
+            (source + " ".join(_FLAGS) + ca.__version__ + compiler + _cpu_identity()).encode()
         ).hexdigest()[:20]
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)

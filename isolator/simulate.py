@@ -187,7 +187,8 @@ class Simulator:
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
         hold = _slowest_period(end.eigenvalues) if end is not None else 0.0
         metrics = settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold)
-        q = np.array([c.profile.evaluate(t)[0] for c in self.scenario.carriages]).reshape(-1, t.size)
+        n = len(self.scenario.carriages)
+        q = np.vstack([inputs[:, 0, :n], inputs[-1:, -1, :n]])[grid.is_sample].T
         return Response(
             name=self.scenario.name,
             model=self.model.kind,
