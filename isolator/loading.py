@@ -448,6 +448,8 @@ def _check_strokes(scenario: Scenario) -> None:
     if scenario.table.size is None or not scenario.carriages:
         return
     t_end = scenario.simulation.duration
+    if math.isfinite(scenario.stop_time):
+        t_end = max(t_end, scenario.stop_time)
     times = np.linspace(0.0, t_end, 4001)
     extra = [b for b in scenario.breakpoints if 0.0 <= b <= t_end]
     times = np.union1d(times, extra)

@@ -1,0 +1,85 @@
+"""Shared scenario builders for the tests."""
+
+from __future__ import annotations
+
+import copy
+from typing import Any
+
+import pytest
+
+from isolator import Scenario, scenario_from_dict
+
+
+def corner_isolators(k: float = 5.7e5, c: float = 5.7e3, hs: float = 0.15) -> list[dict[str, Any]]:
+    """Four identical isolators under the corners of a 2 m x 1 m table."""
+    return [
+        {"position": [x, y, -hs], "stiffness": [k, k, k], "damping": [c, c, c]}
+        for x, y in ((1.0, 0.5), (-1.0, 0.5), (-1.0, -0.5), (1.0, -0.5))
+    ]
+
+
+def base_dict(**overrides: Any) -> dict[str, Any]:
+    """A valid scenario as a dictionary: one carriage on a symmetric table."""
+    data: dict[str, Any] = {
+        "name": "test",
+        "table": {"mass": 4400.0, "size": [2.0, 1.0, 0.3]},
+        "isolators": corner_isolators(),
+        "carriages": [
+            {
+                "name": "x-stage",
+                "mass": 400.0,
+                "parent": "table",
+                "axis": [1.0, 0.0, 0.0],
+                "origin": [0.0, 0.0, 0.35],
+                "profile": {"type": "scurve", "start": -0.4, "stroke": 0.8, "velocity": 0.4,
+                            "acceleration": 1.0, "jerk": 20.0, "t0": 0.2},
+            }
+        ],
+        "simulation": {"duration": 4.0, "sample_rate": 1000.0},
+    }
+    data.update(overrides)
+    return data
+
+
+def make(data: dict[str, Any]) -> Scenario:
+    return scenario_from_dict(copy.deepcopy(data))
+
+
+def asymmetric_3d_dict(duration: float = 5.0) -> dict[str, Any]:
+    """Two stacked carriages on skewed axes over five unequal, scattered isolators."""
+    return {
+        "name": "asymmetric-3d",
+        "table": {"mass": 2500.0, "inertia": [400.0, 900.0, 1100.0], "size": [2.4, 1.6, 0.3]},
+        "isolators": [
+            {"position": [1.1, 0.7, -0.20], "stiffness": [3e5, 4e5, 6e5], "damping": [3e3, 2e3, 5e3]},
+            {"position": [-0.9, 0.6, -0.15], "stiffness": [4e5, 3e5, 5e5], "damping": [4e3, 3e3, 4e3]},
+            {"position": [-1.0, -0.7, -0.18], "stiffness": [3.5e5, 3.5e5, 7e5], "damping": [2e3, 4e3, 6e3]},
+            {"position": [0.8, -0.6, -0.12], "stiffness": [5e5, 2e5, 4e5], "damping": [5e3, 1e3, 3e3]},
+            {"position": [0.1, 0.05, -0.25], "stiffness": [1e5, 1e5, 2e5], "damping": [1e3, 1e3, 1e3]},
+        ],
+        "carriages": [
+            {
+                "name": "lower",
+                "mass": 300.0,
+                "axis": [0.8, 0.6, 0.0],
+                "origin": [0.1, -0.05, 0.25],
+                "profile": {"type": "scurve", "start": -0.3, "stroke": 0.7, "velocity": 0.5,
+                            "acceleration": 2.0, "jerk": 40.0, "t0": 0.1},
+            },
+            {
+                "name": "upper",
+                "mass": 60.0,
+                "parent": "lower",
+                "axis": [0.0, 0.6, 0.8],
+                "origin": [0.0, 0.1, 0.2],
+                "profile": {"type": "trapezoid", "start": 0.1, "stroke": -0.3, "velocity": 0.3,
+                            "acceleration": 1.5, "deceleration": 3.0, "t0": 0.4},
+            },
+        ],
+        "simulation": {"duration": duration, "sample_rate": 1000.0},
+    }
+
+
+@pytest.fixture
+def base() -> dict[str, Any]:
+    return base_dict()
