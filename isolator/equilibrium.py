@@ -9,7 +9,7 @@ import numpy as np
 from .errors import UnstableTableError
 from .model import Model
 
-__all__ = ["Equilibrium", "static_equilibrium", "rest_inputs", "DOF_NAMES"]
+__all__ = ["DOF_NAMES", "Equilibrium", "rest_inputs", "static_equilibrium"]
 
 DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 
@@ -109,8 +109,5 @@ def static_equilibrium(
 
 def _dominant_dof(model: Model, vector: np.ndarray) -> str:
     v = np.abs(vector)
-    if model.kind == "exact":
-        motion = np.concatenate([v[0:3], 2 * v[4:7]])
-    else:
-        motion = v[0:6]
+    motion = np.concatenate([v[0:3], 2 * v[4:7]]) if model.kind == "exact" else v[0:6]
     return DOF_NAMES[int(np.argmax(motion))]

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["IsolatorError", "ScenarioError", "UnstableTableError", "SimulationError"]
+__all__ = ["IsolatorError", "ScenarioError", "SimulationError", "UnstableTableError"]
 
 
 class IsolatorError(Exception):

@@ -11,6 +11,7 @@ in compiled code, in chunks of a fixed number of intervals.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import casadi as ca
 import numpy as np
 
@@ -18,7 +19,7 @@ from .model import Model
 from .native import NativeFunction
 from .scenario import Scenario
 
-__all__ = ["TimeGrid", "Stepper", "time_grid", "carriage_inputs"]
+__all__ = ["Stepper", "TimeGrid", "carriage_inputs", "time_grid"]
 
 CHUNK = 512
 
@@ -71,7 +72,7 @@ def carriage_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.nda
     times = t0[:, None] + (t1 - t0)[:, None] * frac[None, :]
     mid = np.broadcast_to(((t0 + t1) / 2)[:, None], times.shape)
     n = len(scenario.carriages)
-    out = np.empty(times.shape + (3 * n,))
+    out = np.empty((*times.shape, 3 * n))
     for i, carriage in enumerate(scenario.carriages):
         q, v, a = carriage.profile.evaluate(times, mid)
         out[..., i] = q

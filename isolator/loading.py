@@ -28,7 +28,7 @@ from .scenario import (
     Table,
 )
 
-__all__ = ["load_scenario", "scenario_from_dict", "bundled_scenarios", "resolve_scenario_path"]
+__all__ = ["bundled_scenarios", "load_scenario", "resolve_scenario_path", "scenario_from_dict"]
 
 DEFAULT_SCENARIO = "paper-table-3-2"
 _UNIT_TOL = 1e-6
@@ -300,13 +300,13 @@ def _read_profile(r: _Reader, base_dir: Path) -> profiles.Profile:
             t0=r.number("t0", 0.0, nonnegative=True),
         )
     elif kind in ("trapezoid", "scurve"):
-        common = dict(
-            start=r.number("start"),
-            stroke=r.number("stroke"),
-            velocity=r.number("velocity", positive=True),
-            acceleration=r.number("acceleration", positive=True),
-            t0=r.number("t0", 0.0, nonnegative=True),
-        )
+        common = {
+            "start": r.number("start"),
+            "stroke": r.number("stroke"),
+            "velocity": r.number("velocity", positive=True),
+            "acceleration": r.number("acceleration", positive=True),
+            "t0": r.number("t0", 0.0, nonnegative=True),
+        }
         if kind == "trapezoid":
             dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
             r.used.add("deceleration")
@@ -406,7 +406,7 @@ def _check_carriage_tree(carriages: tuple[Carriage, ...]) -> None:
         p = c.parent
         while p != "table":
             if p in seen:
-                chain = " -> ".join(seen + [p])
+                chain = " -> ".join([*seen, p])
                 raise ScenarioError(f"carriages[{i}].parent: cyclic parents ({chain})")
             seen.append(p)
             p = parent[p]

@@ -30,12 +30,12 @@ import numpy as np
 from .scenario import Scenario
 
 __all__ = [
-    "ParameterLayout",
-    "Model",
-    "build_model",
-    "newton_euler_residual",
-    "carriage_kinematics",
     "MODEL_KINDS",
+    "Model",
+    "ParameterLayout",
+    "build_model",
+    "carriage_kinematics",
+    "newton_euler_residual",
 ]
 
 MODEL_KINDS = ("exact", "paper")

@@ -15,6 +15,7 @@ Needs the optional dependency ``mujoco`` (``pip install isolator[check]``).
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -164,7 +165,7 @@ class MujocoTable:
             mj.mj_applyFT(m, d, f, np.zeros(3), point, self.table_id, d.qfrc_applied)
         if self.forces is not None and self.scenario.actuators:
             rot = d.xmat[self.table_id].reshape(3, 3)
-            for act, value in zip(self.scenario.actuators, self.forces(t)):
+            for act, value in zip(self.scenario.actuators, self.forces(t), strict=False):
                 point = d.xpos[self.table_id] + rot @ np.asarray(act.position)
                 f = value * np.asarray(act.direction)
                 mj.mj_applyFT(m, d, f, np.zeros(3), point, self.table_id, d.qfrc_applied)
@@ -223,7 +224,7 @@ class MujocoTable:
         states = np.empty((n, 13))
         y = y0
         filled = np.zeros(n, bool)
-        for a, b in zip(cuts[:-1], cuts[1:]):
+        for a, b in itertools.pairwise(cuts):
             if b - a <= 0:
                 continue
             mask = (t_eval >= a) & (t_eval <= b) & ~filled

@@ -147,11 +147,11 @@ class NativeFunction:
         float arrays of shape ``(columns, rows)``.
         """
         if self._lib is None:
-            out = self.function(*[self._as_dm(x, shape) for x, shape in zip(inputs, self.in_shapes)])
+            out = self.function(*[self._as_dm(x, shape) for x, shape in zip(inputs, self.in_shapes, strict=False)])
             out = out if isinstance(out, tuple | list) else [out]
             return [np.asarray(o, dtype=float).T.copy() for o in out]
         ins = [np.ascontiguousarray(x, dtype=np.float64) for x in inputs]
-        for x, (r, c) in zip(ins, self.in_shapes):
+        for x, (r, c) in zip(ins, self.in_shapes, strict=False):
             if x.size != r * c:
                 raise ValueError(f"{self.name}: input of {x.size} values, expected {r}x{c}")
         outs = [np.empty((c, r)) for (r, c) in self.out_shapes]

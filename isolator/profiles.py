@@ -22,12 +22,12 @@ from scipy.interpolate import CubicSpline
 FloatArray = NDArray[np.float64]
 
 __all__ = [
-    "Profile",
     "PiecewisePolynomialProfile",
+    "Profile",
     "SineProfile",
-    "trapezoid",
-    "scurve",
     "samples",
+    "scurve",
+    "trapezoid",
 ]
 
 

@@ -15,14 +15,14 @@ from .errors import ScenarioError
 from .profiles import Profile
 
 __all__ = [
-    "Table",
-    "Isolator",
-    "Carriage",
+    "SIGNALS",
     "Actuator",
+    "Carriage",
+    "Isolator",
+    "Scenario",
     "Settling",
     "SimulationSettings",
-    "Scenario",
-    "SIGNALS",
+    "Table",
 ]
 
 #: names of the six table signals, in order
@@ -220,7 +220,7 @@ class Scenario:
         """
         q = np.asarray(q, dtype=float)
         parents = self.parent_indices()
-        out = np.zeros((len(self.carriages), 3) + q.shape[1:])
+        out = np.zeros((len(self.carriages), 3, *q.shape[1:]))
         for i in self.carriage_order():
             c = self.carriages[i]
             base = out[parents[i]] if parents[i] >= 0 else 0.0

@@ -81,7 +81,7 @@ def settling_time(
     if not outside.any():
         return 0.0, ""
     last = t[after][np.nonzero(outside)[0][-1]]
-    if t[-1] - last < hold:
+    if last >= t[-1] or t[-1] - last < hold:
         return None, (
             f"still outside the band {t[-1] - last:.3g} s before the run ends; "
             "lengthen simulation.duration"
@@ -102,12 +102,10 @@ def settling_metrics(
     for i, name in enumerate(SIGNALS):
         peak = float(np.max(np.abs(signals[i]))) if signals.shape[1] else 0.0
         band = settling.band(name, peak)
-        if final is None:
-            time, reason = settling_time(t, signals[i], 0.0, stop_time, max(band, 1e-300), hold)
-        elif settling.tolerance is None and peak <= MOTION_FLOOR:
-            time, reason = (0.0, "does not move") if not math.isinf(stop_time) else (
-                None, "a carriage never stops (sine profile): no settling time")
+        if final is not None and settling.tolerance is None and peak <= MOTION_FLOOR:
+            time, reason = 0.0, "does not move"
         else:
-            time, reason = settling_time(t, signals[i], float(final[i]), stop_time, band, hold)
+            target = 0.0 if final is None else float(final[i])
+            time, reason = settling_time(t, signals[i], target, stop_time, max(band, 1e-300), hold)
         out[name] = SettlingResult(time, peak, band, reason)
     return out

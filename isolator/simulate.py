@@ -18,7 +18,7 @@ from .response import Response
 from .scenario import Scenario
 from .settling import settling_metrics
 
-__all__ = ["simulate", "Simulator", "BatchResult", "get_model"]
+__all__ = ["BatchResult", "Simulator", "get_model", "simulate"]
 
 #: largest |lambda| h per RK4 step; keeps the relative error well below 1e-6
 STEP_ANGLE = 0.05
@@ -229,7 +229,7 @@ class Simulator:
         """
         if len(stiffness) != len(damping):
             raise ScenarioError("damping: needs one scale per stiffness scale")
-        params = [self.scaled_parameters(k, c) for k, c in zip(stiffness, damping)]
+        params = [self.scaled_parameters(k, c) for k, c in zip(stiffness, damping, strict=False)]
         eqs = [self.equilibria(p) for p in params]
         omega = max(max(s.max_frequency, e.max_frequency if e else 0.0) for s, e in eqs)
         substeps = self.substeps_for(omega)

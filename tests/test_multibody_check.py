@@ -13,7 +13,7 @@ from isolator.multibody import MujocoTable  # noqa: E402
 
 
 def _relative_rms(a: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    rms = lambda x: np.sqrt(np.mean(x**2, axis=-1))  # noqa: E731
+    rms = lambda x: np.sqrt(np.mean(x**2, axis=-1))
     return rms(a - ref) / rms(ref)
 
 

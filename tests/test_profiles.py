@@ -69,7 +69,7 @@ def test_scurve_is_jerk_limited_and_continuous(stroke, velocity, accel, jerk):
 
 def test_sine_holds_before_t0_and_never_stops():
     p = SineProfile(amplitude=0.7, omega=2.0, phase=-math.pi / 2, t0=1.0)
-    q, v, a = p.evaluate(np.array([0.0, 0.5, 1.0, 1.0 + math.pi / 2]))
+    q, v, _a = p.evaluate(np.array([0.0, 0.5, 1.0, 1.0 + math.pi / 2]))
     assert q[:3] == pytest.approx([-0.7, -0.7, -0.7])
     assert v[:2] == pytest.approx([0, 0])
     assert q[3] == pytest.approx(0.7)

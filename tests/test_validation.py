@@ -122,7 +122,7 @@ def test_samples_profile_from_csv(tmp_path: Path):
 def test_toml_errors_are_one_line(tmp_path: Path, capsys):
     bad = tmp_path / "bad.toml"
     bad.write_text('name = "x"\n[table]\nmass = -3\nsize = [1, 1, 1]\n')
-    with pytest.raises(ScenarioError, match="table.mass: must be > 0"):
+    with pytest.raises(ScenarioError, match=r"table\.mass: must be > 0"):
         load_scenario(bad)
     assert main(["simulate", str(bad)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
