@@ -80,6 +80,9 @@ def _simulate(args: argparse.Namespace) -> int:
 
 
 def _study(args: argparse.Namespace) -> int:
+    import matplotlib
+
+    matplotlib.use("Agg")
     if args.name == "paper":
         from studies.paper import run_paper_study
 

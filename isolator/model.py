@@ -12,7 +12,10 @@ table is prescribed. Every model is built from it:
 * the paper's small-angle model (``kind="paper"``) is its first-order
   expansion in the table's pose about the unloaded reference pose, with
   unloaded isolators, ``M(t) x'' + C(t) x' + K(t) x = F(t)`` as in Shin, Sun
-  and Kim, eq. (11) and appendix; it drops the preload's rocking term.
+  and Kim, eq. (11) and appendix. Linearising about the unloaded pose drops
+  the product of the static sag with the rotation, i.e. the weight carried at
+  attachment points below the mass centre, which lowers the rocking
+  stiffness by about (total weight) x (mass-centre height above them).
 
 Design parameters (masses, inertia, geometry, stiffness, damping, gravity) are
 symbolic inputs ``p``, and the carriages' coordinates, velocities and
