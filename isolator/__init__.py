@@ -27,7 +27,7 @@ from .scenario import (
     Table,
 )
 from .settling import SettlingResult, settling_time
-from .simulate import BatchResult, Simulator, get_model, simulate
+from .simulation import BatchResult, Simulator, get_model, simulate
 
 __all__ = [
     "MODEL_KINDS",

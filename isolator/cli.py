@@ -53,7 +53,7 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from .simulate import simulate
+    from .simulation import simulate
 
     scenario = load_scenario(args.scenario)
     response = simulate(scenario, model=args.model)

@@ -238,7 +238,7 @@ class MujocoTable:
             states[mask] = sol.y.T[np.isin(times, t_eval[mask])]
             filled |= mask
             y = sol.y[:, -1]
-        from .simulate import relative_rotation_vector
+        from .simulation import relative_rotation_vector
 
         signals = np.vstack(
             [(states[:, 0:3] - y0[0:3]).T, relative_rotation_vector(states[:, 3:7], y0[3:7]).T]

@@ -16,6 +16,7 @@ import os
 import shutil
 import subprocess
 import tempfile
+import threading
 import warnings
 from pathlib import Path
 
@@ -39,6 +40,9 @@ def _cpu_identity() -> str:
         import platform
 
         return platform.processor() + platform.machine()
+
+
+_LOCK = threading.Lock()
 
 
 def cache_dir() -> Path:
@@ -95,12 +99,9 @@ class NativeFunction:
         if compiler is None:
             raise RuntimeError("no C compiler found (set CC)")
         with tempfile.TemporaryDirectory() as tmp:
-            cwd = os.getcwd()
-            os.chdir(tmp)
-            try:
-                self.function.generate(f"{self.name}.c", {"with_header": False})
-            finally:
-                os.chdir(cwd)
+            generator = ca.CodeGenerator(f"{self.name}.c", {"with_header": False})
+            generator.add(self.function)
+            generator.generate(tmp + os.sep)
             source = Path(tmp, f"{self.name}.c").read_text()
         digest = hashlib.sha256(
             (source + " ".join(_FLAGS) + ca.__version__ + compiler + _cpu_identity()).encode()
@@ -108,8 +109,12 @@ class NativeFunction:
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
         target = folder / f"{self.name}-{digest}.so"
-        if target.exists():
-            return target
+        with _LOCK:
+            if not target.exists():
+                self._compile(compiler, source, folder, target, digest)
+        return target
+
+    def _compile(self, compiler: str, source: str, folder: Path, target: Path, digest: str) -> None:
         src = folder / f"{self.name}-{digest}.c"
         src.write_text(source)
         fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
@@ -125,7 +130,6 @@ class NativeFunction:
             if os.path.exists(tmp_so):
                 os.unlink(tmp_so)
             src.unlink(missing_ok=True)
-        return target
 
     def _load(self, path: Path) -> None:
         lib = ctypes.CDLL(str(path))

@@ -234,6 +234,7 @@ class Simulator:
         omega = max(max(s.max_frequency, e.max_frequency if e else 0.0) for s, e in eqs)
         substeps = self.substeps_for(omega)
         self._carriage_inputs(substeps)
+        _stepper(self.model, substeps)  # build before the threads start
         n = len(params)
         done = [0]
 
