@@ -22,7 +22,8 @@ from numpy_reference import NumpyTable
 
 from isolator import Simulator, load_scenario
 from isolator.multibody import MujocoTable, mujoco_available
-from isolator.simulation import relative_rotation_vector
+from isolator.simulation import table_signals
+from studies.paper import relative_rms
 
 
 def timed(fn, repeat: int) -> tuple[float, object]:
@@ -32,10 +33,6 @@ def timed(fn, repeat: int) -> tuple[float, object]:
         out = fn()
         times.append(time.perf_counter() - t)
     return statistics.median(times), out
-
-
-def rel_rms(a, ref):
-    return np.sqrt(np.mean((a - ref) ** 2, axis=1)) / np.sqrt(np.mean(ref**2, axis=1))
 
 
 def main() -> None:
@@ -68,14 +65,14 @@ def main() -> None:
 
     ref_model = NumpyTable(sc)
     _t_ref, (_, states, y0) = timed(lambda: ref_model.simulate(rtol=1e-12, atol=1e-15), 1)
-    ref = np.vstack([(states[:, :3] - y0[:3]).T, relative_rotation_vector(states[:, 3:7], y0[3:7]).T])
-    err = rel_rms(response.signals, ref)
+    ref = table_signals(states, y0)
+    err = relative_rms(response.signals, ref)
     print(f"accuracy vs tight-tolerance reference (DOP853 rtol 1e-12): max rel. RMS {err.max():.2e} "
           f"(per signal {', '.join(f'{e:.1e}' for e in err)})")
 
     t_np, (_t, states, y0) = timed(lambda: ref_model.simulate(rtol=1e-8, atol=1e-12), 1)
-    sig = np.vstack([(states[:, :3] - y0[:3]).T, relative_rotation_vector(states[:, 3:7], y0[3:7]).T])
-    print(f"baseline numpy + solve_ivp DOP853 rtol 1e-8 (max rel. RMS {rel_rms(sig, ref).max():.1e}): "
+    sig = table_signals(states, y0)
+    print(f"baseline numpy + solve_ivp DOP853 rtol 1e-8 (max rel. RMS {relative_rms(sig, ref).max():.1e}): "
           f"{t_np * 1e3:8.1f} ms   ratio {t_np / t_sim:6.1f}x slower")
     if mujoco_available():
         t_mj, _ = timed(lambda: MujocoTable(sc).simulate(rtol=1e-8, atol=1e-12), 1)

@@ -27,7 +27,7 @@ from .scenario import (
     Table,
 )
 from .settling import SettlingResult, settling_time
-from .simulation import BatchResult, Simulator, get_model, simulate
+from .simulation import BatchResult, Simulator, get_model, simulate, table_signals
 
 __all__ = [
     "MODEL_KINDS",
@@ -63,6 +63,7 @@ __all__ = [
     "settling_time",
     "simulate",
     "static_equilibrium",
+    "table_signals",
     "trapezoid",
 ]
 

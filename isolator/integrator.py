@@ -17,7 +17,7 @@ import numpy as np
 
 from .model import Model
 from .native import NativeFunction
-from .scenario import Scenario
+from .scenario import Scenario, SimulationSettings
 
 __all__ = ["Stepper", "TimeGrid", "carriage_inputs", "time_grid"]
 
@@ -44,10 +44,10 @@ class TimeGrid:
         return self.nodes[self.is_sample]
 
 
-def time_grid(duration: float, sample_rate: float, breakpoints: tuple[float, ...]) -> TimeGrid:
-    """Output samples ``k / sample_rate`` up to ``duration`` merged with breakpoints [s]."""
-    n = int(np.floor(duration * sample_rate * (1 + 1e-12))) + 1
-    samples = np.arange(n) / sample_rate
+def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> TimeGrid:
+    """The settings' output samples merged with breakpoints [s]."""
+    samples = settings.sample_times()
+    n, sample_rate = samples.size, settings.sample_rate
     extra = np.array([b for b in breakpoints if 0.0 < b < samples[-1]], dtype=float)
     if extra.size:
         nearest = np.abs(samples[np.clip(np.rint(extra * sample_rate).astype(int), 0, n - 1)] - extra)

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -25,8 +26,9 @@ from scipy.optimize import root
 
 from .errors import IsolatorError
 from .scenario import Scenario
+from .simulation import table_signals
 
-__all__ = ["MujocoTable", "MultibodyRun", "mujoco_available"]
+__all__ = ["MujocoTable", "MultibodyRun", "mujoco_available", "solve_piecewise"]
 
 
 def mujoco_available() -> bool:
@@ -100,9 +102,7 @@ class MujocoTable:
             int(self.model.jnt_qposadr[mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_JOINT, f"c{i}")])
             for i in range(self.n_c)
         ]
-        kz = np.array([iso.stiffness[2] for iso in scenario.isolators])
-        weight = scenario.gravity * scenario.total_mass
-        self.preload = kz * (weight / kz.sum() if kz.sum() > 0 else 0.0)
+        self.preload = scenario.isolator_preloads()
         self._full_m = np.zeros((self.model.nv, self.model.nv))
 
     def _xml(self) -> str:
@@ -216,31 +216,51 @@ class MujocoTable:
     def simulate(self, rtol: float = 1e-11, atol: float = 1e-14) -> MultibodyRun:
         """Run the scenario from its initial equilibrium at the scenario's samples."""
         sc = self.scenario
-        settings = sc.simulation
-        n = int(np.floor(settings.duration * settings.sample_rate * (1 + 1e-12))) + 1
-        t_eval = np.arange(n) / settings.sample_rate
+        t_eval = sc.simulation.sample_times()
         y0 = self.equilibrium(sc.initial_positions())
-        cuts = [0.0, *[b for b in sc.breakpoints if 0 < b < t_eval[-1]], t_eval[-1]]
-        states = np.empty((n, 13))
-        y = y0
-        filled = np.zeros(n, bool)
-        for a, b in itertools.pairwise(cuts):
-            if b - a <= 0:
-                continue
-            mask = (t_eval >= a) & (t_eval <= b) & ~filled
-            times = np.union1d(t_eval[mask], [b])
-            sol = solve_ivp(
-                self._derivative, (a, b), y, method="DOP853", t_eval=times,
-                rtol=rtol, atol=atol, args=(0.5 * (a + b),),
-            )
-            if not sol.success:
-                raise IsolatorError(f"MuJoCo check: integration failed ({sol.message})")
-            states[mask] = sol.y.T[np.isin(times, t_eval[mask])]
-            filled |= mask
-            y = sol.y[:, -1]
-        from .simulation import relative_rotation_vector
+        states = solve_piecewise(self._derivative, y0, t_eval, sc.breakpoints, rtol=rtol, atol=atol)
+        return MultibodyRun(t_eval, table_signals(states, y0), states)
 
-        signals = np.vstack(
-            [(states[:, 0:3] - y0[0:3]).T, relative_rotation_vector(states[:, 3:7], y0[3:7]).T]
-        )
-        return MultibodyRun(t_eval, signals, states)
+
+def solve_piecewise(
+    rhs: Callable[[float, np.ndarray, float], np.ndarray],
+    y0: np.ndarray,
+    t_eval: np.ndarray,
+    breakpoints: Sequence[float],
+    rtol: float,
+    atol: float,
+) -> np.ndarray:
+    """Integrate with DOP853, restarting at every breakpoint, states at ``t_eval``.
+
+    Parameters
+    ----------
+    rhs : callable
+        ``rhs(t, y, piece_time)``; ``piece_time`` is the middle of the current
+        segment, for one-sided profile evaluation.
+    y0 : ndarray
+        State at ``t_eval[0]``.
+    t_eval : ndarray
+        Increasing output times [s].
+    breakpoints : sequence of float
+        Times [s] where the right-hand side may jump.
+
+    Returns
+    -------
+    ndarray (len(t_eval), len(y0))
+    """
+    cuts = [float(t_eval[0]), *[b for b in breakpoints if t_eval[0] < b < t_eval[-1]], float(t_eval[-1])]
+    states = np.empty((t_eval.size, np.size(y0)))
+    filled = np.zeros(t_eval.size, bool)
+    y = np.asarray(y0, dtype=float)
+    for a, b in itertools.pairwise(cuts):
+        if b - a <= 0:
+            continue
+        mask = (t_eval >= a) & (t_eval <= b) & ~filled
+        times = np.union1d(t_eval[mask], [b])
+        sol = solve_ivp(rhs, (a, b), y, method="DOP853", t_eval=times, rtol=rtol, atol=atol, args=(0.5 * (a + b),))
+        if not sol.success:
+            raise IsolatorError(f"integration failed between {a:g} s and {b:g} s ({sol.message})")
+        states[mask] = sol.y.T[np.isin(times, t_eval[mask])]
+        filled |= mask
+        y = sol.y[:, -1]
+    return states

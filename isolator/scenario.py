@@ -6,12 +6,10 @@ Read one with :func:`isolator.load_scenario`; the file format is described in
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import ScenarioError
 from .profiles import Profile
 
 __all__ = [
@@ -159,6 +157,11 @@ class SimulationSettings:
     duration: float = 10.0
     sample_rate: float = 1000.0
 
+    def sample_times(self) -> np.ndarray:
+        """Output sample times ``k / sample_rate`` from 0 up to ``duration`` [s]."""
+        n = int(np.floor(self.duration * self.sample_rate * (1 + 1e-12))) + 1
+        return np.arange(n) / self.sample_rate
+
 
 @dataclass(frozen=True)
 class Scenario:
@@ -240,22 +243,17 @@ class Scenario:
             return None
         return np.array(finals, dtype=float)
 
+    def isolator_preloads(self) -> np.ndarray:
+        """Vertical static force of each isolator at the reference pose [N].
+
+        All isolators have the same free height, so together they carry the
+        whole weight: ``k_z * g * total_mass / sum(k_z)`` (``docs/scenario-format.md``;
+        :func:`isolator.model.isolator_preloads` is the symbolic form).
+        """
+        kz = np.array([iso.stiffness[2] for iso in self.isolators])
+        total = kz.sum()
+        return kz * (self.gravity * self.total_mass / total) if total > 0 else np.zeros_like(kz)
+
     def with_changes(self, **changes: object) -> Scenario:
         """A copy with top-level fields replaced (see :func:`dataclasses.replace`)."""
         return replace(self, **changes)  # type: ignore[arg-type]
-
-    def scaled(self, stiffness: float = 1.0, damping: float = 1.0) -> Scenario:
-        """A copy with every isolator's stiffness and damping multiplied."""
-        if not (math.isfinite(stiffness) and stiffness > 0):
-            raise ScenarioError(f"stiffness: scale must be a finite number > 0, got {stiffness}")
-        if not (math.isfinite(damping) and damping >= 0):
-            raise ScenarioError(f"damping: scale must be a finite number >= 0, got {damping}")
-        isolators = tuple(
-            replace(
-                iso,
-                stiffness=tuple(stiffness * k for k in iso.stiffness),  # type: ignore[arg-type]
-                damping=tuple(damping * c for c in iso.damping),  # type: ignore[arg-type]
-            )
-            for iso in self.isolators
-        )
-        return replace(self, isolators=isolators)

@@ -18,7 +18,7 @@ from .response import Response
 from .scenario import Scenario
 from .settling import settling_metrics
 
-__all__ = ["BatchResult", "Simulator", "get_model", "simulate"]
+__all__ = ["BatchResult", "Simulator", "get_model", "relative_rotation_vector", "simulate", "table_signals"]
 
 #: largest |lambda| h per RK4 step; keeps the relative error well below 1e-6
 STEP_ANGLE = 0.05
@@ -87,7 +87,7 @@ class Simulator:
         self.parameters = self.layout.pack(scenario)
         self.stop_time = scenario.stop_time
         settings = scenario.simulation
-        self.grid: TimeGrid = time_grid(settings.duration, settings.sample_rate, scenario.breakpoints)
+        self.grid: TimeGrid = time_grid(settings, scenario.breakpoints)
         self._inputs: dict[int, np.ndarray] = {}
         self._forcing = max(
             (abs(c.profile.omega) for c in scenario.carriages if isinstance(c.profile, SineProfile)),
@@ -108,6 +108,10 @@ class Simulator:
 
     def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
         """Parameter vector with all isolator stiffness and damping scaled."""
+        if not (math.isfinite(stiffness) and stiffness > 0):
+            raise ScenarioError(f"stiffness: scale must be a finite number > 0, got {stiffness}")
+        if not (math.isfinite(damping) and damping >= 0):
+            raise ScenarioError(f"damping: scale must be a finite number >= 0, got {damping}")
         p = self.parameters.copy()
         names = self.layout.names
         for i, n in enumerate(names):
@@ -205,8 +209,7 @@ class Simulator:
     def signals(self, states: np.ndarray, start: Equilibrium) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``."""
         if self.model.kind == "exact":
-            angles = relative_rotation_vector(states[:, 3:7], start.state[3:7])
-            return np.vstack([(states[:, 0:3] - start.state[0:3]).T, angles.T])
+            return table_signals(states, start.state)
         return (states[:, 0:6] - start.state[0:6]).T
 
     def run_batch(
@@ -268,6 +271,16 @@ def relative_rotation_vector(quats: np.ndarray, reference: np.ndarray) -> np.nda
     angle = 2.0 * np.arctan2(norm, rel_w)
     scale = np.where(norm > 1e-12, angle / np.where(norm > 1e-12, norm, 1.0), 2.0 / rel_w)
     return rel_v * scale[:, None]
+
+
+def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
+    """The six table signals (6, N) of states (N, >= 7) holding position and quaternion (w, x, y, z).
+
+    Displacement of the mass centre [m] and rotation vector of R R_ref^T [rad],
+    relative to the state ``reference``.
+    """
+    angles = relative_rotation_vector(states[:, 3:7], reference[3:7])
+    return np.vstack([(states[:, 0:3] - reference[0:3]).T, angles.T])
 
 
 def _slowest_period(eigenvalues: np.ndarray) -> float:
