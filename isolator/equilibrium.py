@@ -9,7 +9,7 @@ import numpy as np
 from .errors import UnstableTableError
 from .model import Model
 
-__all__ = ["DOF_NAMES", "Equilibrium", "rest_inputs", "static_equilibrium"]
+__all__ = ["DOF_NAMES", "Equilibrium", "static_equilibrium"]
 
 DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 
@@ -42,12 +42,6 @@ class Equilibrium:
         return float(np.max(np.abs(self.eigenvalues), initial=0.0))
 
 
-def rest_inputs(positions: np.ndarray) -> np.ndarray:
-    """Carriage inputs (q, q', q'') for carriages at rest at ``positions`` [m]."""
-    q = np.asarray(positions, dtype=float)
-    return np.concatenate([q, np.zeros_like(q), np.zeros_like(q)])
-
-
 def static_equilibrium(
     model: Model, p: np.ndarray, positions: np.ndarray, where: str = "at rest"
 ) -> Equilibrium:
@@ -68,7 +62,7 @@ def static_equilibrium(
     UnstableTableError
         No equilibrium, or one with a divergent mode (the table would tip).
     """
-    c = rest_inputs(positions)
+    c = model.layout.rest_inputs(positions)
     z = np.zeros(6)
     weight = abs(float(p[0])) * float(p[1]) + 1.0
     converged = False

@@ -15,11 +15,11 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
-from .model import Model
+from .model import Model, ParameterLayout
 from .native import NativeFunction
 from .scenario import Scenario, SimulationSettings
 
-__all__ = ["Stepper", "TimeGrid", "carriage_inputs", "time_grid"]
+__all__ = ["Stepper", "TimeGrid", "model_inputs", "time_grid"]
 
 CHUNK = 512
 
@@ -58,12 +58,15 @@ def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> T
     return TimeGrid(nodes[order], flags[order])
 
 
-def carriage_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarray:
-    """Carriage (q, q', q'') at every RK stage time of every grid interval.
+def model_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarray:
+    """The model's inputs ``u`` at every RK stage time of every grid interval.
+
+    Carriage (q, q', q''), then the floor's motion when the scenario has some,
+    then zero actuator forces (see :class:`isolator.model.ParameterLayout`).
 
     Returns
     -------
-    ndarray, shape (intervals, 2 substeps + 1, 3 n)
+    ndarray, shape (intervals, 2 substeps + 1, input size)
         One-sided within each interval: the profile piece is chosen by the
         interval's midpoint.
     """
@@ -72,12 +75,15 @@ def carriage_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.nda
     times = t0[:, None] + (t1 - t0)[:, None] * frac[None, :]
     mid = np.broadcast_to(((t0 + t1) / 2)[:, None], times.shape)
     n = len(scenario.carriages)
-    out = np.empty((*times.shape, 3 * n))
+    layout = ParameterLayout.of(scenario)
+    out = np.zeros((*times.shape, layout.input_size))
     for i, carriage in enumerate(scenario.carriages):
         q, v, a = carriage.profile.evaluate(times, mid)
         out[..., i] = q
         out[..., n + i] = v
         out[..., 2 * n + i] = a
+    if layout.ground and scenario.ground is not None:
+        out[..., layout.ground_slice] = scenario.ground.displacement(times, mid)
     return out
 
 
@@ -88,7 +94,7 @@ class Stepper:
         self.model = model
         self.substeps = substeps
         nx = model.n_states
-        nc = 3 * model.layout.n_carriages
+        nc = model.layout.input_size
         npar = model.layout.size
         stages = 2 * substeps + 1
         x = ca.MX.sym("x", nx)
@@ -111,7 +117,11 @@ class Stepper:
         hh = ca.MX.sym("H", 1, CHUNK)
         pp = ca.MX.sym("p", npar)
         xs = acc(x0, cc, hh, ca.repmat(pp, 1, CHUNK))
-        name = f"isolator_{model.kind}_c{model.layout.n_carriages}_i{model.layout.n_isolators}_s{substeps}"
+        lay = model.layout
+        name = (
+            f"isolator_{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
+            f"_g{int(lay.ground)}_s{substeps}"
+        )
         self.chunk = NativeFunction(ca.Function(name, [x0, cc, hh, pp], [xs]), compile=compile)
 
     def run(self, x0: np.ndarray, inputs: np.ndarray, steps: np.ndarray, p: np.ndarray) -> np.ndarray:
@@ -120,7 +130,7 @@ class Stepper:
         Parameters
         ----------
         x0 : ndarray (n_states,)
-        inputs : ndarray (intervals, 2 substeps + 1, 3 n)
+        inputs : ndarray (intervals, 2 substeps + 1, input size)
         steps : ndarray (intervals,)
             Interval lengths [s].
         p : ndarray

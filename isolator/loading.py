@@ -19,16 +19,27 @@ import numpy as np
 from . import profiles
 from .errors import ScenarioError
 from .scenario import (
+    SIGNALS,
     Actuator,
     Carriage,
+    FloorSpectrum,
+    Ground,
     Isolator,
+    Point,
     Scenario,
     Settling,
     SimulationSettings,
     Table,
 )
 
-__all__ = ["bundled_scenarios", "load_scenario", "resolve_scenario_path", "scenario_from_dict"]
+__all__ = [
+    "bundled_scenarios",
+    "load_scenario",
+    "load_spectrum",
+    "read_csv_columns",
+    "resolve_scenario_path",
+    "scenario_from_dict",
+]
 
 DEFAULT_SCENARIO = "paper-table-3-2"
 _UNIT_TOL = 1e-6
@@ -232,6 +243,17 @@ def scenario_from_dict(
         if n in names[:i]:
             raise ScenarioError(f"actuators[{i}].name: '{n}' is used twice")
     settling = _read_settling(_Reader(top.raw("settling", {}), "settling"))
+    ground = _read_ground(_Reader(top.raw("ground"), "ground"), base_dir) if top.has("ground") else None
+    top.used.add("ground")
+    points = tuple(
+        _read_point(_Reader(item, f"points[{i}]"))
+        for i, item in enumerate(_table_of_tables(data, "points"))
+    )
+    top.used.add("points")
+    point_names = [pt.name for pt in points]
+    for i, n in enumerate(point_names):
+        if n in point_names[:i]:
+            raise ScenarioError(f"points[{i}].name: '{n}' is used twice")
     top.finish()
     scenario = Scenario(
         name=name,
@@ -242,6 +264,8 @@ def scenario_from_dict(
         simulation=simulation,
         settling=settling,
         gravity=gravity,
+        ground=ground,
+        points=points,
     )
     _check_strokes(scenario)
     return scenario
@@ -324,31 +348,64 @@ def _read_profile(r: _Reader, base_dir: Path) -> profiles.Profile:
     return prof
 
 
+def read_csv_columns(
+    path: Path, key: str, required: tuple[str, ...], optional: tuple[str, ...] = (), exact: bool = False
+) -> dict[str, np.ndarray]:
+    """Numeric columns of a CSV file with a header line, checked.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    key : str
+        Key path named in errors.
+    required, optional : tuple of str
+        Column names that must and may appear.
+    exact : bool
+        The header must be exactly ``required`` in that order.
+
+    Raises
+    ------
+    ScenarioError
+        Unreadable file, unknown or missing columns, a cell that is not a number.
+    """
+    try:
+        with open(path, newline="") as handle:
+            rows = list(csv.reader(handle))
+    except OSError as exc:
+        raise ScenarioError(f"{key}: cannot read '{path}' ({exc.strerror})") from None
+    header = [h.strip() for h in rows[0]] if rows else []
+    if exact and header != list(required):
+        raise ScenarioError(f"{key}: '{path}' must be a CSV with the header '{','.join(required)}'")
+    missing = [c for c in required if c not in header]
+    unknown = [c for c in header if c not in required + optional]
+    if missing or unknown or len(set(header)) != len(header):
+        allowed = ", ".join(required + optional)
+        raise ScenarioError(
+            f"{key}: '{path}' must be a CSV whose header has {', '.join(required)} and maybe "
+            f"other columns among ({allowed}), once each; got '{','.join(header)}'"
+        )
+    values = []
+    for line, row in enumerate(rows[1:], start=2):
+        if not row:
+            continue
+        if len(row) != len(header):
+            raise ScenarioError(f"{key}: '{path}' line {line}: needs {len(header)} values ({','.join(header)})")
+        try:
+            values.append([float(x) for x in row])
+        except ValueError:
+            raise ScenarioError(f"{key}: '{path}' line {line}: not all numbers") from None
+    arr = np.array(values, dtype=float).reshape(-1, len(header))
+    return {name: arr[:, i] for i, name in enumerate(header)}
+
+
 def _read_samples(r: _Reader, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
     if r.has("file"):
         if r.has("t") or r.has("q"):
             raise ScenarioError(f"{r.key('file')}: give either file or inline t and q, not both")
         file_key = r.key("file")
-        path = base_dir / r.string("file")
-        try:
-            with open(path, newline="") as handle:
-                rows = list(csv.reader(handle))
-        except OSError as exc:
-            raise ScenarioError(f"{file_key}: cannot read '{path}' ({exc.strerror})") from None
-        if not rows or [h.strip() for h in rows[0]] != ["t", "q"]:
-            raise ScenarioError(f"{file_key}: '{path}' must be a CSV with the header 't,q'")
-        values = []
-        for line, row in enumerate(rows[1:], start=2):
-            if not row:
-                continue
-            try:
-                values.append([float(x) for x in row])
-            except ValueError:
-                raise ScenarioError(f"{file_key}: '{path}' line {line}: not two numbers") from None
-            if len(row) != 2:
-                raise ScenarioError(f"{file_key}: '{path}' line {line}: needs exactly t and q")
-        arr = np.array(values, dtype=float).reshape(-1, 2)
-        t, q, key = arr[:, 0], arr[:, 1], file_key
+        columns = read_csv_columns(base_dir / r.string("file"), file_key, ("t", "q"), exact=True)
+        t, q, key = columns["t"], columns["q"], file_key
     else:
         tk, qk = r.key("t"), r.key("q")
         t_raw, q_raw = r.raw("t"), r.raw("q")
@@ -426,6 +483,96 @@ def _read_actuator(r: _Reader) -> Actuator:
     r.used.add("bandwidth")
     r.finish()
     return act
+
+
+def _read_point(r: _Reader) -> Point:
+    name = r.string("name")
+    if not name:
+        raise ScenarioError(f"{r.key('name')}: must be a non-empty name")
+    point = Point(name=name, position=r.vector("position"))
+    r.finish()
+    return point
+
+
+def _read_ground(r: _Reader, base_dir: Path) -> Ground:
+    motion = {}
+    for axis in SIGNALS:
+        if r.has(axis):
+            motion[axis] = _read_profile(_Reader(r.raw(axis), r.key(axis)), base_dir)
+    spectrum = None
+    if r.has("spectrum"):
+        spectrum = _read_spectrum(_Reader(r.raw("spectrum"), r.key("spectrum")), base_dir)
+    r.used.add("spectrum")
+    r.finish()
+    return Ground(motion=motion, spectrum=spectrum)
+
+
+SPECTRUM_KINDS = ("third-octave", "psd")
+
+
+def _read_spectrum(r: _Reader, base_dir: Path) -> FloorSpectrum:
+    kind = r.string("kind")
+    if kind not in SPECTRUM_KINDS:
+        raise ScenarioError(f"{r.key('kind')}: must be one of {', '.join(SPECTRUM_KINDS)}, got '{kind}'")
+    if r.has("file"):
+        if any(r.has(k) for k in ("frequency", "x", "y", "z")):
+            raise ScenarioError(f"{r.key('file')}: give either file or inline frequency and values, not both")
+        spectrum = load_spectrum(base_dir / r.string("file"), kind, key=r.key("file"))
+    else:
+        columns = {"frequency": np.array(_number_list(r, "frequency"))}
+        for axis in ("x", "y", "z"):
+            if r.has(axis):
+                columns[axis] = np.array(_number_list(r, axis))
+        spectrum = _spectrum_from_columns(columns, kind, r.path)
+    r.used.update({"file", "frequency", "x", "y", "z"})
+    r.finish()
+    return spectrum
+
+
+def _number_list(r: _Reader, name: str) -> list[float]:
+    value = r.raw(name)
+    if not isinstance(value, list) or not value:
+        raise ScenarioError(f"{r.key(name)}: must be a non-empty list of numbers")
+    return [_number(v, f"{r.key(name)}[{i}]") for i, v in enumerate(value)]
+
+
+def load_spectrum(path: str | Path, kind: str, key: str = "spectrum") -> FloorSpectrum:
+    """Read a floor vibration spectrum from a CSV file.
+
+    Parameters
+    ----------
+    path : path
+        CSV with a column ``frequency_hz`` and one or more of ``x, y, z``: RMS
+        velocity per one-third-octave band [m/s] (``kind="third-octave"``, at the
+        band centres) or velocity PSD [(m/s)^2/Hz] (``kind="psd"``).
+    kind : {"third-octave", "psd"}
+    key : str
+        Key path named in errors.
+
+    Raises
+    ------
+    ScenarioError
+        A missing file, bad columns, non-increasing frequencies, negative values.
+    """
+    if kind not in SPECTRUM_KINDS:
+        raise ScenarioError(f"{key}: kind must be one of {', '.join(SPECTRUM_KINDS)}, got '{kind}'")
+    columns = read_csv_columns(Path(path), key, ("frequency_hz",), ("x", "y", "z"))
+    columns["frequency"] = columns.pop("frequency_hz")
+    return _spectrum_from_columns(columns, kind, key)
+
+
+def _spectrum_from_columns(columns: dict[str, np.ndarray], kind: str, key: str) -> FloorSpectrum:
+    f = columns.pop("frequency")
+    if not columns:
+        raise ScenarioError(f"{key}: needs values for at least one of x, y, z")
+    if f.size < 2 or np.any(np.diff(f) <= 0) or f[0] <= 0:
+        raise ScenarioError(f"{key}: frequencies must be > 0 and strictly increasing (at least two)")
+    for axis, v in columns.items():
+        if v.size != f.size:
+            raise ScenarioError(f"{key}.{axis}: has {v.size} values for {f.size} frequencies")
+        if not np.all(np.isfinite(v)) or np.any(v < 0):
+            raise ScenarioError(f"{key}.{axis}: values must be finite and >= 0")
+    return FloorSpectrum(kind=kind, frequency=f, values=columns)
 
 
 def _read_settling(r: _Reader) -> Settling:

@@ -98,13 +98,26 @@ class ParameterLayout:
     n_carriages, n_isolators : int
     parents : tuple of int
         Parent index of each carriage (-1: the table); the structure of the chain.
+    n_actuators : int
+        Force actuators between ground and table.
+    ground : bool
+        Whether the floor moves (the inputs then hold its motion).
     names : tuple of str
         One name per entry of ``p``, e.g. ``isolators[2].stiffness.z``.
+
+    Notes
+    -----
+    The model's input vector ``u`` holds, in order: the carriages' coordinates,
+    velocities and accelerations (3 n); with ``ground``, the floor's
+    displacement ``x, y, z`` [m], rotation ``rx, ry, rz`` [rad] (about the world
+    origin) and their rates (12); the actuator forces [N] (``n_actuators``).
     """
 
     n_carriages: int
     n_isolators: int
     parents: tuple[int, ...]
+    n_actuators: int = 0
+    ground: bool = False
     names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -114,15 +127,46 @@ class ParameterLayout:
             names += [f"carriages[{i}].{key}.{a}" for i in range(self.n_carriages) for a in "xyz"]
         for key in ("position", "stiffness", "damping"):
             names += [f"isolators[{i}].{key}.{a}" for i in range(self.n_isolators) for a in "xyz"]
+        for key in ("position", "direction"):
+            names += [f"actuators[{i}].{key}.{a}" for i in range(self.n_actuators) for a in "xyz"]
         object.__setattr__(self, "names", tuple(names))
 
     @property
     def size(self) -> int:
         return len(self.names)
 
+    @property
+    def input_size(self) -> int:
+        """Length of the model's input vector ``u``."""
+        return 3 * self.n_carriages + (12 if self.ground else 0) + self.n_actuators
+
+    @property
+    def ground_slice(self) -> slice:
+        """Where the floor's motion sits in ``u`` (empty without ``ground``)."""
+        start = 3 * self.n_carriages
+        return slice(start, start + (12 if self.ground else 0))
+
+    @property
+    def actuator_slice(self) -> slice:
+        """Where the actuator forces sit in ``u``."""
+        return slice(self.input_size - self.n_actuators, self.input_size)
+
+    def rest_inputs(self, positions: np.ndarray) -> np.ndarray:
+        """Inputs ``u`` with the carriages at rest at ``positions`` [m], the floor still, no forces."""
+        q = np.asarray(positions, dtype=float).ravel()
+        u = np.zeros(self.input_size)
+        u[: self.n_carriages] = q
+        return u
+
     @classmethod
     def of(cls, scenario: Scenario) -> ParameterLayout:
-        return cls(len(scenario.carriages), len(scenario.isolators), scenario.parent_indices())
+        return cls(
+            len(scenario.carriages),
+            len(scenario.isolators),
+            scenario.parent_indices(),
+            len(scenario.actuators),
+            scenario.has_ground_motion,
+        )
 
     def pack(self, scenario: Scenario) -> np.ndarray:
         """The parameter vector of a scenario with this structure."""
@@ -134,6 +178,8 @@ class ParameterLayout:
         values += [v for c in scenario.carriages for v in c.origin]
         for key in ("position", "stiffness", "damping"):
             values += [v for iso in scenario.isolators for v in getattr(iso, key)]
+        for key in ("position", "direction"):
+            values += [v for act in scenario.actuators for v in getattr(act, key)]
         return np.array(values, dtype=float)
 
     def unpack(self, p: ca.SX) -> dict[str, ca.SX]:
@@ -157,9 +203,14 @@ class ParameterLayout:
         take("positions", 3, m)
         take("stiffness", 3, m)
         take("damping", 3, m)
-        for k in ("axes", "origins", "positions", "stiffness", "damping"):
-            if (n if k in ("axes", "origins") else m) == 1:
-                out[k] = ca.reshape(out[k], 3, 1)
+        take("actuator_positions", 3, self.n_actuators)
+        take("actuator_directions", 3, self.n_actuators)
+        sizes = {"axes": n, "origins": n, "actuator_positions": self.n_actuators,
+                 "actuator_directions": self.n_actuators}
+        for k in ("axes", "origins", "positions", "stiffness", "damping", "actuator_positions",
+                  "actuator_directions"):
+            if sizes.get(k, m) <= 1:
+                out[k] = ca.reshape(out[k], 3, sizes.get(k, m))
         return out
 
 
@@ -238,6 +289,9 @@ def newton_euler_residual(
     prm: dict[str, ca.SX],
     parents: tuple[int, ...],
     preload: bool = True,
+    ground: ca.SX | None = None,
+    actuator_forces: ca.SX | None = None,
+    wrench: ca.SX | None = None,
 ) -> ca.SX:
     """Newton's and Euler's laws for the table with its carriages, table frame.
 
@@ -261,6 +315,14 @@ def newton_euler_residual(
         Carriage chain structure.
     preload : bool
         Whether isolators carry their static preload (False: unloaded springs).
+    ground : SX (12,), optional
+        Floor displacement [m], rotation about the world origin [rad] and their
+        rates; the isolators' ground anchors move with the floor (their axes and
+        preload stay along the world axes).
+    actuator_forces : SX (n_a,), optional
+        Actuator forces [N] along their world directions at their table points.
+    wrench : SX (6,), optional
+        Force [N] and moment [N m] applied at the table's mass centre, world axes.
 
     Returns
     -------
@@ -283,11 +345,23 @@ def newton_euler_residual(
     for k in range(prm["positions"].shape[1]):
         s = prm["positions"][:, k]
         arm = rot @ s
-        f = -prm["stiffness"][:, k] * (pos + arm - s) - prm["damping"][:, k] * (vel + ca.cross(w_world, arm))
+        stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
+        if ground is not None:
+            stretch = stretch - ground[0:3] - ca.cross(ground[3:6], s)
+            rate = rate - ground[6:9] - ca.cross(ground[9:12], s)
+        f = -prm["stiffness"][:, k] * stretch - prm["damping"][:, k] * rate
         if load is not None:
             f = f + load[:, k]
         force += f
         moment += ca.cross(arm, f)
+    if actuator_forces is not None:
+        for k in range(actuator_forces.shape[0]):
+            f = prm["actuator_directions"][:, k] * actuator_forces[k]
+            force += f
+            moment += ca.cross(rot @ prm["actuator_positions"][:, k], f)
+    if wrench is not None:
+        force += wrench[0:3]
+        moment += wrench[3:6]
     g_body = rot.T @ g_world
     rel = kin["Sdd"] + 2 * ca.cross(w, kin["Sd"]) + ca.cross(alpha_body, S) + ca.cross(w, ca.cross(w, S))
     translation = m_tot * acc_body + rel - rot.T @ force
@@ -350,25 +424,35 @@ def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
         raise ValueError(f"model: must be one of {', '.join(MODEL_KINDS)}, got '{kind}'")
     n = layout.n_carriages
     p = ca.SX.sym("p", layout.size)
-    c = ca.SX.sym("c", 3 * n)
+    c = ca.SX.sym("u", layout.input_size)
     prm = layout.unpack(p)
     parents = layout.parents
     z = ca.SX.sym("z", 6)
     zero3 = ca.SX.zeros(3, 1)
-    rest = ca.vertcat(c[:n], ca.SX.zeros(2 * n, 1))
+    rest = ca.vertcat(c[:n], ca.SX.zeros(layout.input_size - n, 1))
+    extra = {
+        "ground": c[layout.ground_slice] if layout.ground else None,
+        "actuator_forces": c[layout.actuator_slice] if layout.n_actuators else None,
+    }
+    rest_extra = {
+        "ground": rest[layout.ground_slice] if layout.ground else None,
+        "actuator_forces": rest[layout.actuator_slice] if layout.n_actuators else None,
+    }
 
     if kind == "exact":
         x = ca.SX.sym("x", 13)
         pos, qt, vel, w = x[0:3], x[3:7], x[7:10], x[10:13]
         rot = quaternion_to_matrix(qt)
         acc_vars = ca.SX.sym("a", 6)
-        res = newton_euler_residual(pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c, prm, parents)
+        res = newton_euler_residual(
+            pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c[: 3 * n], prm, parents, **extra
+        )
         mass = ca.jacobian(res, acc_vars)
         bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
         accel = _solve_blocks(mass, -bias)
         xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
         static = newton_euler_residual(
-            z[:3], cardan_matrix(z[3:]), zero3, zero3, zero3, zero3, rest, prm, parents
+            z[:3], cardan_matrix(z[3:]), zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents, **rest_extra
         )
         pose = ca.vertcat(z[:3], _cardan_to_quaternion(z[3:]), ca.SX.zeros(6, 1))
         linear = None
@@ -378,8 +462,8 @@ def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
         pos, th = gen[0:3], gen[3:6]
         rot = cardan_matrix(th)
         body = newton_euler_residual(
-            pos, rot, gen[6:9], gen[9:12], rot.T @ gen[12:15], gen[15:18], c, prm, parents,
-            preload=False,
+            pos, rot, gen[6:9], gen[9:12], rot.T @ gen[12:15], gen[15:18], c[: 3 * n], prm, parents,
+            preload=False, **extra,
         )
         res = ca.vertcat(rot @ body[:3], rot @ body[3:])  # world frame, as the paper writes it
         at_zero = {"x": ca.SX.zeros(18, 1)}

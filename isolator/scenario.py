@@ -6,7 +6,7 @@ Read one with :func:`isolator.load_scenario`; the file format is described in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -16,7 +16,10 @@ __all__ = [
     "SIGNALS",
     "Actuator",
     "Carriage",
+    "FloorSpectrum",
+    "Ground",
     "Isolator",
+    "Point",
     "Scenario",
     "Settling",
     "SimulationSettings",
@@ -121,6 +124,73 @@ class Actuator:
 
 
 @dataclass(frozen=True)
+class Point:
+    """A point of interest on the table, whose motion linear analyses report.
+
+    Attributes
+    ----------
+    name : str
+    position : tuple of float
+        In the table frame [m].
+    """
+
+    name: str
+    position: Vector3
+
+
+@dataclass(frozen=True)
+class FloorSpectrum:
+    """A floor vibration spectrum, per world axis.
+
+    Attributes
+    ----------
+    kind : {"third-octave", "psd"}
+        ``third-octave``: RMS velocity [m/s] in the one-third-octave band of each
+        centre frequency; ``psd``: velocity power spectral density [(m/s)^2/Hz].
+    frequency : ndarray
+        Band centres or PSD frequencies [Hz], increasing.
+    values : dict of str to ndarray
+        Per axis ``x``, ``y``, ``z`` (axes not given have no floor motion).
+    """
+
+    kind: str
+    frequency: np.ndarray
+    values: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Ground:
+    """Prescribed floor motion and an optional floor vibration spectrum.
+
+    Attributes
+    ----------
+    motion : dict of str to Profile
+        Floor translation [m] along ``x, y, z`` and rotation [rad] about ``rx, ry, rz``
+        (world axes, rotations about the world origin), each a profile of time.
+    spectrum : FloorSpectrum or None
+    """
+
+    motion: dict[str, Profile] = field(default_factory=dict)
+    spectrum: FloorSpectrum | None = None
+
+    def displacement(self, t: np.ndarray, piece_time: np.ndarray | None = None) -> np.ndarray:
+        """Floor displacement and its rate, shape ``(*t.shape, 12)``: 6 values then 6 rates."""
+        t = np.asarray(t, dtype=float)
+        out = np.zeros((*t.shape, 12))
+        for k, axis in enumerate(SIGNALS):
+            if axis in self.motion:
+                q, v, _ = self.motion[axis].evaluate(t, piece_time)
+                out[..., k] = q
+                out[..., 6 + k] = v
+        return out
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Times [s] where a floor acceleration may jump."""
+        return tuple(sorted({b for p in self.motion.values() for b in p.breakpoints}))
+
+
+@dataclass(frozen=True)
 class Settling:
     """The settling band: a fraction of each signal's peak, or absolute tolerances.
 
@@ -175,6 +245,8 @@ class Scenario:
     simulation: SimulationSettings = SimulationSettings()
     settling: Settling = Settling()
     gravity: float = 9.81
+    ground: Ground | None = None
+    points: tuple[Point, ...] = ()
 
     # -- derived quantities -------------------------------------------------
     @property
@@ -189,8 +261,14 @@ class Scenario:
 
     @property
     def breakpoints(self) -> tuple[float, ...]:
-        """Sorted times [s] where some carriage's acceleration may jump."""
-        return tuple(sorted({b for c in self.carriages for b in c.profile.breakpoints}))
+        """Sorted times [s] where some carriage's or the floor's acceleration may jump."""
+        floor = self.ground.breakpoints if self.ground is not None else ()
+        return tuple(sorted({b for c in self.carriages for b in c.profile.breakpoints} | set(floor)))
+
+    @property
+    def has_ground_motion(self) -> bool:
+        """Whether the floor moves (a ``[ground]`` section with motion)."""
+        return self.ground is not None and bool(self.ground.motion)
 
     def parent_indices(self) -> tuple[int, ...]:
         """Index of each carriage's parent carriage, -1 for the table."""

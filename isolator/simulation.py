@@ -11,7 +11,7 @@ import numpy as np
 
 from .equilibrium import Equilibrium, static_equilibrium
 from .errors import ScenarioError, SimulationError
-from .integrator import Stepper, TimeGrid, carriage_inputs, time_grid
+from .integrator import Stepper, TimeGrid, model_inputs, time_grid
 from .model import MODEL_KINDS, Model, ParameterLayout, build_model
 from .profiles import SineProfile
 from .response import Response
@@ -89,10 +89,9 @@ class Simulator:
         settings = scenario.simulation
         self.grid: TimeGrid = time_grid(settings, scenario.breakpoints)
         self._inputs: dict[int, np.ndarray] = {}
-        self._forcing = max(
-            (abs(c.profile.omega) for c in scenario.carriages if isinstance(c.profile, SineProfile)),
-            default=0.0,
-        )
+        drives = [c.profile for c in scenario.carriages]
+        drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
+        self._forcing = max((abs(d.omega) for d in drives if isinstance(d, SineProfile)), default=0.0)
 
     # -- parameters ------------------------------------------------------------
     def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
@@ -139,9 +138,9 @@ class Simulator:
         omega = max(omega_max, self._forcing)
         return max(1, math.ceil(omega * dt / STEP_ANGLE))
 
-    def _carriage_inputs(self, substeps: int) -> np.ndarray:
+    def _model_inputs(self, substeps: int) -> np.ndarray:
         if substeps not in self._inputs:
-            self._inputs[substeps] = carriage_inputs(self.scenario, self.grid, substeps)
+            self._inputs[substeps] = model_inputs(self.scenario, self.grid, substeps)
         return self._inputs[substeps]
 
     # -- runs --------------------------------------------------------------------
@@ -175,7 +174,7 @@ class Simulator:
         self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, substeps: int
     ) -> Response:
         grid = self.grid
-        inputs = self._carriage_inputs(substeps)
+        inputs = self._model_inputs(substeps)
         states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
         states = np.vstack([start.state, states])[grid.is_sample]
         t = grid.samples
@@ -236,7 +235,7 @@ class Simulator:
         eqs = [self.equilibria(p) for p in params]
         omega = max(max(s.max_frequency, e.max_frequency if e else 0.0) for s, e in eqs)
         substeps = self.substeps_for(omega)
-        self._carriage_inputs(substeps)
+        self._model_inputs(substeps)
         _stepper(self.model, substeps)  # build before the threads start
         n = len(params)
         done = [0]
