@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .errors import IsolatorError
+from .errors import IsolatorError, ScenarioError
 from .loading import DEFAULT_SCENARIO, bundled_scenarios, load_scenario
 from .model import MODEL_KINDS
 
@@ -22,7 +22,8 @@ __all__ = ["main"]
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="isolator",
-        description="Pneumatic isolation tables carrying moving stages: transients and settling.",
+        description="Pneumatic isolation tables carrying moving stages: transients, settling, "
+        "modes, transmissibility, stability and vibration criteria.",
     )
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
 
@@ -48,8 +49,151 @@ def _parser() -> argparse.ArgumentParser:
     study.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     study.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
 
+    modes = sub.add_parser(
+        "modes", help="natural frequencies, damping ratios and mode shapes of the parked table",
+        description="Linearise about a rest configuration and print the six rigid-body modes.",
+    )
+    _linear_arguments(modes)
+    modes.add_argument("--plot", type=Path, metavar="FILE.png", help="write the mode-shape figure")
+    modes.add_argument("--travel", type=Path, metavar="FILE.png",
+                       help="write a figure of the modes as each carriage travels over its stroke")
+
+    trans = sub.add_parser(
+        "transmissibility", help="floor-to-table transmissibility (or compliance) per axis",
+        description="Same-axis floor motion to table motion at the mass centre: peak, its frequency, "
+        "and the frequency above which isolation starts.",
+    )
+    _linear_arguments(trans)
+    trans.add_argument("--plot", type=Path, metavar="FILE.png", help="write the Bode plot")
+    trans.add_argument("--compliance", action="store_true",
+                       help="force / moment at the mass centre to table motion instead")
+    trans.add_argument("--points", type=int, default=1000, help="frequencies, log-spaced (default 1000)")
+
+    stab = sub.add_parser(
+        "stability", help="rocking-stiffness margin over the carriages' travel",
+        description="Check, before any simulation, that the table stands wherever the carriages go; "
+        "exit status 3 when it would tip.",
+    )
+    stab.add_argument("scenario", nargs="?", default=None,
+                      help=f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
+    stab.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    crit = sub.add_parser(
+        "criteria", help="one-third-octave table velocity from a floor spectrum, and its VC class",
+        description="Pass a floor vibration spectrum through the parked table and rate a point "
+        "against the VC curves (VC-A 50 um/s ... VC-G 0.78 um/s, 1-80 Hz).",
+    )
+    _linear_arguments(crit)
+    crit.add_argument("--spectrum", type=Path, metavar="FILE.csv",
+                      help="floor spectrum CSV (frequency_hz and x, y, z columns); default: [ground.spectrum]")
+    crit.add_argument("--kind", choices=["third-octave", "psd"], default="third-octave",
+                      help="band RMS velocities [m/s] or a velocity PSD [(m/s)^2/Hz] (default third-octave)")
+    crit.add_argument("--point", default=None, help="a [[points]] name (default: the mass centre)")
+    crit.add_argument("--plot", type=Path, metavar="FILE.png", help="write the figure against the VC curves")
+
     sub.add_parser("scenarios", help="list the bundled scenarios")
     return parser
+
+
+def _linear_arguments(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("scenario", nargs="?", default=None,
+                        help=f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--time", type=float, metavar="T",
+                       help="park the carriages where their profiles are at T seconds (default: their start)")
+    where.add_argument("--position", action="append", default=None, metavar="NAME=Q",
+                       help="park carriage NAME at Q metres (repeatable; the others at their start)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+
+def _linearised(args: argparse.Namespace):
+    from .linear import linearise
+
+    scenario = load_scenario(args.scenario)
+    positions = None
+    if args.position:
+        positions = {}
+        for item in args.position:
+            name, sep, value = item.partition("=")
+            try:
+                positions[name.strip()] = float(value)
+            except ValueError:
+                raise ScenarioError(f"--position: expected NAME=Q with Q in metres, got '{item}'") from None
+            if not sep:
+                raise ScenarioError(f"--position: expected NAME=Q with Q in metres, got '{item}'")
+    return scenario, linearise(scenario, positions=positions, time=args.time)
+
+
+def _save(fig, path: Path) -> None:
+    fig.savefig(path, dpi=120)
+    import matplotlib.pyplot as plt
+
+    plt.close(fig)
+
+
+def _modes(args: argparse.Namespace) -> int:
+    from .modes import modes, modes_over_travel
+
+    scenario, lin = _linearised(args)
+    result = modes(lin)
+    if args.plot:
+        _save(result.plot(title=f"Modes of {scenario.name}"), args.plot)
+    if args.travel:
+        _save(modes_over_travel(scenario).plot(title=f"Modes of {scenario.name} as the stage travels"), args.travel)
+    if args.json:
+        print(json.dumps(result.to_dict(), indent=2))
+    else:
+        print(result.summary())
+        for path in (args.plot, args.travel):
+            if path:
+                print(f"figure: {path}")
+    return 0
+
+
+def _transmissibility(args: argparse.Namespace) -> int:
+    from .transmissibility import compliance, default_frequencies, transmissibility
+
+    if args.points < 2:
+        raise ScenarioError(f"--points: must be >= 2, got {args.points}")
+    _, lin = _linearised(args)
+    f = default_frequencies(lin, args.points)
+    result = compliance(lin, f) if args.compliance else transmissibility(lin, f)
+    if args.plot:
+        _save(result.plot(), args.plot)
+    if args.json:
+        print(json.dumps(result.to_dict()))
+    else:
+        print(result.summary())
+        if args.plot:
+            print(f"figure: {args.plot}")
+    return 0
+
+
+def _stability(args: argparse.Namespace) -> int:
+    from .stability import stability
+
+    report = stability(load_scenario(args.scenario))
+    print(json.dumps(report.to_dict(), indent=2) if args.json else report.describe())
+    return 0 if report.stable else 3
+
+
+def _criteria(args: argparse.Namespace) -> int:
+    from .loading import load_spectrum
+    from .vibration import vibration_criteria
+
+    _, lin = _linearised(args)
+    spectrum = load_spectrum(args.spectrum, args.kind, key="--spectrum") if args.spectrum else None
+    result = vibration_criteria(lin, spectrum, point=args.point)
+    if args.plot:
+        _save(result.plot(), args.plot)
+    if args.json:
+        print(json.dumps(result.to_dict(), indent=2))
+    else:
+        print(f"floor: {result.floor_class}; table at {result.point}: {result.table_class} "
+              f"(largest band RMS {result.table_max * 1e6:.3g} um/s over 1-80 Hz)")
+        if args.plot:
+            print(f"figure: {args.plot}")
+    return 0
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -99,6 +243,14 @@ def main(argv: Sequence[str] | None = None) -> int:
             return _simulate(args)
         if args.command == "study":
             return _study(args)
+        handlers = {"modes": _modes, "transmissibility": _transmissibility, "stability": _stability,
+                    "criteria": _criteria}
+        if args.command in handlers:
+            if args.command != "stability":
+                import matplotlib
+
+                matplotlib.use("Agg")
+            return handlers[args.command](args)
         if args.command == "scenarios":
             for name, path in sorted(bundled_scenarios().items()):
                 print(f"{name}\t{path}")
@@ -106,6 +258,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except IsolatorError as exc:
         print(f"isolator: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # output piped into a command that stopped reading
+        sys.stderr.close()
+        return 0
     except KeyboardInterrupt:
         print("isolator: interrupted", file=sys.stderr)
         return 130
