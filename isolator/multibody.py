@@ -143,8 +143,23 @@ class MujocoTable:
             out[:, i] = (q[0], v[0], a[0])
         return out
 
-    def accelerations(self, y: np.ndarray, carriages: np.ndarray, t: float = 0.0) -> np.ndarray:
-        """Table accelerations (linear world, angular table frame) for state ``y``."""
+    def accelerations(
+        self, y: np.ndarray, carriages: np.ndarray, t: float = 0.0, ground: np.ndarray | None = None
+    ) -> np.ndarray:
+        """Table accelerations (linear world, angular table frame) for state ``y``.
+
+        Parameters
+        ----------
+        y : ndarray (13,)
+            Position, quaternion (w, x, y, z), world velocity, table-frame angular velocity.
+        carriages : ndarray (3, n)
+            Carriage coordinates, velocities, accelerations.
+        t : float
+            Time [s] (for the actuator forces).
+        ground : ndarray (12,), optional
+            Floor translation [m], rotation about the world origin [rad] and their
+            rates: the isolators' ground anchors move with it.
+        """
         mj, m, d = self.mj, self.model, self.data
         d.qpos[0:7] = y[0:7] / np.r_[1.0, 1.0, 1.0, np.full(4, np.linalg.norm(y[3:7]))]
         d.qvel[0:6] = y[7:13]
@@ -159,8 +174,12 @@ class MujocoTable:
             sid = self.site_ids[k]
             point = d.site_xpos[sid].copy()
             mj.mj_objectVelocity(m, d, mj.mjtObj.mjOBJ_SITE, sid, vel6, 0)
-            disp = point - np.asarray(iso.position)
-            f = -np.asarray(iso.stiffness) * disp - np.asarray(iso.damping) * vel6[3:6]
+            anchor = np.asarray(iso.position, dtype=float)
+            disp, rate = point - anchor, vel6[3:6].copy()
+            if ground is not None:
+                disp -= ground[0:3] + np.cross(ground[3:6], anchor)
+                rate -= ground[6:9] + np.cross(ground[9:12], anchor)
+            f = -np.asarray(iso.stiffness) * disp - np.asarray(iso.damping) * rate
             f[2] += self.preload[k]
             mj.mj_applyFT(m, d, f, np.zeros(3), point, self.table_id, d.qfrc_applied)
         if self.forces is not None and self.scenario.actuators:
