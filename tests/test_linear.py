@@ -14,10 +14,10 @@ import math
 
 import numpy as np
 import pytest
-from conftest import asymmetric_3d_dict, base_dict, make
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
+from conftest import asymmetric_3d_dict, base_dict, make
 from isolator import ScenarioError, Simulator, UnstableTableError
 from isolator.linear import linearise
 from isolator.modes import modes
@@ -210,7 +210,8 @@ def test_rest_configurations_and_named_signals():
     assert lin.output_names == ["x", "y", "z", "rx", "ry", "rz", "lens:x", "lens:y", "lens:z"]
     assert lin.input_names[-1] == "actuator:z1"
     moved = linearise(scenario, positions={"lower": 0.2})
-    assert moved.positions[0] == 0.2 and moved.positions[1] == scenario.initial_positions()[1]
+    assert moved.positions[0] == 0.2
+    assert moved.positions[1] == scenario.initial_positions()[1]
     at_end = linearise(scenario, time=10.0)
     np.testing.assert_allclose(at_end.positions, scenario.final_positions())
     # the point's motion is the mass centre's plus the rotation times its arm (static, 0 Hz)
