@@ -20,7 +20,7 @@ from scipy.spatial.transform import Rotation
 from conftest import asymmetric_3d_dict, base_dict, make
 from isolator import ScenarioError, Simulator, UnstableTableError
 from isolator.linear import linearise
-from isolator.modes import modes
+from isolator.modes import modes, modes_over_travel
 from isolator.multibody import MujocoTable, mujoco_available
 from isolator.stability import stability
 from isolator.transmissibility import compliance, transmissibility
@@ -253,3 +253,21 @@ def test_modes_follow_the_stage():
     edge = modes(linearise(scenario, positions=[0.4]))
     assert not np.allclose(centre.frequencies_hz, edge.frequencies_hz, rtol=1e-6)
     assert np.all(np.diff(centre.frequencies_hz) >= 0)
+
+
+def test_modes_over_travel_and_figures(tmp_path):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    scenario = make(asymmetric_3d_dict())
+    travel = modes_over_travel(scenario, samples=5)
+    assert travel.carriages == ("lower", "upper")
+    assert travel.frequencies_hz[0].shape == (5, 6)
+    # each sweep point equals a direct linearisation there
+    direct = modes(linearise(scenario, positions={"upper": travel.positions[1][2]}))
+    np.testing.assert_allclose(travel.frequencies_hz[1][2], direct.frequencies_hz, rtol=1e-12)
+    for i, fig in enumerate((travel.plot(), direct.plot(), compliance(linearise(scenario)).plot())):
+        fig.savefig(tmp_path / f"{i}.png")
+        assert (tmp_path / f"{i}.png").stat().st_size > 10_000
+    with pytest.raises(ValueError, match="samples: must be >= 2"):
+        modes_over_travel(scenario, samples=1)
