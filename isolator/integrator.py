@@ -19,7 +19,7 @@ from .model import Model, ParameterLayout
 from .native import NativeFunction
 from .scenario import Scenario, SimulationSettings
 
-__all__ = ["Stepper", "TimeGrid", "model_inputs", "time_grid"]
+__all__ = ["Stepper", "TimeGrid", "model_inputs", "stage_times", "time_grid"]
 
 CHUNK = 512
 
@@ -58,6 +58,21 @@ def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> T
     return TimeGrid(nodes[order], flags[order])
 
 
+def stage_times(grid: TimeGrid, substeps: int) -> tuple[np.ndarray, np.ndarray]:
+    """RK4 stage times of every grid interval and each interval's midpoint [s].
+
+    Returns
+    -------
+    times, mid : ndarray, shape (intervals, 2 substeps + 1)
+        Non-decreasing when flattened in C order.
+    """
+    t0, t1 = grid.nodes[:-1], grid.nodes[1:]
+    frac = np.arange(2 * substeps + 1) / (2 * substeps)
+    times = t0[:, None] + (t1 - t0)[:, None] * frac[None, :]
+    mid = np.broadcast_to(((t0 + t1) / 2)[:, None], times.shape)
+    return times, mid
+
+
 def model_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarray:
     """The model's inputs ``u`` at every RK stage time of every grid interval.
 
@@ -70,10 +85,7 @@ def model_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarra
         One-sided within each interval: the profile piece is chosen by the
         interval's midpoint.
     """
-    t0, t1 = grid.nodes[:-1], grid.nodes[1:]
-    frac = np.arange(2 * substeps + 1) / (2 * substeps)
-    times = t0[:, None] + (t1 - t0)[:, None] * frac[None, :]
-    mid = np.broadcast_to(((t0 + t1) / 2)[:, None], times.shape)
+    times, mid = stage_times(grid, substeps)
     n = len(scenario.carriages)
     layout = ParameterLayout.of(scenario)
     out = np.zeros((*times.shape, layout.input_size))

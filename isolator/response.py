@@ -46,6 +46,9 @@ class Response:
         Per signal: settling time [s] (or None with a reason), peak, band.
     states : ndarray (N, n_states)
         The model's state at the samples (for checks).
+    actuator_names : tuple of str
+    actuator_forces : ndarray (n_actuators, N)
+        Forces the actuators applied [N] (after saturation and lag).
     """
 
     name: str
@@ -58,6 +61,8 @@ class Response:
     final: np.ndarray | None
     settling: dict[str, SettlingResult]
     states: np.ndarray = field(repr=False)
+    actuator_names: tuple[str, ...] = ()
+    actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
 
     @property
     def signal_names(self) -> tuple[str, ...]:
@@ -106,10 +111,15 @@ class Response:
         }
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad] to ``path``."""
+        """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``f:<actuator>...`` [N]
+        when actuators applied forces, to ``path``."""
         path = Path(path)
         header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names]]
-        data = np.column_stack([self.t, self.signals.T, self.q.T])
+        columns = [self.t, self.signals.T, self.q.T]
+        if self.actuator_forces.size and np.any(self.actuator_forces):
+            header += [f"f:{n}" for n in self.actuator_names]
+            columns.append(self.actuator_forces.T)
+        data = np.column_stack(columns)
         with open(path, "w", newline="") as handle:
             writer = csv.writer(handle)
             writer.writerow(header)

@@ -9,9 +9,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .actuation import ForceHistory, applied_forces
 from .equilibrium import Equilibrium, static_equilibrium
 from .errors import ScenarioError, SimulationError
-from .integrator import Stepper, TimeGrid, model_inputs, time_grid
+from .integrator import Stepper, TimeGrid, model_inputs, stage_times, time_grid
 from .model import MODEL_KINDS, Model, ParameterLayout, build_model
 from .profiles import SineProfile
 from .response import Response
@@ -144,7 +145,12 @@ class Simulator:
         return self._inputs[substeps]
 
     # -- runs --------------------------------------------------------------------
-    def run(self, changes: Mapping[str, float] | None = None, p: np.ndarray | None = None) -> Response:
+    def run(
+        self,
+        changes: Mapping[str, float] | None = None,
+        p: np.ndarray | None = None,
+        forces: ForceHistory | None = None,
+    ) -> Response:
         """Simulate once.
 
         Parameters
@@ -153,6 +159,9 @@ class Simulator:
             Parameter values by name, e.g. ``{"isolators[0].stiffness.z": 6e5}``.
         p : ndarray, optional
             A whole parameter vector (overrides ``changes``).
+        forces : ForceHistory, optional
+            Commanded actuator forces (clipped at ``max_force`` and lagged by
+            each actuator's bandwidth, see :mod:`isolator.actuation`).
 
         Returns
         -------
@@ -168,13 +177,32 @@ class Simulator:
         p = self.parameter_vector(changes) if p is None else np.asarray(p, dtype=float)
         start, end = self.equilibria(p)
         substeps = self.substeps_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        return self._run(p, start, end, substeps)
+        return self._run(p, start, end, substeps, forces)
+
+    def _with_forces(self, inputs: np.ndarray, substeps: int, forces: ForceHistory | None) -> np.ndarray:
+        """The inputs with the actuators' applied forces at every stage time."""
+        if forces is None:
+            return inputs
+        names = tuple(a.name for a in self.scenario.actuators)
+        if forces.names != names:
+            raise ScenarioError(f"forces: are for actuators {forces.names}, the scenario has {names}")
+        times, _ = stage_times(self.grid, substeps)
+        flat = times.ravel()
+        applied = applied_forces(self.scenario, forces.command(flat), flat)
+        out = inputs.copy()
+        out[..., self.layout.actuator_slice] = applied.reshape(*times.shape, len(names))
+        return out
 
     def _run(
-        self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, substeps: int
+        self,
+        p: np.ndarray,
+        start: Equilibrium,
+        end: Equilibrium | None,
+        substeps: int,
+        forces: ForceHistory | None = None,
     ) -> Response:
         grid = self.grid
-        inputs = self._model_inputs(substeps)
+        inputs = self._with_forces(self._model_inputs(substeps), substeps, forces)
         states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
         states = np.vstack([start.state, states])[grid.is_sample]
         t = grid.samples
@@ -191,7 +219,9 @@ class Simulator:
         hold = _slowest_period(end.eigenvalues) if end is not None else 0.0
         metrics = settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold)
         n = len(self.scenario.carriages)
-        q = np.vstack([inputs[:, 0, :n], inputs[-1:, -1, :n]])[grid.is_sample].T
+        at_nodes = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
+        q = at_nodes[:, :n].T
+        applied = at_nodes[:, self.layout.actuator_slice].T
         return Response(
             name=self.scenario.name,
             model=self.model.kind,
@@ -203,6 +233,8 @@ class Simulator:
             final=final,
             settling=metrics,
             states=states,
+            actuator_names=tuple(a.name for a in self.scenario.actuators),
+            actuator_forces=applied,
         )
 
     def signals(self, states: np.ndarray, start: Equilibrium) -> np.ndarray:

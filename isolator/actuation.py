@@ -1,0 +1,132 @@
+"""Actuator force histories: forces files, saturation and the actuators' first-order lag.
+
+A forces file (``docs/scenario-format.md``) is a CSV with a column ``t`` and
+one column per actuator name, in N along the actuator's direction, linearly
+interpolated in time and zero outside its time range. What acts on the table
+is the command clipped at ``max_force`` and, for an actuator with a
+``bandwidth``, passed through the first-order lag ``tau f' = u - f`` with
+``tau = 1 / (2 pi bandwidth)`` (starting from zero force), solved exactly for
+a command that is linear between evaluation times.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import ScenarioError
+from .loading import read_csv_columns
+from .scenario import Scenario
+
+__all__ = ["ForceHistory", "applied_forces", "load_forces"]
+
+
+@dataclass(frozen=True)
+class ForceHistory:
+    """Commanded actuator forces over time.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        Increasing times [s].
+    forces : ndarray (n_actuators, N)
+        [N] per scenario actuator, in the scenario's order (zero for actuators
+        the source did not name).
+    names : tuple of str
+        The scenario's actuator names.
+    """
+
+    t: np.ndarray
+    forces: np.ndarray
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        f = np.asarray(self.forces, dtype=float).reshape(len(self.names), -1)
+        if t.ndim != 1 or t.size != f.shape[1]:
+            raise ScenarioError(f"forces: {t.size} times for {f.shape[1]} force samples")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
+            raise ScenarioError("forces: times and forces must be finite (found NaN or infinity)")
+        if t.size and np.any(np.diff(t) <= 0):
+            raise ScenarioError("forces.t: times must be strictly increasing")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "forces", f)
+
+    def command(self, times: np.ndarray) -> np.ndarray:
+        """Commanded forces at ``times`` [N], shape ``(*times.shape, n_actuators)``; zero outside."""
+        times = np.asarray(times, dtype=float)
+        out = np.zeros((*times.shape, len(self.names)))
+        if self.t.size == 0:
+            return out
+        inside = (times >= self.t[0]) & (times <= self.t[-1])
+        for k in range(len(self.names)):
+            out[..., k] = np.where(inside, np.interp(times, self.t, self.forces[k]), 0.0)
+        return out
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write the forces file (``t`` and one column per actuator) [s, N]."""
+        path = Path(path)
+        data = np.column_stack([self.t, self.forces.T])
+        with open(path, "w") as handle:
+            handle.write(",".join(["t", *self.names]) + "\n")
+            for row in data:
+                handle.write(",".join(f"{v:.10g}" for v in row) + "\n")
+        return path
+
+
+def load_forces(path: str | Path, scenario: Scenario, key: str = "forces") -> ForceHistory:
+    """Read a forces file for a scenario's actuators.
+
+    Raises
+    ------
+    ScenarioError
+        No actuators in the scenario; an unreadable file; a column that names
+        no actuator; non-numeric, non-finite or non-increasing values.
+    """
+    names = tuple(a.name for a in scenario.actuators)
+    if not names:
+        raise ScenarioError(f"{key}: the scenario has no [[actuators]] to apply forces with")
+    columns = read_csv_columns(Path(path), key, ("t",), names)
+    t = columns.pop("t")
+    forces = np.array([columns.get(n, np.zeros_like(t)) for n in names])
+    return ForceHistory(t, forces, names)
+
+
+def applied_forces(scenario: Scenario, command: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """What the actuators apply for a command: clipped at ``max_force``, then lagged.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    command : ndarray (N, n_actuators)
+        Commanded forces [N] at ``times``.
+    times : ndarray (N,)
+        Non-decreasing times [s] (repeated times allowed).
+
+    Returns
+    -------
+    ndarray (N, n_actuators)
+        [N]
+    """
+    limits = np.array([a.max_force for a in scenario.actuators])
+    u = np.clip(command, -limits, limits)
+    out = u.copy()
+    h = np.diff(times)
+    for k, act in enumerate(scenario.actuators):
+        if act.bandwidth is None:
+            continue
+        tau = 1.0 / (2 * math.pi * act.bandwidth)
+        decay = np.exp(-h / tau)
+        y = np.empty(u.shape[0])
+        y[0] = 0.0
+        for i in range(h.size):  # exact for u linear over [t_i, t_i+1]
+            if h[i] <= 0:
+                y[i + 1] = y[i]
+                continue
+            slope = (u[i + 1, k] - u[i, k]) / h[i]
+            y[i + 1] = u[i + 1, k] + (y[i] - u[i, k] + slope * tau) * decay[i] - slope * tau
+        out[:, k] = y
+    return out
