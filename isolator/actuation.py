@@ -2,7 +2,10 @@
 
 A forces file (``docs/scenario-format.md``) is a CSV with a column ``t`` and
 one column per actuator name, in N along the actuator's direction, linearly
-interpolated in time and zero outside its time range. What acts on the table
+interpolated in time and zero outside its time range. A time may appear twice
+in a row to give a step: the first row holds the value just before it, the
+second the value from it on (the simulation takes the side of each step that
+its integration interval lies on). What acts on the table
 is the command clipped at ``max_force`` and, for an actuator with a
 ``bandwidth``, passed through the first-order lag ``tau f' = u - f`` with
 ``tau = 1 / (2 pi bandwidth)`` (starting from zero force), solved exactly for
@@ -50,20 +53,33 @@ class ForceHistory:
             raise ScenarioError(f"forces: {t.size} times for {f.shape[1]} force samples")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
             raise ScenarioError("forces: times and forces must be finite (found NaN or infinity)")
-        if t.size and np.any(np.diff(t) <= 0):
-            raise ScenarioError("forces.t: times must be strictly increasing")
+        steps = np.diff(t)
+        if t.size and (np.any(steps < 0) or np.any((steps[1:] == 0) & (steps[:-1] == 0))):
+            raise ScenarioError("forces.t: times must be increasing (a time at most twice, for a step)")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "forces", f)
 
-    def command(self, times: np.ndarray) -> np.ndarray:
-        """Commanded forces at ``times`` [N], shape ``(*times.shape, n_actuators)``; zero outside."""
+    def command(self, times: np.ndarray, piece_time: np.ndarray | None = None) -> np.ndarray:
+        """Commanded forces at ``times`` [N], shape ``(*times.shape, n_actuators)``; zero outside.
+
+        At a step (a repeated time) the value is the one after it where
+        ``piece_time`` (e.g. the middle of the integration interval) lies
+        after ``times``, else the one before; without ``piece_time``, after.
+        """
         times = np.asarray(times, dtype=float)
         out = np.zeros((*times.shape, len(self.names)))
-        if self.t.size == 0:
+        if self.t.size < 2:
             return out
+        after = np.ones(times.shape, bool) if piece_time is None else np.asarray(piece_time) > times
+        right = np.searchsorted(self.t, times, side="right") - 1
+        left = np.searchsorted(self.t, times, side="left") - 1
+        i = np.clip(np.where(after, right, left), 0, self.t.size - 2)
+        t0, t1 = self.t[i], self.t[i + 1]
+        w = np.where(t1 > t0, (times - t0) / np.where(t1 > t0, t1 - t0, 1.0), 1.0)
         inside = (times >= self.t[0]) & (times <= self.t[-1])
         for k in range(len(self.names)):
-            out[..., k] = np.where(inside, np.interp(times, self.t, self.forces[k]), 0.0)
+            f = self.forces[k]
+            out[..., k] = np.where(inside, f[i] + w * (f[i + 1] - f[i]), 0.0)
         return out
 
     def to_csv(self, path: str | Path) -> Path:

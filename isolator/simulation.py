@@ -186,9 +186,9 @@ class Simulator:
         names = tuple(a.name for a in self.scenario.actuators)
         if forces.names != names:
             raise ScenarioError(f"forces: are for actuators {forces.names}, the scenario has {names}")
-        times, _ = stage_times(self.grid, substeps)
+        times, mid = stage_times(self.grid, substeps)
         flat = times.ravel()
-        applied = applied_forces(self.scenario, forces.command(flat), flat)
+        applied = applied_forces(self.scenario, forces.command(flat, mid.ravel()), flat)
         out = inputs.copy()
         out[..., self.layout.actuator_slice] = applied.reshape(*times.shape, len(names))
         return out

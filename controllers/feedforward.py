@@ -1,0 +1,260 @@
+"""Feedforward cancellation of the carriages' reaction on the table, from the planned motion.
+
+What the actuators hold and what they leave: the carriages' weight moving
+across the table tilts it quasi-statically (the static equilibrium follows
+the carriages). Holding that tilt would take a standing force after every
+move (Table 3.2: about 2,700 N m for the 400 kg stage moving 1.4 m, more
+than four 500 N actuators at 1 m can give) and is the job of the isolators'
+slow leveling valves. So the feedforward leaves the table on its
+**quasi-static path** and cancels everything else: it supplies
+
+* the carriages' inertial reaction, ``sum m_i a_i`` and ``sum m_i d_i x a_i``
+  (their accelerations relative to the table, about its mass centre), and
+* the small force that moves the table along its quasi-static path,
+  ``M z_qs'' + C z_qs'`` (linearised mass and damping at the start),
+
+allocated over the actuators by least squares within their force limits
+(``method="allocation"``). What remains is the deviation from the
+quasi-static path that the table would see with ideal actuators: second
+order in the small rotations.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+from scipy.optimize import lsq_linear
+from scipy.spatial.transform import Rotation
+
+from isolator.actuation import ForceHistory
+from isolator.equilibrium import static_equilibrium
+from isolator.errors import ScenarioError
+from isolator.linear import LinearModel, linearise
+from isolator.model import ParameterLayout, build_linearisation, cardan_matrix
+from isolator.scenario import Scenario
+from isolator.simulation import Simulator, table_signals
+
+__all__ = ["Feedforward", "allocation_matrix", "feedforward_allocation", "quasi_static_path", "reaction_wrench"]
+
+#: spacing of the static equilibria that trace the quasi-static path [s]
+QS_SPACING = 0.02
+
+
+def _rotation(pose: np.ndarray) -> np.ndarray:
+    import casadi as ca
+
+    return np.asarray(cardan_matrix(ca.DM(pose[3:])), dtype=float)
+
+
+def _orientations(rot0: np.ndarray, rotation_vectors: np.ndarray) -> np.ndarray:
+    """``exp([phi]x) R0`` for rotation vectors (N, 3), shape (N, 3, 3)."""
+    return Rotation.from_rotvec(rotation_vectors).as_matrix() @ rot0
+
+
+def allocation_matrix(scenario: Scenario, rot: np.ndarray) -> np.ndarray:
+    """Wrench per unit actuator force, shape (..., 6, n_actuators).
+
+    Rows: force [N] and moment about the table's mass centre [N m], world axes,
+    with the table turned by ``rot`` (..., 3, 3) (table to world).
+    """
+    d = np.array([a.direction for a in scenario.actuators], dtype=float)  # (n, 3)
+    p = np.array([a.position for a in scenario.actuators], dtype=float)
+    arms = np.einsum("...ij,nj->...ni", rot, p)
+    moments = np.cross(arms, d)
+    force = np.broadcast_to(d, moments.shape)
+    return np.swapaxes(np.concatenate([force, moments], axis=-1), -1, -2)
+
+
+def reaction_wrench(scenario: Scenario, t: np.ndarray, piece_time: np.ndarray | None, rot: np.ndarray) -> np.ndarray:
+    """The wrench that cancels the carriages' inertial reaction, (N, 6) [N, N m], world axes.
+
+    ``sum m_i a_i`` and ``sum m_i d_i x a_i`` with ``d_i`` the carriage masses'
+    positions and ``a_i`` their accelerations relative to the table, about its
+    mass centre, turned by the table's orientation ``rot`` (N, 3, 3).
+    """
+    t = np.asarray(t, dtype=float)
+    n = len(scenario.carriages)
+    q = np.zeros((n, t.size))
+    qdd = np.zeros((n, t.size))
+    for i, c in enumerate(scenario.carriages):
+        q[i], _, qdd[i] = c.profile.evaluate(t, piece_time)
+    pos = scenario.carriage_positions(q)  # (n, 3, N)
+    acc = scenario.carriage_positions(qdd) - scenario.carriage_positions(np.zeros_like(qdd))
+    m = np.array([c.mass for c in scenario.carriages])[:, None, None]
+    force = np.sum(m * acc, axis=0).T
+    moment = np.sum(m * np.cross(pos, acc, axis=1), axis=0).T
+    return np.hstack([np.einsum("nij,nj->ni", rot, force), np.einsum("nij,nj->ni", rot, moment)])
+
+
+@dataclass(frozen=True)
+class QuasiStaticPath:
+    """The table's static equilibrium as the carriages move, traced in time.
+
+    Attributes
+    ----------
+    segments : list of (float, float, CubicSpline)
+        Per stretch between profile breakpoints: start, end [s] and a spline of
+        the six signals (displacement [m], rotation vector [rad]) from the
+        initial equilibrium.
+    """
+
+    segments: list[tuple[float, float, CubicSpline]]
+
+    def __call__(self, t: np.ndarray, piece_time: np.ndarray | None = None, nu: int = 0) -> np.ndarray:
+        """Signals (nu = 0) or their ``nu``-th time derivative at ``t``, shape (N, 6)."""
+        t = np.asarray(t, dtype=float)
+        sel = t if piece_time is None else np.asarray(piece_time, dtype=float)
+        out = np.zeros((t.size, 6))
+        for k, (a, b, spline) in enumerate(self.segments):
+            last = k == len(self.segments) - 1
+            mask = (sel >= a) & ((sel < b) | last)
+            if k == 0:
+                mask |= sel < a
+            if mask.any():
+                out[mask] = spline(np.clip(t[mask], a, b), nu)
+                if nu > 0:  # held before the first and after the last stretch
+                    out[mask & ((t < a) | (t > b))] = 0.0
+        return out
+
+
+def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiStaticPath:
+    """Trace the static equilibrium along the carriages' planned motion.
+
+    Static equilibria (Newton, exact model) every ``spacing`` seconds within
+    each stretch between profile breakpoints, splined per stretch (the path
+    is smooth within a stretch; its acceleration may jump at a breakpoint).
+    """
+    sim = Simulator(scenario)
+    model, p = sim.model, sim.parameters
+    start = static_equilibrium(model, p, scenario.initial_positions(), check=False)
+    t_end = scenario.simulation.duration
+    stop = scenario.stop_time if math.isfinite(scenario.stop_time) else t_end
+    cuts = sorted({0.0, *[b for b in scenario.breakpoints if 0 < b < min(stop, t_end)], min(stop, t_end)})
+    segments = []
+    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+        if b <= a:
+            continue
+        count = max(4, math.ceil((b - a) / spacing) + 1)
+        knots = np.linspace(a, b, count)
+        mid = np.full(count, 0.5 * (a + b))
+        q = np.array([c.profile.evaluate(knots, mid)[0] for c in scenario.carriages]).T
+        states = np.array([static_equilibrium(model, p, qk, check=False).state for qk in q])
+        signals = table_signals(states, start.state).T
+        segments.append((a, b, CubicSpline(knots, signals, axis=0)))
+    if not segments:  # nothing moves
+        segments.append((0.0, t_end, CubicSpline([0.0, max(t_end, 1.0)], np.zeros((2, 6)), axis=0)))
+    return QuasiStaticPath(segments)
+
+
+@dataclass(frozen=True)
+class Feedforward:
+    """Feedforward actuator forces and what they were computed from.
+
+    Attributes
+    ----------
+    forces : ForceHistory
+        Commanded forces at the knots (samples and both sides of each breakpoint).
+    wrench : ndarray (N, 6)
+        The wrench asked of the actuators at the knots [N, N m].
+    residual : ndarray (N, 6)
+        What the allocation could not give (limits, directions) [N, N m].
+    path : QuasiStaticPath
+        The table's quasi-static path, which the forces leave alone.
+    """
+
+    forces: ForceHistory
+    wrench: np.ndarray
+    residual: np.ndarray
+    path: QuasiStaticPath
+
+    @property
+    def max_force(self) -> dict[str, float]:
+        """Largest |force| per actuator [N]."""
+        return {n: float(np.max(np.abs(f), initial=0.0)) for n, f in zip(self.forces.names, self.forces.forces,
+                                                                          strict=True)}
+
+
+def _knots(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
+    """Sample times plus both sides of every breakpoint, with a time on the side to evaluate."""
+    samples = scenario.simulation.sample_times()
+    bps = np.array([b for b in scenario.breakpoints if samples[0] < b < samples[-1]])
+    eps = 1e-9
+    if bps.size:  # a breakpoint within round-off of a sample takes its time (as the integration grid does)
+        nearest = samples[np.argmin(np.abs(samples[:, None] - bps[None, :]), axis=0)]
+        bps = np.where(np.abs(nearest - bps) <= eps * np.maximum(1.0, bps), nearest, bps)
+        samples = samples[np.min(np.abs(samples[:, None] - bps[None, :]), axis=1) > 0]
+    times = np.concatenate([samples, bps, bps])
+    sides = np.concatenate([samples, bps - eps, bps + eps])
+    order = np.lexsort((sides, times))
+    return times[order], sides[order]
+
+
+def _path_wrench(
+    scenario: Scenario,
+    lin: LinearModel,
+    times: np.ndarray,
+    sides: np.ndarray,
+    signals: np.ndarray,
+    rot: np.ndarray,
+    path: QuasiStaticPath,
+) -> np.ndarray:
+    """``M(t) z_qs'' + C(t) z_qs'``: the wrench that moves the table along its quasi-static path.
+
+    ``M`` and ``C`` of the exact model linearised at the path's pose with the
+    carriages where (and as fast as) they are at each time: the coupling
+    terms change sign as a carriage crosses the table.
+    """
+    layout = ParameterLayout.of(scenario)
+    n = len(scenario.carriages)
+    c = np.zeros((3 * n, times.size))
+    for i, carriage in enumerate(scenario.carriages):
+        q, v, _ = carriage.profile.evaluate(times, sides)
+        c[i], c[n + i] = q, v
+    pose = np.vstack([lin.equilibrium.pose[:3, None] + signals[:, :3].T,
+                      Rotation.from_matrix(rot).as_euler("ZYX")[:, ::-1].T])
+    mapped = build_linearisation(layout).map(times.size, "serial")
+    mass, damping = (np.asarray(m, dtype=float) for m in mapped(pose, c, layout.pack(scenario))[:2])
+    mass = mass.reshape(6, times.size, 6).transpose(1, 0, 2)
+    damping = damping.reshape(6, times.size, 6).transpose(1, 0, 2)
+    return np.einsum("nij,nj->ni", mass, path(times, sides, 2)) + np.einsum("nij,nj->ni", damping, path(times, sides, 1))
+
+
+def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforward:
+    """Instantaneous allocation of the cancelling wrench over the actuators.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With ``[[actuators]]``.
+    limits : bool
+        Respect each actuator's ``max_force`` (bounded least squares where the
+        minimum-norm solution exceeds one); False: the unconstrained solution.
+
+    Raises
+    ------
+    ScenarioError
+        No actuators, or actuators that cannot produce a wrench in every direction
+        (the allocation then leaves the unreachable part in ``residual``; only
+        no actuators at all is an error).
+    """
+    if not scenario.actuators:
+        raise ScenarioError("actuators: the scenario has no [[actuators]] for feedforward")
+    lin = linearise(scenario)
+    path = quasi_static_path(scenario)
+    times, sides = _knots(scenario)
+    signals = path(times, sides)
+    rot = _orientations(_rotation(lin.equilibrium.pose), signals[:, 3:])
+    wrench = reaction_wrench(scenario, times, sides, rot)
+    wrench += _path_wrench(scenario, lin, times, sides, signals, rot, path)
+    b = allocation_matrix(scenario, rot)  # (N, 6, n)
+    forces = np.einsum("nij,nj->ni", np.linalg.pinv(b), wrench)
+    if limits:
+        cap = np.array([a.max_force for a in scenario.actuators])
+        for i in np.flatnonzero(np.any(np.abs(forces) > cap, axis=1)):
+            forces[i] = lsq_linear(b[i], wrench[i], bounds=(-cap, cap)).x
+    residual = wrench - np.einsum("nij,nj->ni", b, forces)
+    names = tuple(a.name for a in scenario.actuators)
+    return Feedforward(ForceHistory(times, forces.T, names), wrench, residual, path)
