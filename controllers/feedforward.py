@@ -21,6 +21,7 @@ order in the small rotations.
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -134,7 +135,7 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
     stop = scenario.stop_time if math.isfinite(scenario.stop_time) else t_end
     cuts = sorted({0.0, *[b for b in scenario.breakpoints if 0 < b < min(stop, t_end)], min(stop, t_end)})
     segments = []
-    for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+    for a, b in itertools.pairwise(cuts):
         if b <= a:
             continue
         count = max(4, math.ceil((b - a) / spacing) + 1)
@@ -219,7 +220,8 @@ def _path_wrench(
     mass, damping = (np.asarray(m, dtype=float) for m in mapped(pose, c, layout.pack(scenario))[:2])
     mass = mass.reshape(6, times.size, 6).transpose(1, 0, 2)
     damping = damping.reshape(6, times.size, 6).transpose(1, 0, 2)
-    return np.einsum("nij,nj->ni", mass, path(times, sides, 2)) + np.einsum("nij,nj->ni", damping, path(times, sides, 1))
+    accel, rate = path(times, sides, 2), path(times, sides, 1)
+    return np.einsum("nij,nj->ni", mass, accel) + np.einsum("nij,nj->ni", damping, rate)
 
 
 def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforward:
