@@ -43,6 +43,8 @@ def _parser() -> argparse.ArgumentParser:
     sim.add_argument("--plot", type=Path, metavar="FILE.png",
                      help="figure path (default: <scenario name>.png, none with --json)")
     sim.add_argument("--json", action="store_true", help="print a JSON summary instead of the table")
+    sim.add_argument("--forces", type=Path, metavar="FILE.csv",
+                     help="actuator forces file (t and one column per actuator, N)")
 
     study = sub.add_parser("study", help="run a study that writes figures and a report")
     study.add_argument("name", choices=["paper"], help="paper: reproduce Shin, Sun and Kim")
@@ -91,8 +93,36 @@ def _parser() -> argparse.ArgumentParser:
     crit.add_argument("--point", default=None, help="a [[points]] name (default: the mass centre)")
     crit.add_argument("--plot", type=Path, metavar="FILE.png", help="write the figure against the VC curves")
 
+    ff = sub.add_parser(
+        "feedforward", help="actuator forces that cancel the carriages' reaction, and what they buy",
+        description="Compute feedforward actuator forces from the planned carriage motion and compare "
+        "the passive and controlled runs (settling band: 5 %% of the passive peak per signal).",
+    )
+    ff.add_argument("scenario", nargs="?", default=None,
+                    help="scenario file or bundled name with [[actuators]] (default: paper-table-3-2-active)")
+    ff.add_argument("--method", choices=["allocation"], default="allocation",
+                    help="allocation: least squares of the reaction wrench over the actuators, within limits")
+    ff.add_argument("--out", type=Path, metavar="FORCES.csv", help="write the forces file")
+    ff.add_argument("--json", action="store_true", help="print JSON instead of text")
+
     sub.add_parser("scenarios", help="list the bundled scenarios")
     return parser
+
+
+def _feedforward(args: argparse.Namespace) -> int:
+    from controllers.feedforward import compare_feedforward
+
+    scenario = load_scenario(args.scenario or "paper-table-3-2-active")
+    result = compare_feedforward(scenario)
+    if args.out:
+        result.feedforward.forces.to_csv(args.out)
+    if args.json:
+        print(json.dumps(result.to_dict(), indent=2))
+    else:
+        print(result.summary())
+        if args.out:
+            print(f"forces file: {args.out}")
+    return 0
 
 
 def _linear_arguments(parser: argparse.ArgumentParser) -> None:
@@ -200,7 +230,13 @@ def _simulate(args: argparse.Namespace) -> int:
     from .simulation import simulate
 
     scenario = load_scenario(args.scenario)
-    response = simulate(scenario, model=args.model)
+    if args.forces:
+        from .actuation import load_forces
+        from .simulation import Simulator
+
+        response = Simulator(scenario, args.model).run(forces=load_forces(args.forces, scenario, key="--forces"))
+    else:
+        response = simulate(scenario, model=args.model)
     if args.out:
         response.to_csv(args.out)
     plot = args.plot
@@ -244,7 +280,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "study":
             return _study(args)
         handlers = {"modes": _modes, "transmissibility": _transmissibility, "stability": _stability,
-                    "criteria": _criteria}
+                    "criteria": _criteria, "feedforward": _feedforward}
         if args.command in handlers:
             if args.command != "stability":
                 import matplotlib

@@ -72,11 +72,13 @@ class MujocoTable:
     ----------
     scenario : Scenario
     forces : callable, optional
-        ``forces(t) -> (n_actuators,)`` actuator forces [N] along each
-        actuator's direction (world), applied at its point on the table.
+        ``forces(t, piece_time) -> (n_actuators,)`` actuator forces [N] along
+        each actuator's direction (world), applied at its point on the table;
+        ``piece_time`` lies inside the current integration segment (for forces
+        that step at profile breakpoints), or equals ``t``.
     """
 
-    def __init__(self, scenario: Scenario, forces=None) -> None:
+    def __init__(self, scenario: Scenario, forces: Callable[[float, float], Sequence[float]] | None = None) -> None:
         try:
             import mujoco
         except ImportError as exc:
@@ -144,7 +146,12 @@ class MujocoTable:
         return out
 
     def accelerations(
-        self, y: np.ndarray, carriages: np.ndarray, t: float = 0.0, ground: np.ndarray | None = None
+        self,
+        y: np.ndarray,
+        carriages: np.ndarray,
+        t: float = 0.0,
+        ground: np.ndarray | None = None,
+        piece_time: float | None = None,
     ) -> np.ndarray:
         """Table accelerations (linear world, angular table frame) for state ``y``.
 
@@ -159,6 +166,8 @@ class MujocoTable:
         ground : ndarray (12,), optional
             Floor translation [m], rotation about the world origin [rad] and their
             rates: the isolators' ground anchors move with it.
+        piece_time : float, optional
+            A time inside the current integration segment (for the forces).
         """
         mj, m, d = self.mj, self.model, self.data
         d.qpos[0:7] = y[0:7] / np.r_[1.0, 1.0, 1.0, np.full(4, np.linalg.norm(y[3:7]))]
@@ -184,7 +193,8 @@ class MujocoTable:
             mj.mj_applyFT(m, d, f, np.zeros(3), point, self.table_id, d.qfrc_applied)
         if self.forces is not None and self.scenario.actuators:
             rot = d.xmat[self.table_id].reshape(3, 3)
-            for act, value in zip(self.scenario.actuators, self.forces(t), strict=False):
+            values = self.forces(t, t if piece_time is None else piece_time)
+            for act, value in zip(self.scenario.actuators, values, strict=False):
                 point = d.xpos[self.table_id] + rot @ np.asarray(act.position)
                 f = value * np.asarray(act.direction)
                 mj.mj_applyFT(m, d, f, np.zeros(3), point, self.table_id, d.qfrc_applied)
@@ -205,7 +215,7 @@ class MujocoTable:
             mj.mj_fullM(m, d, self._full_m)
 
     def _derivative(self, t: float, y: np.ndarray, piece_time: float) -> np.ndarray:
-        acc = self.accelerations(y, self._carriages(t, piece_time), t)
+        acc = self.accelerations(y, self._carriages(t, piece_time), t, piece_time=piece_time)
         qw, qx, qy, qz = y[3:7]
         p, q, r = y[10:13]
         qdot = 0.5 * np.array(

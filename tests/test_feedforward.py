@@ -1,0 +1,124 @@
+"""Actuator forces in the simulation, and feedforward cancellation checked independently."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import base_dict, make
+from controllers.feedforward import compare_feedforward, feedforward_allocation
+from isolator import ScenarioError, Simulator, load_scenario
+from isolator.actuation import ForceHistory, applied_forces, load_forces
+from isolator.cli import main
+from isolator.multibody import MujocoTable, mujoco_available
+from isolator.scenario import SIGNALS
+
+
+def _active_dict(max_force: float = 500.0, bandwidth: float | None = None) -> dict:
+    data = base_dict()
+    data["simulation"]["duration"] = 3.0
+    acts = []
+    for k, iso in enumerate(data["isolators"]):
+        for axis, d in (("x", [1.0, 0, 0]), ("y", [0, 1.0, 0]), ("z", [0, 0, 1.0])):
+            act = {"name": f"{axis}{k}", "position": iso["position"], "direction": d, "max_force": max_force}
+            if bandwidth is not None:
+                act["bandwidth"] = bandwidth
+            acts.append(act)
+    data["actuators"] = acts
+    return data
+
+
+@pytest.mark.skipif(not mujoco_available(), reason="needs mujoco")
+def test_unlimited_allocation_leaves_the_table_on_its_quasi_static_path_in_mujoco():
+    scenario = make(_active_dict(max_force=1e6))
+    ff = feedforward_allocation(scenario, limits=False)
+    passive = MujocoTable(scenario).simulate(rtol=1e-9, atol=1e-13)
+
+    def forces(t: float, piece_time: float) -> np.ndarray:
+        return ff.forces.command(np.array([t]), np.array([piece_time]))[0]
+
+    controlled = MujocoTable(scenario, forces=forces).simulate(rtol=1e-9, atol=1e-13)
+    qs = ff.path(passive.t).T
+    for k, name in enumerate(SIGNALS):
+        dev_p = np.max(np.abs(passive.signals[k] - qs[k]))
+        dev_c = np.max(np.abs(controlled.signals[k] - qs[k]))
+        if dev_p > 1e-12:
+            assert 20 * math.log10(dev_c / dev_p) < -40, name
+    # and our simulation of the same forces agrees with MuJoCo's
+    ours = Simulator(scenario).run(forces=ff.forces)
+    scale = np.max(np.abs(controlled.signals), axis=1)
+    np.testing.assert_allclose(ours.signals, controlled.signals, atol=1e-5 * scale.max())
+
+
+def test_targets_on_the_active_paper_scenario():
+    result = compare_feedforward(load_scenario("paper-table-3-2-active"))
+    assert all(v <= -40 for v in result.reduction_db().values())
+    assert result.settling_time_max("controlled") <= 0.020
+    assert result.settling_time_max("passive") > 1.0
+    assert all(f <= 500.0 for f in result.feedforward.max_force.values())
+    data = result.to_dict()
+    for which in ("passive", "controlled"):
+        assert set(data[which]) >= {"peak", "settling_time_max"}
+        assert set(data[which]["peak"]) == set(SIGNALS)
+    assert len(data["max_force"]) == 12
+
+
+def test_force_limits_are_respected():
+    scenario = make(_active_dict(max_force=15.0))
+    ff = feedforward_allocation(scenario)
+    assert np.max(np.abs(ff.forces.forces)) <= 15.0 + 1e-9
+    assert np.max(np.abs(ff.residual)) > 1.0  # the limits leave part of the wrench
+    doubled = ForceHistory(ff.forces.t, 2 * ff.forces.forces, ff.forces.names)
+    run = Simulator(scenario).run(forces=doubled)
+    assert np.max(np.abs(run.actuator_forces)) <= 15.0 + 1e-9  # the simulation clips commands
+
+
+def test_first_order_lag_is_exact():
+    scenario = make(_active_dict(bandwidth=20.0))
+    tau = 1 / (2 * math.pi * 20.0)
+    times = np.linspace(0.0, 0.05, 51)
+    command = np.zeros((51, 12))
+    command[:, 0] = 100.0  # a step at t = 0 (the lag starts from zero force)
+    command[:, 1] = 1000.0 * times  # a ramp
+    out = applied_forces(scenario, command, times)
+    np.testing.assert_allclose(out[:, 0], 100.0 * (1 - np.exp(-times / tau)), rtol=1e-12, atol=1e-12)
+    ramp = np.minimum(1000.0 * (times - tau * (1 - np.exp(-times / tau))), 500.0)
+    np.testing.assert_allclose(out[:, 1], ramp, rtol=1e-9, atol=1e-9)
+
+
+def test_forces_files(tmp_path: Path):
+    scenario = make(_active_dict())
+    path = tmp_path / "f.csv"
+    path.write_text("t,z0,x1\n0,0,0\n0.5,0,0\n0.5,100,-20\n1,100,-20\n")
+    forces = load_forces(path, scenario)
+    cmd = forces.command(np.array([0.5, 0.5, 0.75]), np.array([0.4, 0.6, 0.75]))
+    assert cmd[0, forces.names.index("z0")] == 0.0  # before the step
+    assert cmd[1, forces.names.index("z0")] == 100.0  # after it
+    assert cmd[2, forces.names.index("x1")] == -20.0
+    assert np.all(cmd[:, forces.names.index("y2")] == 0.0)  # not named: zero
+    bad = tmp_path / "bad.csv"
+    bad.write_text("t,nope\n0,1\n")
+    with pytest.raises(ScenarioError, match=r"forces: .* must be a CSV whose header has t"):
+        load_forces(bad, scenario)
+    bad.write_text("t,z0\n1,0\n0,1\n")
+    with pytest.raises(ScenarioError, match=r"forces\.t: times must be increasing"):
+        load_forces(bad, scenario)
+    with pytest.raises(ScenarioError, match="no \\[\\[actuators\\]\\]"):
+        load_forces(path, make(base_dict()))
+
+
+def test_feedforward_and_forces_commands(tmp_path: Path, capsys):
+    out = tmp_path / "ff.csv"
+    assert main(["feedforward", "--json", "--out", str(out)]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert set(data) >= {"passive", "controlled", "max_force"}
+    assert data["controlled"]["settling_time_max"] <= 0.02
+    assert main(["simulate", "paper-table-3-2-active", "--forces", str(out), "--json"]) == 0
+    run = json.loads(capsys.readouterr().out)
+    assert run["peak"]["z"] < 0.05 * data["passive"]["peak"]["z"]
+    assert main(["feedforward", "paper-table-3-2"]) == 2
+    assert "no [[actuators]]" in capsys.readouterr().err
