@@ -99,17 +99,14 @@ def _finite(value: object, key: str) -> float:
 
 
 def _check_footprint(scenario: Scenario, q: np.ndarray) -> None:
-    if scenario.table.size is None or q.size == 0:
-        return
-    pos = scenario.carriage_positions(q)
-    half = np.array(scenario.table.size[:2]) / 2.0
-    for i, carriage in enumerate(scenario.carriages):
-        for axis, label in ((0, "x"), (1, "y")):
-            if abs(pos[i, axis]) > half[axis] * (1 + 1e-9):
-                raise ScenarioError(
-                    f"positions.{carriage.name}: puts the carriage's mass at {label} = {pos[i, axis]:.4g} m, "
-                    f"beyond the table's footprint (+-{half[axis]:.4g} m, table.size)"
-                )
+    excess = scenario.outside_footprint(q)
+    if excess is not None:
+        i, axis, _, coordinate = excess
+        half = scenario.table.size[axis] / 2.0  # type: ignore[index]
+        raise ScenarioError(
+            f"positions.{scenario.carriages[i].name}: puts the carriage's mass at {'xy'[axis]} = {coordinate:.4g} m, "
+            f"beyond the table's footprint (+-{half:.4g} m, table.size)"
+        )
 
 
 @dataclass(frozen=True)

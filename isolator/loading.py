@@ -601,16 +601,13 @@ def _check_strokes(scenario: Scenario) -> None:
     extra = [b for b in scenario.breakpoints if 0.0 <= b <= t_end]
     times = np.union1d(times, extra)
     q = np.array([c.profile.evaluate(times)[0] for c in scenario.carriages])
-    pos = scenario.carriage_positions(q)
-    half = np.array(scenario.table.size[:2]) / 2.0
-    for i in range(len(scenario.carriages)):
-        for axis, label in ((0, "x", ), (1, "y")):
-            reach = np.abs(pos[i, axis])
-            k = int(np.argmax(reach))
-            if reach[k] > half[axis] * (1 + 1e-9):
-                which = "half-length" if axis == 0 else "half-width"
-                raise ScenarioError(
-                    f"carriages[{i}].profile: the carriage's mass reaches {label} = "
-                    f"{pos[i, axis, k]:.4g} m at t = {times[k]:.4g} s, beyond the table's "
-                    f"{which} {half[axis]:.4g} m (table.size)"
-                )
+    excess = scenario.outside_footprint(q)
+    if excess is not None:
+        i, axis, k, coordinate = excess
+        half = scenario.table.size[axis] / 2.0
+        which = "half-length" if axis == 0 else "half-width"
+        raise ScenarioError(
+            f"carriages[{i}].profile: the carriage's mass reaches {'xy'[axis]} = "
+            f"{coordinate:.4g} m at t = {times[k]:.4g} s, beyond the table's "
+            f"{which} {half:.4g} m (table.size)"
+        )

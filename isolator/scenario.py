@@ -310,6 +310,33 @@ class Scenario:
             out[i] = base + origin + axis * q[i]
         return out
 
+    def outside_footprint(self, q: np.ndarray) -> tuple[int, int, int, float] | None:
+        """The first carriage whose mass leaves the table's footprint, if any.
+
+        Parameters
+        ----------
+        q : ndarray, shape (n_carriages,) or (n_carriages, N)
+            Carriage coordinates [m], one column per configuration.
+
+        Returns
+        -------
+        tuple or None
+            ``(carriage index, axis (0: x, 1: y), column of its farthest reach,
+            that coordinate [m])``; None when all stay within ``|x| <= length/2``,
+            ``|y| <= width/2`` (or the table has no size).
+        """
+        if self.table.size is None or not self.carriages:
+            return None
+        pos = self.carriage_positions(np.asarray(q, dtype=float).reshape(len(self.carriages), -1))
+        half = np.array(self.table.size[:2]) / 2.0
+        for i in range(len(self.carriages)):
+            for axis in (0, 1):
+                reach = np.abs(pos[i, axis])
+                k = int(np.argmax(reach))
+                if reach[k] > half[axis] * (1 + 1e-9):
+                    return i, axis, k, float(pos[i, axis, k])
+        return None
+
     def initial_positions(self) -> np.ndarray:
         """Carriage coordinates at t = 0 [m]."""
         return np.array([c.profile.position(0.0) for c in self.carriages])
