@@ -34,6 +34,7 @@ from scipy.spatial.transform import Rotation
 from isolator.actuation import ForceHistory
 from isolator.equilibrium import static_equilibrium
 from isolator.errors import ScenarioError
+from isolator.integrator import grid_breakpoints
 from isolator.linear import LinearModel, linearise
 from isolator.model import ParameterLayout, build_linearisation, cardan_matrix
 from isolator.response import Response
@@ -192,12 +193,9 @@ class Feedforward:
 def _knots(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     """Sample times plus both sides of every breakpoint, with a time on the side to evaluate."""
     samples = scenario.simulation.sample_times()
-    bps = np.array([b for b in scenario.breakpoints if samples[0] < b < samples[-1]])
+    bps = grid_breakpoints(scenario.simulation, scenario.breakpoints)  # on the simulation's grid
+    samples = samples[~np.isin(samples, bps)]
     eps = 1e-9
-    if bps.size:  # a breakpoint within round-off of a sample takes its time (as the integration grid does)
-        nearest = samples[np.argmin(np.abs(samples[:, None] - bps[None, :]), axis=0)]
-        bps = np.where(np.abs(nearest - bps) <= eps * np.maximum(1.0, bps), nearest, bps)
-        samples = samples[np.min(np.abs(samples[:, None] - bps[None, :]), axis=1) > 0]
     times = np.concatenate([samples, bps, bps])
     sides = np.concatenate([samples, bps - eps, bps + eps])
     order = np.lexsort((sides, times))

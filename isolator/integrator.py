@@ -19,7 +19,7 @@ from .model import Model, ParameterLayout
 from .native import NativeFunction
 from .scenario import Scenario, SimulationSettings
 
-__all__ = ["Stepper", "TimeGrid", "model_inputs", "stage_times", "time_grid"]
+__all__ = ["Stepper", "TimeGrid", "grid_breakpoints", "model_inputs", "stage_times", "time_grid"]
 
 CHUNK = 512
 
@@ -44,16 +44,29 @@ class TimeGrid:
         return self.nodes[self.is_sample]
 
 
+def grid_breakpoints(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> np.ndarray:
+    """Breakpoints inside the run as the integration grid holds them [s], sorted, unique.
+
+    A breakpoint within round-off (1e-9 relative) of an output sample takes
+    that sample's time, so that every tool that steps at breakpoints (the
+    grid, forces files that step there) agrees on the instant.
+    """
+    samples = settings.sample_times()
+    inside = np.array([b for b in breakpoints if 0.0 < b < samples[-1]], dtype=float)
+    if inside.size:
+        index = np.clip(np.rint(inside * settings.sample_rate).astype(int), 0, samples.size - 1)
+        nearest = samples[index]
+        inside = np.where(np.abs(nearest - inside) <= 1e-9 * np.maximum(1.0, inside), nearest, inside)
+    return np.unique(inside)
+
+
 def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> TimeGrid:
     """The settings' output samples merged with breakpoints [s]."""
     samples = settings.sample_times()
-    n, sample_rate = samples.size, settings.sample_rate
-    extra = np.array([b for b in breakpoints if 0.0 < b < samples[-1]], dtype=float)
-    if extra.size:
-        nearest = np.abs(samples[np.clip(np.rint(extra * sample_rate).astype(int), 0, n - 1)] - extra)
-        extra = extra[nearest > 1e-9 * np.maximum(1.0, extra)]
+    extra = grid_breakpoints(settings, breakpoints)
+    extra = extra[~np.isin(extra, samples)]
     nodes = np.concatenate([samples, extra])
-    flags = np.concatenate([np.ones(n, bool), np.zeros(extra.size, bool)])
+    flags = np.concatenate([np.ones(samples.size, bool), np.zeros(extra.size, bool)])
     order = np.argsort(nodes, kind="stable")
     return TimeGrid(nodes[order], flags[order])
 
