@@ -36,7 +36,7 @@ from isolator.equilibrium import static_equilibrium
 from isolator.errors import ScenarioError
 from isolator.integrator import grid_breakpoints
 from isolator.linear import LinearModel, linearise
-from isolator.model import ParameterLayout, build_linearisation, cardan_matrix
+from isolator.model import ParameterLayout, build_linearisation, pose_rotation
 from isolator.response import Response
 from isolator.scenario import SIGNALS, Scenario
 from isolator.settling import settling_time
@@ -54,12 +54,6 @@ __all__ = [
 
 #: spacing of the static equilibria that trace the quasi-static path [s]
 QS_SPACING = 0.02
-
-
-def _rotation(pose: np.ndarray) -> np.ndarray:
-    import casadi as ca
-
-    return np.asarray(cardan_matrix(ca.DM(pose[3:])), dtype=float)
 
 
 def _orientations(rot0: np.ndarray, rotation_vectors: np.ndarray) -> np.ndarray:
@@ -257,7 +251,7 @@ def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforwa
     path = quasi_static_path(scenario)
     times, sides = _knots(scenario)
     signals = path(times, sides)
-    rot = _orientations(_rotation(lin.equilibrium.pose), signals[:, 3:])
+    rot = _orientations(pose_rotation(lin.equilibrium.pose[3:]), signals[:, 3:])
     wrench = reaction_wrench(scenario, times, sides, rot)
     wrench += _path_wrench(scenario, lin, times, sides, signals, rot, path)
     b = allocation_matrix(scenario, rot)  # (N, 6, n)

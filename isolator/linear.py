@@ -27,7 +27,7 @@ import numpy as np
 
 from .equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
 from .errors import ScenarioError
-from .model import ParameterLayout, build_linearisation, cardan_matrix, skew
+from .model import ParameterLayout, build_linearisation, pose_rotation, skew
 from .scenario import Scenario
 from .simulation import get_model
 
@@ -282,7 +282,7 @@ def _state_space(
     b0 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g0, force_input])])
     b1 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g1, np.zeros_like(force_input)])])
     # x' = A x + B0 u + B1 u'  ->  xi = x - B1 u:  xi' = A xi + (A B1 + B0) u
-    rot0 = np.asarray(cardan_matrix(ca.DM(eq.pose[3:])), dtype=float)
+    rot0 = pose_rotation(eq.pose[3:])
     rows = [np.hstack([eye, zero])]
     out_names = list(DOF_NAMES)
     for point in scenario.points:

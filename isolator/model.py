@@ -41,6 +41,7 @@ __all__ = [
     "build_model",
     "carriage_kinematics",
     "newton_euler_residual",
+    "pose_rotation",
 ]
 
 MODEL_KINDS = ("exact", "paper")
@@ -88,6 +89,11 @@ def cardan_matrix(th: ca.SX) -> ca.SX:
     ry = ca.vertcat(ca.horzcat(cy, 0, sy), ca.horzcat(0, 1, 0), ca.horzcat(-sy, 0, cy))
     rz = ca.vertcat(ca.horzcat(cz, -sz, 0), ca.horzcat(sz, cz, 0), ca.horzcat(0, 0, 1))
     return rz @ ry @ rx
+
+
+def pose_rotation(angles: np.ndarray) -> np.ndarray:
+    """Numeric Rz Ry Rx of Cardan angles (rx, ry, rz) [rad], e.g. of an equilibrium pose, (3, 3)."""
+    return np.asarray(cardan_matrix(ca.DM(np.asarray(angles, dtype=float))), dtype=float)
 
 
 # -- parameters ---------------------------------------------------------------
