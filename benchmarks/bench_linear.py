@@ -8,24 +8,19 @@ python-control's own frequency response of the same 12-state system
 from __future__ import annotations
 
 import argparse
-import statistics
+import sys
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from timing import timed
 
 from isolator import load_scenario
 from isolator.linear import GROUND_INPUTS, linearise
 from isolator.modes import modes
 from isolator.transmissibility import transmissibility
-
-
-def timed(fn, repeat: int) -> tuple[float, object]:
-    times, out = [], None
-    for _ in range(repeat):
-        t = time.perf_counter()
-        out = fn()
-        times.append(time.perf_counter() - t)
-    return statistics.median(times), out
 
 
 def main() -> None:

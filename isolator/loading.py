@@ -238,10 +238,7 @@ def scenario_from_dict(
         for i, item in enumerate(_table_of_tables(data, "actuators"))
     )
     top.used.add("actuators")
-    names = [a.name for a in actuators]
-    for i, n in enumerate(names):
-        if n in names[:i]:
-            raise ScenarioError(f"actuators[{i}].name: '{n}' is used twice")
+    _check_unique_names([a.name for a in actuators], "actuators")
     settling = _read_settling(_Reader(top.raw("settling", {}), "settling"))
     ground = _read_ground(_Reader(top.raw("ground"), "ground"), base_dir) if top.has("ground") else None
     top.used.add("ground")
@@ -250,10 +247,7 @@ def scenario_from_dict(
         for i, item in enumerate(_table_of_tables(data, "points"))
     )
     top.used.add("points")
-    point_names = [pt.name for pt in points]
-    for i, n in enumerate(point_names):
-        if n in point_names[:i]:
-            raise ScenarioError(f"points[{i}].name: '{n}' is used twice")
+    _check_unique_names([pt.name for pt in points], "points")
     top.finish()
     scenario = Scenario(
         name=name,
@@ -445,11 +439,16 @@ def _read_carriage(r: _Reader, base_dir: Path) -> Carriage:
     return carriage
 
 
+def _check_unique_names(names: list[str], section: str) -> None:
+    """Each name once per section, else an error naming the second use."""
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise ScenarioError(f"{section}[{i}].name: '{n}' is used twice")
+
+
 def _check_carriage_tree(carriages: tuple[Carriage, ...]) -> None:
     names = [c.name for c in carriages]
-    for i, c in enumerate(carriages):
-        if c.name in names[:i]:
-            raise ScenarioError(f"carriages[{i}].name: '{c.name}' is used twice")
+    _check_unique_names(names, "carriages")
     for i, c in enumerate(carriages):
         if c.parent == c.name:
             raise ScenarioError(f"carriages[{i}].parent: a carriage cannot be its own parent")

@@ -183,9 +183,7 @@ def transmissibility(lin: LinearModel, frequency_hz: np.ndarray | None = None) -
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
     """
-    f = default_frequencies(lin) if frequency_hz is None else np.asarray(frequency_hz, dtype=float)
-    h = lin.frequency_response(f, GROUND_INPUTS, DOF_NAMES)
-    return FrequencyResponse("transmissibility", f, h, GROUND_INPUTS, lin)
+    return _response(lin, "transmissibility", GROUND_INPUTS, frequency_hz)
 
 
 def compliance(lin: LinearModel, frequency_hz: np.ndarray | None = None) -> FrequencyResponse:
@@ -197,6 +195,11 @@ def compliance(lin: LinearModel, frequency_hz: np.ndarray | None = None) -> Freq
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
     """
+    return _response(lin, "compliance", FORCE_INPUTS, frequency_hz)
+
+
+def _response(
+    lin: LinearModel, kind: str, inputs: tuple[str, ...], frequency_hz: np.ndarray | None
+) -> FrequencyResponse:
     f = default_frequencies(lin) if frequency_hz is None else np.asarray(frequency_hz, dtype=float)
-    h = lin.frequency_response(f, FORCE_INPUTS, DOF_NAMES)
-    return FrequencyResponse("compliance", f, h, FORCE_INPUTS, lin)
+    return FrequencyResponse(kind, f, lin.frequency_response(f, inputs, DOF_NAMES), inputs, lin)
