@@ -116,12 +116,20 @@ def _feedforward(args: argparse.Namespace) -> int:
     result = compare_feedforward(scenario)
     if args.out:
         result.feedforward.forces.to_csv(args.out)
-    if args.json:
-        print(json.dumps(result.to_dict(), indent=2))
-    else:
-        print(result.summary())
-        if args.out:
-            print(f"forces file: {args.out}")
+    return _report(args.json, result.to_dict(), result.summary(), [("forces file", args.out)])
+
+
+def _report(
+    as_json: bool, data: dict, text: str, files: Sequence[tuple[str, Path | None]], indent: int | None = 2
+) -> int:
+    """Print the JSON, or the text followed by a ``label: path`` line per file written; exit status 0."""
+    if as_json:
+        print(json.dumps(data, indent=indent))
+        return 0
+    print(text)
+    for label, path in files:
+        if path is not None:
+            print(f"{label}: {path}")
     return 0
 
 
@@ -170,14 +178,7 @@ def _modes(args: argparse.Namespace) -> int:
         _save(result.plot(title=f"Modes of {scenario.name}"), args.plot)
     if args.travel:
         _save(modes_over_travel(scenario).plot(title=f"Modes of {scenario.name} as the stage travels"), args.travel)
-    if args.json:
-        print(json.dumps(result.to_dict(), indent=2))
-    else:
-        print(result.summary())
-        for path in (args.plot, args.travel):
-            if path:
-                print(f"figure: {path}")
-    return 0
+    return _report(args.json, result.to_dict(), result.summary(), [("figure", args.plot), ("figure", args.travel)])
 
 
 def _transmissibility(args: argparse.Namespace) -> int:
@@ -190,13 +191,7 @@ def _transmissibility(args: argparse.Namespace) -> int:
     result = compliance(lin, f) if args.compliance else transmissibility(lin, f)
     if args.plot:
         _save(result.plot(), args.plot)
-    if args.json:
-        print(json.dumps(result.to_dict()))
-    else:
-        print(result.summary())
-        if args.plot:
-            print(f"figure: {args.plot}")
-    return 0
+    return _report(args.json, result.to_dict(), result.summary(), [("figure", args.plot)], indent=None)
 
 
 def _stability(args: argparse.Namespace) -> int:
@@ -216,14 +211,9 @@ def _criteria(args: argparse.Namespace) -> int:
     result = vibration_criteria(lin, spectrum, point=args.point)
     if args.plot:
         _save(result.plot(), args.plot)
-    if args.json:
-        print(json.dumps(result.to_dict(), indent=2))
-    else:
-        print(f"floor: {result.floor_class}; table at {result.point}: {result.table_class} "
-              f"(largest band RMS {result.table_max * 1e6:.3g} um/s over 1-80 Hz)")
-        if args.plot:
-            print(f"figure: {args.plot}")
-    return 0
+    text = (f"floor: {result.floor_class}; table at {result.point}: {result.table_class} "
+            f"(largest band RMS {result.table_max * 1e6:.3g} um/s over 1-80 Hz)")
+    return _report(args.json, result.to_dict(), text, [("figure", args.plot)])
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -248,15 +238,7 @@ def _simulate(args: argparse.Namespace) -> int:
         matplotlib.use("Agg")
         fig = response.plot()
         fig.savefig(plot, dpi=120)
-    if args.json:
-        print(json.dumps(response.to_dict(), indent=2))
-    else:
-        print(response.summary())
-        if args.out:
-            print(f"response table: {args.out}")
-        if plot is not None:
-            print(f"figure: {plot}")
-    return 0
+    return _report(args.json, response.to_dict(), response.summary(), [("response table", args.out), ("figure", plot)])
 
 
 def _study(args: argparse.Namespace) -> int:
