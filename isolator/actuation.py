@@ -130,19 +130,20 @@ def applied_forces(scenario: Scenario, command: np.ndarray, times: np.ndarray) -
     limits = np.array([a.max_force for a in scenario.actuators])
     u = np.clip(command, -limits, limits)
     out = u.copy()
+    lagged = [k for k, a in enumerate(scenario.actuators) if a.bandwidth is not None]
+    if not lagged:
+        return out
+    tau = np.array([1.0 / (2 * math.pi * scenario.actuators[k].bandwidth) for k in lagged])  # type: ignore[operator]
     h = np.diff(times)
-    for k, act in enumerate(scenario.actuators):
-        if act.bandwidth is None:
-            continue
-        tau = 1.0 / (2 * math.pi * act.bandwidth)
-        decay = np.exp(-h / tau)
-        y = np.empty(u.shape[0])
-        y[0] = 0.0
-        for i in range(h.size):  # exact for u linear over [t_i, t_i+1]
-            if h[i] <= 0:
-                y[i + 1] = y[i]
-                continue
-            slope = (u[i + 1, k] - u[i, k]) / h[i]
-            y[i + 1] = u[i + 1, k] + (y[i] - u[i, k] + slope * tau) * decay[i] - slope * tau
-        out[:, k] = y
+    step = h > 0
+    safe = np.where(step, h, 1.0)
+    decay = np.exp(-safe[:, None] / tau[None, :])
+    slope = np.where(step[:, None], np.diff(u[:, lagged], axis=0) / safe[:, None], 0.0)
+    ul = u[:, lagged]
+    y = np.zeros(len(lagged))
+    out[0, lagged] = y
+    for i in range(h.size):  # exact for u linear over [t_i, t_i+1]; held where the time repeats
+        if step[i]:
+            y = ul[i + 1] + (y - ul[i] + slope[i] * tau) * decay[i] - slope[i] * tau
+        out[i + 1, lagged] = y
     return out
