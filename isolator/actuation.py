@@ -111,7 +111,9 @@ def load_forces(path: str | Path, scenario: Scenario, key: str = "forces") -> Fo
     return ForceHistory(t, forces, names)
 
 
-def applied_forces(scenario: Scenario, command: np.ndarray, times: np.ndarray) -> np.ndarray:
+def applied_forces(
+    scenario: Scenario, command: np.ndarray, times: np.ndarray, initial: np.ndarray | None = None
+) -> np.ndarray:
     """What the actuators apply for a command: clipped at ``max_force``, then lagged.
 
     Parameters
@@ -121,6 +123,8 @@ def applied_forces(scenario: Scenario, command: np.ndarray, times: np.ndarray) -
         Commanded forces [N] at ``times``.
     times : ndarray (N,)
         Non-decreasing times [s] (repeated times allowed).
+    initial : ndarray (n_actuators,), optional
+        The lagged actuators' force at ``times[0]`` [N] (default zero).
 
     Returns
     -------
@@ -140,7 +144,7 @@ def applied_forces(scenario: Scenario, command: np.ndarray, times: np.ndarray) -
     decay = np.exp(-safe[:, None] / tau[None, :])
     slope = np.where(step[:, None], np.diff(u[:, lagged], axis=0) / safe[:, None], 0.0)
     ul = u[:, lagged]
-    y = np.zeros(len(lagged))
+    y = np.zeros(len(lagged)) if initial is None else np.asarray(initial, dtype=float)[lagged]
     out[0, lagged] = y
     for i in range(h.size):  # exact for u linear over [t_i, t_i+1]; held where the time repeats
         if step[i]:

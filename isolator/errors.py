@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-__all__ = ["IsolatorError", "ScenarioError", "SimulationError", "UnstableTableError"]
+__all__ = ["IsolatorError", "ScenarioError", "SimulationError", "UnstableClosedLoopError", "UnstableTableError"]
 
 
 class IsolatorError(Exception):
@@ -19,3 +19,7 @@ class UnstableTableError(IsolatorError):
 
 class SimulationError(IsolatorError):
     """A run diverged or produced non-finite values."""
+
+
+class UnstableClosedLoopError(IsolatorError):
+    """A feedback loop is unstable (in continuous time or at its sample rate)."""

@@ -10,16 +10,17 @@ in compiled code, in chunks of a fixed number of intervals.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
 
-from .model import Model, ParameterLayout
+from .model import Model, ParameterLayout, quaternion_to_matrix
 from .native import NativeFunction
 from .scenario import Scenario, SimulationSettings
 
-__all__ = ["Stepper", "TimeGrid", "grid_breakpoints", "model_inputs", "stage_times", "time_grid"]
+__all__ = ["Stepper", "TimeGrid", "grid_breakpoints", "model_inputs", "sensed_motion", "stage_times", "time_grid"]
 
 CHUNK = 512
 
@@ -112,6 +113,29 @@ def model_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarra
     return out
 
 
+def sensed_motion(kind: str, x: ca.MX, reference: ca.MX) -> ca.MX:
+    """The table's motion as ideal inertial sensors report it, (12,).
+
+    Displacement of the mass centre [m] and rotation vector of ``R R_ref^T``
+    [rad] from the state ``reference``, then velocity [m/s] and angular
+    velocity [rad/s], world axes. The paper model: its coordinates and rates.
+    """
+    if kind != "exact":
+        return ca.vertcat(x[:6] - reference[:6], x[6:12])
+    q = x[3:7] / ca.norm_2(x[3:7])
+    r = reference[3:7] / ca.norm_2(reference[3:7])
+    w0, v0 = r[0], -r[1:4]
+    w, v = q[0], q[1:4]
+    rel_w = w * w0 - ca.dot(v, v0)
+    rel_v = w * v0 + w0 * v + ca.cross(v, v0)
+    sign = ca.sign(rel_w) + (rel_w == 0)
+    rel_w, rel_v = rel_w * sign, rel_v * sign
+    norm = ca.sqrt(ca.dot(rel_v, rel_v) + 1e-300)
+    angles = 2 * ca.atan2(norm, rel_w) / norm * rel_v
+    omega_world = quaternion_to_matrix(x[3:7]) @ x[10:13]
+    return ca.vertcat(x[0:3] - reference[0:3], angles, x[7:10], omega_world)
+
+
 class Stepper:
     """Compiled RK4 stepping of one model with a fixed number of substeps."""
 
@@ -136,6 +160,10 @@ class Stepper:
             k4 = model.rhs(xk + dt * k3, c2, p)
             xk = xk + dt / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
         step = ca.Function("step", [x, cin, h, p], [xk])
+        reference = ca.MX.sym("x_ref", nx)
+        self._step_parts = ([x, cin, h, p, reference], [xk, sensed_motion(model.kind, xk, reference)])
+        self._single: Callable[..., list[np.ndarray]] | None = None
+        self._compile = compile
         acc = step.mapaccum("acc", CHUNK)
         x0 = ca.MX.sym("x0", nx)
         cc = ca.MX.sym("C", cin.shape[0], stages * CHUNK)
@@ -147,7 +175,27 @@ class Stepper:
             f"isolator_{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
             f"_g{int(lay.ground)}_s{substeps}"
         )
+        self.name = name
         self.chunk = NativeFunction(ca.Function(name, [x0, cc, hh, pp], [xs]), compile=compile)
+
+    def step(
+        self, x: np.ndarray, inputs: np.ndarray, h: float, p: np.ndarray, reference: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """One grid interval of length ``h`` [s] with stage inputs (2 substeps + 1, input size).
+
+        Returns
+        -------
+        state : ndarray (n_states,)
+            At the end of the interval.
+        motion : ndarray (12,)
+            What motion sensors see there (see :func:`sensed_motion`) relative to the state ``reference``.
+        """
+        if self._single is None:
+            fn = ca.Function(f"{self.name}_one", *self._step_parts)
+            self._single = NativeFunction(fn, compile=self._compile).bound()
+        stages = inputs if inputs.shape[-1] else np.zeros((inputs.shape[0], 0))
+        out, motion = self._single(x, stages, h, p, reference)
+        return out.ravel().copy(), motion.ravel().copy()
 
     def run(self, x0: np.ndarray, inputs: np.ndarray, steps: np.ndarray, p: np.ndarray) -> np.ndarray:
         """States at the end of every interval.

@@ -38,6 +38,7 @@ __all__ = [
     "LinearModel",
     "linearise",
     "rest_positions",
+    "state_space_response",
 ]
 
 GROUND_INPUTS = tuple(f"ground:{a}" for a in DOF_NAMES)
@@ -156,16 +157,6 @@ class LinearModel:
     def output_names(self) -> list[str]:
         return list(self.system.output_labels)
 
-    def _index(self, names: Sequence[str] | None, labels: list[str], what: str) -> list[int]:
-        if names is None:
-            return list(range(len(labels)))
-        out = []
-        for name in names:
-            if name not in labels:
-                raise ScenarioError(f"{what}: no {what[:-1]} named '{name}' (have: {', '.join(labels)})")
-            out.append(labels.index(name))
-        return out
-
     # -- analyses ----------------------------------------------------------------
     def frequency_response(
         self,
@@ -187,18 +178,19 @@ class LinearModel:
         ndarray (nf, n_outputs, n_inputs)
             In output units per input unit.
         """
-        f = np.asarray(frequency_hz, dtype=float).ravel()
-        if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
-            raise ScenarioError("frequency_hz: must be finite frequencies >= 0 Hz")
-        iu = self._index(inputs, self.input_names, "inputs")
-        iy = self._index(outputs, self.output_names, "outputs")
-        a, b = np.asarray(self.system.A), np.asarray(self.system.B)[:, iu]
-        c, d = np.asarray(self.system.C)[iy], np.asarray(self.system.D)[np.ix_(iy, iu)]
-        s = 2j * np.pi * f
-        n = a.shape[0]
-        resolvent = s[:, None, None] * np.eye(n) - a[None]
-        x = np.linalg.solve(resolvent, np.broadcast_to(b.astype(complex), (f.size, *b.shape)))
-        return c[None] @ x + d[None]
+        return state_space_response(self.system, frequency_hz, inputs, outputs)
+
+    @property
+    def feedthrough(self) -> np.ndarray:
+        """``B1`` (12, inputs): the true state is ``system``'s state plus ``B1 u``.
+
+        Non-zero only in the velocity rows of the floor inputs: what the floor's
+        velocity adds through the isolators' dampers at once (``-M^-1 G1``).
+        """
+        n_in = len(self.input_names)
+        out = np.zeros((12, n_in))
+        out[6:, :6] = -np.linalg.solve(self.mass, self.ground_damping)
+        return out
 
     def rocking_stiffness(self) -> RockingStiffness:
         """The static rocking stiffness and its margin at this rest configuration."""
@@ -219,6 +211,43 @@ class LinearModel:
         """All eigenvalues in the open left half-plane (up to round-off)."""
         eig = self.eigenvalues
         return bool(np.all(eig.real < 1e-9 * max(1.0, float(np.abs(eig).max()))))
+
+
+def _index(names: Sequence[str] | None, labels: list[str], what: str) -> list[int]:
+    if names is None:
+        return list(range(len(labels)))
+    out = []
+    for name in names:
+        if name not in labels:
+            raise ScenarioError(f"{what}: no {what[:-1]} named '{name}' (have: {', '.join(labels)})")
+        out.append(labels.index(name))
+    return out
+
+
+def state_space_response(
+    system: control.StateSpace,
+    frequency_hz: np.ndarray,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+) -> np.ndarray:
+    """Complex ``H(j 2 pi f)`` of a named state-space system, one batched solve.
+
+    Returns
+    -------
+    ndarray (nf, n_outputs, n_inputs)
+    """
+    f = np.asarray(frequency_hz, dtype=float).ravel()
+    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
+        raise ScenarioError("frequency_hz: must be finite frequencies >= 0 Hz")
+    iu = _index(inputs, list(system.input_labels), "inputs")
+    iy = _index(outputs, list(system.output_labels), "outputs")
+    a, b = np.asarray(system.A), np.asarray(system.B)[:, iu]
+    c, d = np.asarray(system.C)[iy], np.asarray(system.D)[np.ix_(iy, iu)]
+    s = 2j * np.pi * f
+    n = a.shape[0]
+    resolvent = s[:, None, None] * np.eye(n) - a[None]
+    x = np.linalg.solve(resolvent, np.broadcast_to(b.astype(complex), (f.size, *b.shape)))
+    return c[None] @ x + d[None]
 
 
 def linearise(

@@ -18,6 +18,7 @@ import subprocess
 import tempfile
 import threading
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import casadi as ca
@@ -170,6 +171,33 @@ class NativeFunction:
         if status != 0:
             raise RuntimeError(f"{self.name}: native evaluation failed ({status})")
         return outs
+
+    def bound(self) -> Callable[..., list[np.ndarray]]:
+        """A caller for many small calls from one thread, with its buffers allocated once.
+
+        Same arguments as calling the object; the returned output arrays are
+        reused (overwritten) by the next call, so copy what you keep.
+        """
+        if self._lib is None:
+            return self.__call__
+        ins = [np.empty(r * c) for (r, c) in self.in_shapes]
+        outs = [np.empty((c, r)) for (r, c) in self.out_shapes]
+        sz_arg, sz_res, sz_iw, sz_w = self._sz
+        arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
+        res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
+        iw = np.empty(max(sz_iw, 1), dtype=np.int64)
+        w = np.empty(max(sz_w, 1), dtype=np.float64)
+        fn, pointers = self._fn, (ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0)
+
+        def call(*inputs: np.ndarray) -> list[np.ndarray]:
+            for buffer, x in zip(ins, inputs, strict=True):
+                buffer[:] = np.ravel(x)
+            if fn(*pointers) != 0:
+                raise RuntimeError(f"{self.name}: native evaluation failed")
+            return outs
+
+        call.buffers = (arg, res, iw, w)  # type: ignore[attr-defined]  # what the pointers point into
+        return call
 
     @staticmethod
     def _as_dm(x: np.ndarray, shape: tuple[int, int]) -> ca.DM:

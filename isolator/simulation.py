@@ -6,6 +6,7 @@ import math
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -19,7 +20,15 @@ from .response import Response
 from .scenario import Scenario
 from .settling import settling_metrics
 
-__all__ = ["BatchResult", "Simulator", "get_model", "relative_rotation_vector", "simulate", "table_signals"]
+__all__ = [
+    "BatchResult",
+    "FeedbackLaw",
+    "Simulator",
+    "get_model",
+    "relative_rotation_vector",
+    "simulate",
+    "table_signals",
+]
 
 #: largest |lambda| h per RK4 step; keeps the relative error well below 1e-6
 STEP_ANGLE = 0.05
@@ -62,6 +71,29 @@ class BatchResult:
     settling_time: np.ndarray
     settling_time_max: np.ndarray
     peak: np.ndarray
+
+
+class FeedbackLaw(Protocol):
+    """A sampled controller the simulation runs (e.g. :class:`controllers.feedback.DiscreteLaw`).
+
+    Attributes
+    ----------
+    sample_rate : float
+        [Hz]; must divide the simulation's output sample rate.
+    """
+
+    sample_rate: float
+
+    def reset(self) -> None:
+        """Forget the controller's state (called at the start of a run)."""
+
+    def __call__(self, t: float, measurement: np.ndarray) -> np.ndarray:
+        """Commands [N] per actuator at tick ``t`` [s] from the measured table state (12,): displacement
+        [m] and rotation vector [rad] from the initial equilibrium, velocity [m/s] and angular velocity
+        [rad/s], world axes. Held until the next tick."""
+
+    def final(self, passive: np.ndarray) -> np.ndarray:
+        """The six signals' closed-loop final value given the passive one (the settling reference)."""
 
 
 class Simulator:
@@ -150,6 +182,7 @@ class Simulator:
         changes: Mapping[str, float] | None = None,
         p: np.ndarray | None = None,
         forces: ForceHistory | None = None,
+        feedback: FeedbackLaw | None = None,
     ) -> Response:
         """Simulate once.
 
@@ -162,6 +195,9 @@ class Simulator:
         forces : ForceHistory, optional
             Commanded actuator forces (clipped at ``max_force`` and lagged by
             each actuator's bandwidth, see :mod:`isolator.actuation`).
+        feedback : FeedbackLaw, optional
+            A sampled controller: its command, held between ticks, is added to
+            ``forces`` before saturation and lag.
 
         Returns
         -------
@@ -177,7 +213,7 @@ class Simulator:
         p = self.parameter_vector(changes) if p is None else np.asarray(p, dtype=float)
         start, end = self.equilibria(p)
         substeps = self.substeps_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        return self._run(p, start, end, substeps, forces)
+        return self._run(p, start, end, substeps, forces, feedback)
 
     def _with_forces(self, inputs: np.ndarray, substeps: int, forces: ForceHistory | None) -> np.ndarray:
         """The inputs with the actuators' applied forces at every stage time."""
@@ -200,10 +236,14 @@ class Simulator:
         end: Equilibrium | None,
         substeps: int,
         forces: ForceHistory | None = None,
+        feedback: FeedbackLaw | None = None,
     ) -> Response:
         grid = self.grid
-        inputs = self._with_forces(self._model_inputs(substeps), substeps, forces)
-        states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+        if feedback is None:
+            inputs = self._with_forces(self._model_inputs(substeps), substeps, forces)
+            states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+        else:
+            states, inputs = self._run_feedback(p, start, substeps, forces, feedback)
         states = np.vstack([start.state, states])[grid.is_sample]
         t = grid.samples
         bad = ~np.all(np.isfinite(states), axis=1)
@@ -216,6 +256,8 @@ class Simulator:
                 f"the run diverged: the table turned by more than 0.2 rad at t = {t[np.argmax(too_far)]:.4g} s"
             )
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
+        if final is not None and feedback is not None:
+            final = np.asarray(feedback.final(final), dtype=float)
         hold = _slowest_period(end.eigenvalues) if end is not None else 0.0
         metrics = settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold)
         n = len(self.scenario.carriages)
@@ -236,6 +278,63 @@ class Simulator:
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=applied,
         )
+
+    def _controller_period(self, feedback: FeedbackLaw) -> int:
+        """Output samples per controller tick."""
+        ratio = self.scenario.simulation.sample_rate / float(feedback.sample_rate)
+        period = round(ratio)
+        if not (math.isfinite(ratio) and period >= 1 and abs(ratio - period) <= 1e-9 * ratio):
+            raise ScenarioError(
+                f"simulation.sample_rate: the controller's {feedback.sample_rate:.6g} Hz must divide it "
+                f"({self.scenario.simulation.sample_rate:.6g} Hz)"
+            )
+        return period
+
+    def _run_feedback(
+        self, p: np.ndarray, start: Equilibrium, substeps: int, forces: ForceHistory | None,
+        feedback: FeedbackLaw,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Step interval by interval, the controller ticking at its rate; the states after each
+        interval and the inputs (with the applied forces) at every stage."""
+        period = self._controller_period(feedback)
+        grid = self.grid
+        inputs = self._with_forces(self._model_inputs(substeps), substeps, forces).copy()
+        acts = self.layout.actuator_slice
+        commanded = None
+        if forces is not None:  # the feedforward command before saturation and lag
+            times, mid = stage_times(grid, substeps)
+            commanded = forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, -1)
+        times, _ = stage_times(grid, substeps)
+        sample_index = np.cumsum(grid.is_sample) - 1
+        ticks = grid.is_sample & (sample_index % period == 0)
+        stepper = _stepper(self.model, substeps)
+        steps = np.diff(grid.nodes)
+        n_a = self.layout.n_actuators
+        u = np.zeros(n_a)
+        lag = np.zeros(n_a)
+        x = start.state.copy()
+        out = np.empty((steps.size, x.size))
+        feedback.reset()
+        motion = np.zeros(12)
+        limits = np.array([a.max_force for a in self.scenario.actuators])
+        lagged = any(a.bandwidth is not None for a in self.scenario.actuators)
+        for i, h in enumerate(steps):
+            if ticks[i]:
+                u = np.asarray(feedback(float(grid.nodes[i]), motion), dtype=float).reshape(n_a)
+            if commanded is None and not lagged:
+                inputs[i, :, acts] = np.clip(u, -limits, limits)
+            else:
+                command = u[None, :] if commanded is None else commanded[i] + u[None, :]
+                command = np.broadcast_to(command, (times.shape[1], n_a))
+                applied = applied_forces(self.scenario, command, times[i], lag)
+                lag = applied[-1]
+                inputs[i, :, acts] = applied
+            x, motion = stepper.step(x, inputs[i], float(h), p, start.state)
+            out[i] = x
+            if not np.all(np.isfinite(x)):
+                out[i:] = np.nan
+                break
+        return out, inputs
 
     def signals(self, states: np.ndarray, start: Equilibrium) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``."""
