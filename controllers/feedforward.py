@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import itertools
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -45,9 +45,11 @@ from isolator.simulation import Simulator, table_signals
 __all__ = [
     "Feedforward",
     "FeedforwardComparison",
+    "PathDemand",
     "allocation_matrix",
     "compare_feedforward",
     "feedforward_allocation",
+    "path_demand",
     "quasi_static_path",
     "reaction_wrench",
 ]
@@ -170,12 +172,19 @@ class Feedforward:
         What the allocation could not give (limits, directions) [N, N m].
     path : QuasiStaticPath
         The table's quasi-static path, which the forces leave alone.
+    method : str
+        ``"allocation"`` or ``"optimal"``.
+    info : dict
+        How the forces were found (for ``"optimal"``: solver status, iterations,
+        knots, variables, time).
     """
 
     forces: ForceHistory
     wrench: np.ndarray
     residual: np.ndarray
     path: QuasiStaticPath
+    method: str = "allocation"
+    info: dict[str, Any] = field(default_factory=dict)
 
     @property
     def max_force(self) -> dict[str, float]:
@@ -196,22 +205,44 @@ def _knots(scenario: Scenario) -> tuple[np.ndarray, np.ndarray]:
     return times[order], sides[order]
 
 
-def _path_wrench(
-    scenario: Scenario,
-    lin: LinearModel,
-    times: np.ndarray,
-    sides: np.ndarray,
-    signals: np.ndarray,
-    rot: np.ndarray,
-    path: QuasiStaticPath,
-) -> np.ndarray:
-    """``M(t) z_qs'' + C(t) z_qs'``: the wrench that moves the table along its quasi-static path.
+@dataclass(frozen=True)
+class PathDemand:
+    """What the table needs along its quasi-static path at a set of times.
 
-    ``M`` and ``C`` of the exact model linearised at the path's pose with the
-    carriages where (and as fast as) they are at each time: the coupling
-    terms change sign as a carriage crosses the table.
+    Attributes
+    ----------
+    wrench : ndarray (N, 6)
+        The cancelling wrench: the carriages' inertial reaction plus
+        ``M z_qs'' + C z_qs'`` [N, N m], world axes about the mass centre.
+    allocation : ndarray (N, 6, n_actuators)
+        Wrench per unit actuator force with the table on its path.
+    mass, damping, stiffness : ndarray (N, 6, 6)
+        The exact model linearised on the path, the carriages where (and as
+        fast as) they are: the coupling terms change as a carriage crosses.
+    """
+
+    wrench: np.ndarray
+    allocation: np.ndarray
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+
+
+def path_demand(
+    scenario: Scenario, lin: LinearModel, path: QuasiStaticPath, times: np.ndarray, sides: np.ndarray
+) -> PathDemand:
+    """The cancelling wrench and the linearised table along the quasi-static path.
+
+    Parameters
+    ----------
+    times : ndarray (N,)
+        [s]
+    sides : ndarray (N,)
+        Times that pick the profile piece at each time (one-sided at breakpoints).
     """
     layout = ParameterLayout.of(scenario)
+    signals = path(times, sides)
+    rot = _orientations(pose_rotation(lin.equilibrium.pose[3:]), signals[:, 3:])
     n = len(scenario.carriages)
     c = np.zeros((3 * n, times.size))
     for i, carriage in enumerate(scenario.carriages):
@@ -220,11 +251,14 @@ def _path_wrench(
     pose = np.vstack([lin.equilibrium.pose[:3, None] + signals[:, :3].T,
                       Rotation.from_matrix(rot).as_euler("ZYX")[:, ::-1].T])
     mapped = build_linearisation(layout).map(times.size, "serial")
-    mass, damping = (np.asarray(m, dtype=float) for m in mapped(pose, c, layout.pack(scenario))[:2])
-    mass = mass.reshape(6, times.size, 6).transpose(1, 0, 2)
-    damping = damping.reshape(6, times.size, 6).transpose(1, 0, 2)
+    mass, damping, stiffness = (
+        np.asarray(m, dtype=float).reshape(6, times.size, 6).transpose(1, 0, 2)
+        for m in mapped(pose, c, layout.pack(scenario))[:3]
+    )
     accel, rate = path(times, sides, 2), path(times, sides, 1)
-    return np.einsum("nij,nj->ni", mass, accel) + np.einsum("nij,nj->ni", damping, rate)
+    wrench = reaction_wrench(scenario, times, sides, rot)
+    wrench += np.einsum("nij,nj->ni", mass, accel) + np.einsum("nij,nj->ni", damping, rate)
+    return PathDemand(wrench, allocation_matrix(scenario, rot), mass, damping, stiffness)
 
 
 def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforward:
@@ -250,11 +284,8 @@ def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforwa
     lin = linearise(scenario)
     path = quasi_static_path(scenario)
     times, sides = _knots(scenario)
-    signals = path(times, sides)
-    rot = _orientations(pose_rotation(lin.equilibrium.pose[3:]), signals[:, 3:])
-    wrench = reaction_wrench(scenario, times, sides, rot)
-    wrench += _path_wrench(scenario, lin, times, sides, signals, rot, path)
-    b = allocation_matrix(scenario, rot)  # (N, 6, n)
+    demand = path_demand(scenario, lin, path, times, sides)
+    wrench, b = demand.wrench, demand.allocation  # (N, 6), (N, 6, n)
     forces = np.einsum("nij,nj->ni", np.linalg.pinv(b), wrench)
     if limits:
         cap = np.array([a.max_force for a in scenario.actuators])
@@ -307,7 +338,7 @@ class FeedforwardComparison:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``passive`` and ``controlled`` (``peak``, ``deviation_peak``,
         ``settling_time``, ``settling_time_max``), ``band``, ``reduction_db``, ``max_force``."""
-        out: dict[str, Any] = {"name": self.passive.name, "method": "allocation"}
+        out: dict[str, Any] = {"name": self.passive.name, "method": self.feedforward.method}
         for which, r in (("passive", self.passive), ("controlled", self.controlled)):
             out[which] = {
                 "peak": r.peak,
@@ -318,6 +349,8 @@ class FeedforwardComparison:
         out["band"] = self.band
         out["reduction_db"] = self.reduction_db()
         out["max_force"] = self.feedforward.max_force
+        if self.feedforward.info:
+            out["optimisation"] = self.feedforward.info
         return out
 
     def summary(self) -> str:
@@ -325,7 +358,7 @@ class FeedforwardComparison:
         red = self.reduction_db()
         dp, dc = self.deviation_peak("passive"), self.deviation_peak("controlled")
         lines = [
-            f"{self.passive.name}: feedforward by allocation (deviation from the quasi-static path; "
+            f"{self.passive.name}: feedforward by {self.feedforward.method} (deviation from the quasi-static path; "
             "settling band 5 % of the passive peak)",
             f"{'signal':>6}  {'passive dev.':>12}  {'with ff':>12}  {'change':>9}  "
             f"{'settling passive':>16}  {'with ff':>8}",

@@ -14,7 +14,14 @@ and vibration-criteria class.
 from __future__ import annotations
 
 from .equilibrium import Equilibrium, RockingStiffness, static_equilibrium
-from .errors import IsolatorError, ScenarioError, SimulationError, UnstableClosedLoopError, UnstableTableError
+from .errors import (
+    IsolatorError,
+    OptimisationError,
+    ScenarioError,
+    SimulationError,
+    UnstableClosedLoopError,
+    UnstableTableError,
+)
 from .linear import LinearModel, linearise
 from .loading import bundled_scenarios, load_scenario, load_spectrum, scenario_from_dict
 from .model import MODEL_KINDS, Model, ParameterLayout, build_model
@@ -56,6 +63,7 @@ __all__ = [
     "LinearModel",
     "Model",
     "Modes",
+    "OptimisationError",
     "ParameterLayout",
     "PiecewisePolynomialProfile",
     "Point",

@@ -100,8 +100,10 @@ def _parser() -> argparse.ArgumentParser:
     )
     ff.add_argument("scenario", nargs="?", default=None,
                     help="scenario file or bundled name with [[actuators]] (default: paper-table-3-2-active)")
-    ff.add_argument("--method", choices=["allocation"], default="allocation",
-                    help="allocation: least squares of the reaction wrench over the actuators, within limits")
+    ff.add_argument("--method", choices=["allocation", "optimal"], default="allocation",
+                    help="allocation: least squares of the reaction wrench over the actuators, within limits; "
+                    "optimal: command histories optimised through the time-varying model, within force and "
+                    "rate limits, accounting for the actuators' lag")
     ff.add_argument("--out", type=Path, metavar="FORCES.csv", help="write the forces file")
     ff.add_argument("--json", action="store_true", help="print JSON instead of text")
 
@@ -113,7 +115,12 @@ def _feedforward(args: argparse.Namespace) -> int:
     from controllers.feedforward import compare_feedforward
 
     scenario = load_scenario(args.scenario or "paper-table-3-2-active")
-    result = compare_feedforward(scenario)
+    feedforward = None
+    if args.method == "optimal":
+        from controllers.optimal_feedforward import feedforward_optimal
+
+        feedforward = feedforward_optimal(scenario, progress=not args.json)
+    result = compare_feedforward(scenario, feedforward)
     if args.out:
         result.feedforward.forces.to_csv(args.out)
     return _report(args.json, result.to_dict(), result.summary(), [("forces file", args.out)])

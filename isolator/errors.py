@@ -2,7 +2,14 @@
 
 from __future__ import annotations
 
-__all__ = ["IsolatorError", "ScenarioError", "SimulationError", "UnstableClosedLoopError", "UnstableTableError"]
+__all__ = [
+    "IsolatorError",
+    "OptimisationError",
+    "ScenarioError",
+    "SimulationError",
+    "UnstableClosedLoopError",
+    "UnstableTableError",
+]
 
 
 class IsolatorError(Exception):
@@ -23,3 +30,7 @@ class SimulationError(IsolatorError):
 
 class UnstableClosedLoopError(IsolatorError):
     """A feedback loop is unstable (in continuous time or at its sample rate)."""
+
+
+class OptimisationError(IsolatorError):
+    """An optimiser stopped without a usable answer; the message says why and what is kept."""

@@ -478,8 +478,9 @@ def _read_actuator(r: _Reader) -> Actuator:
         direction=r.unit_vector("direction"),
         max_force=r.number("max_force", positive=True),
         bandwidth=r.number("bandwidth", positive=True) if r.has("bandwidth") else None,
+        max_rate=r.number("max_rate", positive=True) if r.has("max_rate") else None,
     )
-    r.used.add("bandwidth")
+    r.used.update(("bandwidth", "max_rate"))
     r.finish()
     return act
 

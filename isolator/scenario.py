@@ -114,6 +114,9 @@ class Actuator:
         Symmetric limit [N].
     bandwidth : float or None
         First-order lag corner [Hz], if any.
+    max_rate : float or None
+        Largest rate of change of the command [N/s], if any (respected by
+        optimised feedforward; commands from files are not rate limited).
     """
 
     name: str
@@ -121,6 +124,7 @@ class Actuator:
     direction: Vector3
     max_force: float
     bandwidth: float | None = None
+    max_rate: float | None = None
 
 
 @dataclass(frozen=True)

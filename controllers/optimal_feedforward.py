@@ -1,0 +1,349 @@
+"""Feedforward force histories optimised with casadi through the time-varying model.
+
+The allocation (:func:`controllers.feedforward.feedforward_allocation`) asks
+each actuator for the force that cancels the carriages' reaction *at that
+instant*. Real actuators lag (``bandwidth``) and slew (``max_rate``), so the
+force that arrives is late and rounded and the table rings. Here the command
+is instead chosen over the whole move: piecewise linear between knots, it
+drives the actuators' exact first-order lag, whose output acts on the table's
+deviation ``e`` from its quasi-static path through the exact model linearised
+**along the path** (carriages where and as fast as they are at each instant):
+
+``M(t) e'' + C(t) e' + K(t) e = B(t) f(t) - w(t)``
+
+with ``w`` the cancelling wrench and ``B`` the actuators' allocation (both from
+:func:`controllers.feedforward.path_demand`). The quadratic programme (solved
+by IPOPT through ``casadi.Opti``, multiple shooting, one RK4 step per knot
+interval) minimises the deviation, normalised per signal by the passive run's,
+plus the vibration left at the end of the window, within ``max_force`` and
+``max_rate``. Knots are 1 ms apart near the profiles' breakpoints (where the
+demand changes fast) and coarser elsewhere.
+The quasi-static tilt is left to leveling, as with the allocation.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any
+
+import casadi as ca
+import numpy as np
+from scipy import sparse
+
+from controllers.feedforward import (
+    Feedforward,
+    path_demand,
+    quasi_static_path,
+)
+from isolator.actuation import ForceHistory
+from isolator.errors import OptimisationError, ScenarioError
+from isolator.integrator import grid_breakpoints
+from isolator.linear import linearise
+from isolator.scenario import Scenario
+from isolator.simulation import Simulator
+
+__all__ = ["OptimalSettings", "feedforward_optimal"]
+
+
+
+@dataclass(frozen=True)
+class OptimalSettings:
+    """Knobs of the optimal feedforward.
+
+    Attributes
+    ----------
+    fine, coarse : float
+        Knot spacing [s] near breakpoints and elsewhere (multiples of the
+        output sample period).
+    before, after : float
+        The fine stretch around each breakpoint [s].
+    tail : float
+        How long after the last carriage stops the actuators may still act [s].
+    terminal_weight : float
+        Weight of the vibration left at the end of the window, against the
+        time integral of the squared normalised deviation [s].
+    effort_weight : float
+        Weight of the squared forces over ``max_force`` (regularisation).
+    max_iterations : int
+        Interior-point iterations.
+    tolerance : float
+        The solver's gap and feasibility tolerance (scaled problem).
+    """
+
+    fine: float = 1e-3
+    coarse: float = 1e-2
+    before: float = 0.03
+    after: float = 0.12
+    tail: float = 0.3
+    terminal_weight: float = 10.0
+    effort_weight: float = 1e-4
+    max_iterations: int = 100
+    tolerance: float = 1e-10
+
+
+def _knot_times(scenario: Scenario, settings: OptimalSettings) -> tuple[np.ndarray, float]:
+    """Knots [s] on the output sample grid (plus off-grid breakpoints), and the window's end."""
+    sim = scenario.simulation
+    stop = scenario.stop_time
+    if not math.isfinite(stop):
+        raise ScenarioError("carriages: optimal feedforward needs moves that stop (a sine never does)")
+    end = min(sim.duration, stop + settings.tail)
+    period = 1.0 / sim.sample_rate
+    fine = max(1, round(settings.fine / period))
+    coarse = max(fine, round(settings.coarse / period))
+    n_end = math.floor(end * sim.sample_rate + 1e-9)
+    index = np.arange(n_end + 1)
+    t = index * period
+    bps = grid_breakpoints(sim, scenario.breakpoints)
+    bps = bps[bps < end]
+    near = np.zeros(t.size, bool)
+    for b in bps:
+        near |= (t >= b - settings.before) & (t <= b + settings.after)
+    keep = (index % coarse == 0) | (near & (index % fine == 0))
+    keep[0] = keep[-1] = True
+    knots = np.union1d(t[keep], bps)
+    return knots, float(knots[-1])
+
+
+def _stage_data(scenario: Scenario, knots: np.ndarray) -> tuple[np.ndarray, Any]:
+    """Per interval and RK4 stage (start, middle, end): ``M^-1 K``, ``M^-1 C``, ``M^-1 B``, ``M^-1 w``."""
+    lin = linearise(scenario)
+    path = quasi_static_path(scenario)
+    h = np.diff(knots)
+    t = np.column_stack([knots[:-1], knots[:-1] + h / 2, knots[1:]]).ravel()
+    sides = np.repeat(knots[:-1] + h / 2, 3)
+    demand = path_demand(scenario, lin, path, t, sides)
+    inv_m = np.linalg.inv(demand.mass)
+    blocks = [inv_m @ demand.stiffness, inv_m @ demand.damping, inv_m @ demand.allocation,
+              (inv_m @ demand.wrench[:, :, None])[..., 0]]
+    n = h.size
+    flat = np.hstack([b.reshape(t.size, -1, order="F") for b in blocks])  # column-major per stage
+    return flat.reshape(n, 3 * flat.shape[1]), path
+
+
+def _interval_function(n_a: int, tau: np.ndarray, lagged: list[int]) -> ca.Function:
+    """One knot interval: RK4 on the deviation with the exact lag of a linear command."""
+    e = ca.SX.sym("e", 12)
+    fl = ca.SX.sym("f", len(lagged))
+    u0, u1 = ca.SX.sym("u0", n_a), ca.SX.sym("u1", n_a)
+    h = ca.SX.sym("h")
+    width = 36 + 36 + 6 * n_a + 6
+    data = ca.SX.sym("d", 3 * width)
+    slope = (u1 - u0) / h
+
+    def applied(s: ca.SX) -> ca.SX:
+        f = u0 + slope * s
+        if not lagged:
+            return f
+        parts = [f[k] for k in range(n_a)]
+        for j, k in enumerate(lagged):
+            parts[k] = u0[k] + slope[k] * s + (fl[j] - u0[k] + slope[k] * tau[j]) * ca.exp(-s / tau[j]) \
+                - slope[k] * tau[j]
+        return ca.vertcat(*parts)
+
+    def rates(x: ca.SX, stage: int, s: ca.SX) -> ca.SX:
+        d = data[stage * width:(stage + 1) * width]
+        mk = ca.reshape(d[0:36], 6, 6)
+        mc = ca.reshape(d[36:72], 6, 6)
+        mb = ca.reshape(d[72:72 + 6 * n_a], 6, n_a)
+        mw = d[72 + 6 * n_a:]
+        acc = mb @ applied(s) - mw - mc @ x[6:] - mk @ x[:6]
+        return ca.vertcat(x[6:], acc)
+
+    k1 = rates(e, 0, 0)
+    k2 = rates(e + h / 2 * k1, 1, h / 2)
+    k3 = rates(e + h / 2 * k2, 1, h / 2)
+    k4 = rates(e + h * k3, 2, h)
+    e_next = e + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+    f_next = applied(h)[lagged] if lagged else ca.SX.zeros(0, 1)
+    return ca.Function("interval", [e, fl, u0, u1, h, data], [e_next, f_next])
+
+
+@dataclass(frozen=True)
+class _QP:
+    """``min 1/2 x' P x`` s.t. ``A x = b`` and ``lower <= C x <= upper``, in scaled variables ``x = D^-1 z``."""
+
+    p: sparse.csc_matrix
+    a: sparse.csc_matrix
+    b: np.ndarray
+    c: sparse.csc_matrix
+    lower: np.ndarray
+    upper: np.ndarray
+    scale: np.ndarray  # D: z = D x
+
+
+def _assemble(
+    interval: ca.Function,
+    n_lag: int,
+    h: np.ndarray,
+    data: np.ndarray,
+    scale: np.ndarray,
+    omega: float,
+    cap: np.ndarray,
+    lag_scale: np.ndarray,
+    rates: list[float | None],
+    settings: OptimalSettings,
+) -> _QP:
+    """The sparse QP in the knot-wise variables ``z_k = [e_k, f_k, u_k]``, k = 0 .. n.
+
+    The dynamics are affine, so each interval's map is its Jacobian (casadi,
+    evaluated for all intervals in one call) plus an offset. Variables and
+    dynamics rows are scaled so that the passive run's deviation and the
+    actuators' ``max_force`` are 1.
+    """
+    n = h.size
+    n_a = cap.size
+    nx = 12 + n_lag
+    m = nx + n_a
+    decision = ca.SX.sym("z", nx + 2 * n_a)
+    step = ca.SX.sym("h")
+    table = ca.SX.sym("d", interval.size_in(5)[0])
+    parts = ca.vertsplit(decision, [0, 12, nx, nx + n_a, nx + 2 * n_a])
+    outs = ca.vertcat(*interval(*parts, step, table))
+    jac = ca.Function("interval_jacobian", [decision, step, table], [ca.jacobian(outs, decision), outs])
+    jacs, offsets = jac.map(n, "serial")(np.zeros((decision.shape[0], n)), h[None, :], data.T)
+    # (n, nx, columns [e_k, f_k, u_k, u_k+1]); the map puts the intervals' Jacobians side by side
+    jacs = np.asarray(jacs, dtype=float).reshape(nx, nx + 2 * n_a, n, order="F").transpose(2, 0, 1)
+    offsets = np.asarray(offsets, dtype=float)  # (nx, n)
+    # dynamics rows k: z_{k+1}[:nx] - J_k [z_k; u_k+1] = offset_k
+    k, r, c = np.meshgrid(np.arange(n), np.arange(nx), np.arange(nx + 2 * n_a), indexing="ij")
+    col = np.where(c < m, k * m + c, (k + 1) * m + nx + (c - m))
+    vals = -jacs
+    keep = vals != 0
+    rows = np.concatenate([(k * nx + r)[keep], (np.arange(n)[:, None] * nx + np.arange(nx)).ravel()])
+    cols = np.concatenate([col[keep], ((np.arange(n)[:, None] + 1) * m + np.arange(nx)).ravel()])
+    values = np.concatenate([vals[keep], np.ones(n * nx)])
+    dynamics = sparse.csc_matrix((values, (rows, cols)), shape=(n * nx, (n + 1) * m))
+    # fixed values: rest at the start, zero command at the end
+    fixed = np.concatenate([np.arange(nx), n * m + nx + np.arange(n_a)])
+    pin = sparse.csc_matrix((np.ones(fixed.size), (np.arange(fixed.size), fixed)), shape=(fixed.size, (n + 1) * m))
+    # scaling: z = D x, rows of the dynamics by the state scales
+    state_scale = np.concatenate([1 / scale, 1 / (scale * omega), lag_scale])
+    d = np.tile(np.concatenate([state_scale, cap]), n + 1)
+    row_scale = np.tile(1 / state_scale, n)
+    a = sparse.vstack([sparse.diags(row_scale) @ dynamics, pin]) @ sparse.diags(d)
+    b = np.concatenate([row_scale * offsets.T.ravel(), np.zeros(fixed.size)])
+    # inequalities: force limits (|u| <= 1 scaled) and rate limits
+    u_index = (np.arange(n + 1)[:, None] * m + nx + np.arange(n_a)).ravel()
+    rows_c = [sparse.csc_matrix((np.ones(u_index.size), (np.arange(u_index.size), u_index)),
+                                shape=(u_index.size, (n + 1) * m))]
+    lower = [-np.ones(u_index.size)]
+    upper = [np.ones(u_index.size)]
+    for j, rate in enumerate(rates):
+        if rate is None:
+            continue
+        kk = np.arange(n)
+        diff = sparse.csc_matrix(
+            (np.concatenate([np.ones(n), -np.ones(n)]),
+             (np.concatenate([kk, kk]), np.concatenate([(kk + 1) * m + nx + j, kk * m + nx + j]))),
+            shape=(n, (n + 1) * m))
+        rows_c.append(diff)
+        lower.append(-rate * h / cap[j])
+        upper.append(rate * h / cap[j])
+    # cost: tracking (trapezoid weights), vibration left at the window's end, effort
+    weights = np.concatenate([[h[0] / 2], (h[:-1] + h[1:]) / 2, [h[-1] / 2]])
+    diag = np.zeros((n + 1, m))
+    diag[:, :6] = 2 * weights[:, None]
+    diag[-1, :12] += 2 * settings.terminal_weight
+    diag[:, nx:] = 2 * settings.effort_weight * weights[:, None]
+    return _QP(sparse.diags(diag.ravel()).tocsc(), a.tocsc(), b, sparse.vstack(rows_c).tocsc(),
+               np.concatenate(lower), np.concatenate(upper), d)
+
+
+def _solve(qp: _QP, settings: OptimalSettings) -> tuple[np.ndarray, str, int, bool]:
+    """Clarabel (interior point) on the QP; the unscaled variables, status, iterations, success."""
+    import clarabel
+
+    a = sparse.vstack([qp.a, qp.c, -qp.c]).tocsc()
+    b = np.concatenate([qp.b, qp.upper, -qp.lower])
+    cones = [clarabel.ZeroConeT(qp.a.shape[0]), clarabel.NonnegativeConeT(2 * qp.c.shape[0])]
+    options = clarabel.DefaultSettings()
+    options.verbose = False
+    options.max_iter = settings.max_iterations
+    options.tol_gap_abs = options.tol_gap_rel = settings.tolerance
+    options.tol_feas = settings.tolerance
+    options.equilibrate_enable = False  # _assemble scales the problem; Clarabel's own scaling stalls it
+    solver = clarabel.DefaultSolver(sparse.triu(qp.p).tocsc(), np.zeros(qp.p.shape[0]), a, b, cones, options)
+    solution = solver.solve()
+    status = str(solution.status)
+    ok = status in ("Solved", "AlmostSolved")
+    return qp.scale * np.asarray(solution.x), status, int(solution.iterations), ok
+
+
+def feedforward_optimal(
+    scenario: Scenario,
+    settings: OptimalSettings | None = None,
+    progress: bool = False,
+) -> Feedforward:
+    """Optimise the actuators' command through the time-varying model (see the module docstring).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With ``[[actuators]]`` and moves that stop.
+    settings : OptimalSettings, optional
+    progress : bool
+        Print what is being solved and how it went.
+
+    Returns
+    -------
+    Feedforward
+        ``method="optimal"``; ``info`` holds the solver's status, iterations,
+        objective, knots, variables and time.
+
+    Raises
+    ------
+    OptimisationError
+        the QP solver (Clarabel) stopped without converging; the message gives its status and
+        the best point's objective (``exc.feedforward`` holds that point's forces).
+    """
+    settings = settings or OptimalSettings()
+    if not scenario.actuators:
+        raise ScenarioError("actuators: the scenario has no [[actuators]] for feedforward")
+    began = time.perf_counter()
+    acts = scenario.actuators
+    n_a = len(acts)
+    knots, _ = _knot_times(scenario, settings)
+    h = np.diff(knots)
+    n = h.size
+    data, path = _stage_data(scenario, knots)
+    lagged = [k for k, a in enumerate(acts) if a.bandwidth is not None]
+    tau = np.array([1.0 / (2 * math.pi * acts[k].bandwidth) for k in lagged])  # type: ignore[operator]
+    interval = _interval_function(n_a, tau, lagged)
+
+    # normalise each signal by the passive run's deviation from the quasi-static path
+    passive = Simulator(scenario).run()
+    deviation = np.max(np.abs(passive.signals - path(passive.t).T), axis=1)
+    scale = 1.0 / np.maximum(deviation, 1e-12 * max(deviation.max(), 1e-300))
+    omega = float(np.median(np.abs(linearise(scenario).eigenvalues)))
+
+    cap = np.array([a.max_force for a in acts])
+    qp = _assemble(interval, len(lagged), h, data, scale, omega, cap, cap[lagged], [a.max_rate for a in acts],
+                   settings)
+    if progress:
+        print(f"  optimal feedforward: {n + 1} knots over {knots[-1]:.3g} s, {qp.p.shape[0]} variables ...",
+              flush=True)
+    z, status, iterations, ok = _solve(qp, settings)
+    forces = z.reshape(n + 1, -1)[:, 12 + len(lagged):].T
+    n_vars = int(qp.p.shape[0])
+    elapsed = time.perf_counter() - began
+    info = {"status": status, "iterations": iterations,
+            "knots": int(n + 1), "variables": n_vars, "seconds": elapsed, "window_end": float(knots[-1])}
+    if progress:
+        print(f"  optimal feedforward: {info['status']} after {info['iterations']} iterations, {elapsed:.1f} s",
+              flush=True)
+    demand = path_demand(scenario, linearise(scenario), path, knots, knots + 1e-12)
+    residual = demand.wrench - np.einsum("nij,jn->ni", demand.allocation, forces)
+    result = Feedforward(ForceHistory(knots, forces, tuple(a.name for a in acts)), demand.wrench, residual, path,
+                         "optimal", info)
+    if not ok:
+        error = OptimisationError(
+            f"optimal feedforward: the QP solver (Clarabel) stopped with '{info['status']}' after "
+            f"{info['iterations']} iterations; "
+            "the best point found is kept (raise OptimalSettings.max_iterations, or use --method allocation)"
+        )
+        error.feedforward = result  # type: ignore[attr-defined]
+        raise error
+    return result
