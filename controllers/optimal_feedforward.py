@@ -316,7 +316,9 @@ def feedforward_optimal(
     # normalise each signal by the passive run's deviation from the quasi-static path
     passive = Simulator(scenario).run()
     deviation = np.max(np.abs(passive.signals - path(passive.t).T), axis=1)
-    scale = 1.0 / np.maximum(deviation, 1e-12 * max(deviation.max(), 1e-300))
+    # signals the move leaves (nearly) still weigh as if they moved 0.1 % of their group's largest
+    floor = np.repeat([1e-3 * max(deviation[:3].max(), 1e-12), 1e-3 * max(deviation[3:].max(), 1e-12)], 3)
+    scale = 1.0 / np.maximum(deviation, floor)
     omega = float(np.median(np.abs(linearise(scenario).eigenvalues)))
 
     cap = np.array([a.max_force for a in acts])

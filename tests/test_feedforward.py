@@ -122,3 +122,46 @@ def test_feedforward_and_forces_commands(tmp_path: Path, capsys):
     assert run["peak"]["z"] < 0.05 * data["passive"]["peak"]["z"]
     assert main(["feedforward", "paper-table-3-2"]) == 2
     assert "no [[actuators]]" in capsys.readouterr().err
+
+
+# -- optimal feedforward ---------------------------------------------------------------
+def test_optimal_feedforward_beats_allocation_with_slow_actuators():
+    data = _active_dict(bandwidth=20.0)
+    for act in data["actuators"]:
+        act["max_rate"] = 2e4
+    scenario = make(data)
+    from controllers.optimal_feedforward import feedforward_optimal
+
+    optimal = feedforward_optimal(scenario)
+    assert optimal.method == "optimal"
+    with_optimal = compare_feedforward(scenario, optimal)
+    with_allocation = compare_feedforward(scenario)
+    red_opt, red_alloc = with_optimal.reduction_db(), with_allocation.reduction_db()
+    passive = with_optimal.deviation_peak("passive")
+    largest = {"r": max(passive[k] for k in ("rx", "ry", "rz")), "t": max(passive[k] for k in "xyz")}
+    moving = [k for k in SIGNALS if passive[k] > 1e-3 * largest["r" if k.startswith("r") else "t"]]
+    assert set(moving) == {"x", "z", "ry"}  # the x move on the symmetric table
+    for k in moving:
+        assert red_opt[k] <= -40, (k, red_opt[k])
+        assert red_opt[k] <= red_alloc[k] - 20, (k, red_opt[k], red_alloc[k])
+    assert max(with_optimal.settling["controlled"][k] for k in moving) <= 0.020
+    # limits: force and rate of the command, and what the actuators apply in the run
+    f, t = optimal.forces.forces, optimal.forces.t
+    assert np.abs(f).max() <= 500.0 * (1 + 1e-6)
+    assert np.max(np.abs(np.diff(f, axis=1)) / np.diff(t)) <= 2e4 * (1 + 1e-4)
+    assert np.abs(with_optimal.controlled.actuator_forces).max() <= 500.0 + 1e-9
+    assert with_optimal.to_dict()["method"] == "optimal"
+
+
+def test_optimal_feedforward_failures_are_reported():
+    from controllers.optimal_feedforward import OptimalSettings, feedforward_optimal
+    from isolator import OptimisationError
+
+    scenario = make(_active_dict())
+    with pytest.raises(OptimisationError, match=r"stopped with '.*' after 1 iterations; the best point") as info:
+        feedforward_optimal(scenario, OptimalSettings(max_iterations=1))
+    assert info.value.feedforward.forces.forces.shape[0] == len(scenario.actuators)
+    data = _active_dict()
+    data["carriages"][0]["profile"] = {"type": "sine", "amplitude": 0.1, "omega": 3.0}
+    with pytest.raises(ScenarioError, match="needs moves that stop"):
+        feedforward_optimal(make(data))
