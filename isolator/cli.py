@@ -47,9 +47,16 @@ def _parser() -> argparse.ArgumentParser:
                      help="actuator forces file (t and one column per actuator, N)")
 
     study = sub.add_parser("study", help="run a study that writes figures and a report")
-    study.add_argument("name", choices=["paper"], help="paper: reproduce Shin, Sun and Kim")
+    study.add_argument("name", choices=["paper", "control"],
+                       help="paper: reproduce Shin, Sun and Kim; control: passive, feedforward, feedback and both")
+    study.add_argument("scenario", nargs="?", default=None,
+                       help="control: scenario with [[actuators]] (default: paper-table-3-2-active)")
     study.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     study.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
+    study.add_argument("--controller", choices=["skyhook", "lead", "lqr", "hinf"], default="skyhook",
+                       help="control: the feedback design in the time runs")
+    study.add_argument("--feedforward", choices=["allocation", "optimal"], default="allocation",
+                       help="control: the feedforward method")
 
     modes = sub.add_parser(
         "modes", help="natural frequencies, damping ratios and mode shapes of the parked table",
@@ -257,6 +264,15 @@ def _study(args: argparse.Namespace) -> int:
 
         report = run_paper_study(args.out, quick=args.quick)
         print(f"report: {report}")
+    elif args.name == "control":
+        from studies.control import run_control_study
+
+        scenario = load_scenario(args.scenario or "paper-table-3-2-active")
+        study = run_control_study(args.out, scenario, args.controller, args.feedforward)
+        for run in ("passive", "feedforward", "feedback", "both"):
+            value = study.settling_time_max(run)
+            print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
+        print(f"report: {args.out / 'report.md'}")
     return 0
 
 

@@ -194,3 +194,28 @@ def test_closed_loop_final_value_follows_the_controllers_dc_stiffness(active, li
     np.testing.assert_allclose(run.final, final, rtol=1e-12)
     assert math.isfinite(run.signals[ry, -1])
     assert abs(run.signals[ry, -1] - final[ry]) < 0.05 * abs(passive.final[ry])
+
+
+def test_control_study_writes_figures_and_report(tmp_path, capsys):
+    from isolator.cli import main
+
+    assert main(["study", "control", "--out", str(tmp_path)]) == 0
+    out = capsys.readouterr().out
+    for name in ("time.png", "transmissibility.png", "settling.png", "forces.png", "report.md"):
+        assert (tmp_path / name).stat().st_size > 1000, name
+    report = (tmp_path / "report.md").read_text()
+    assert "| passive |" in report
+    assert "| both |" in report
+    settle = {line.split(":")[0].strip(): line for line in out.splitlines() if "settling" in line}
+    assert "n/a" not in settle["feedback"]
+    passive = float(settle["passive"].split("settling")[1].split()[0])
+    feedback = float(settle["feedback"].split("settling")[1].split()[0])
+    assert feedback < 0.2 * passive  # skyhook damps the ringing
+    assert float(settle["both"].split("settling")[1].split()[0]) <= 0.020
+
+
+def test_control_study_needs_actuators(tmp_path, capsys):
+    from isolator.cli import main
+
+    assert main(["study", "control", "paper-table-3-2", "--out", str(tmp_path)]) == 2
+    assert "needs a scenario with [[actuators]]" in capsys.readouterr().err

@@ -1,0 +1,300 @@
+"""What active isolation buys: passive, feedforward, feedback and both on an active table.
+
+Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
+
+* ``time.png``: the six table signals in the four runs;
+* ``transmissibility.png``: same-axis floor-to-table transmissibility,
+  passive and with each feedback design (feedforward does not change it);
+* ``settling.png``: 5 % settling time per signal and run (one band: 5 % of
+  the passive peak);
+* ``forces.png``: the actuators' forces in the three active runs;
+* ``report.md``: the numbers, the controller and its loop's stability.
+
+With feedback alone the controller regulates to the initial equilibrium;
+with both, to the feedforward's quasi-static path, so the two do not fight
+over the quasi-static tilt.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from controllers import feedback as fb
+from controllers.feedforward import Feedforward, feedforward_allocation
+from isolator import SIGNALS, Response, Scenario, ScenarioError, Simulator
+from isolator.linear import LinearModel, linearise
+from isolator.settling import settling_time
+from isolator.transmissibility import transmissibility
+
+__all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
+
+CONTROLLERS = ("skyhook", "lead", "lqr", "hinf")
+RUNS = ("passive", "feedforward", "feedback", "both")
+_COLORS = {"passive": "0.35", "feedforward": "tab:blue", "feedback": "tab:orange", "both": "tab:green"}
+
+
+def design(name: str, lin: LinearModel) -> fb.Controller:
+    """The study's design of each controller (default parameters, documented in the report).
+
+    Raises
+    ------
+    ScenarioError
+        Unknown name, or ``hinf`` without slycot.
+    """
+    if name == "skyhook":
+        return fb.skyhook(lin, 5e4)
+    if name == "lead":
+        return fb.lead(lin, 1e5, 2.0, 20.0)
+    if name == "lqr":
+        return fb.lqr(lin)
+    if name == "hinf":
+        return fb.hinf(lin)
+    raise ScenarioError(f"controller: must be one of {', '.join(CONTROLLERS)}, got '{name}'")
+
+
+@dataclass(frozen=True)
+class ControlStudy:
+    """The four runs and what was measured.
+
+    Attributes
+    ----------
+    runs : dict of str to Response
+        ``passive``, ``feedforward``, ``feedback``, ``both``.
+    settling : dict of str to dict
+        Per run, settling time per signal [s] (None: not within the run) in the
+        band 5 % of the passive peak.
+    deviation : dict of str to dict
+        Per run, the largest deviation from the quasi-static path per signal [m, rad].
+    controller : fb.Controller
+    stability : fb.LoopStability
+        Of the sampled loop with the carriages at their start.
+    folder : Path
+    """
+
+    runs: dict[str, Response]
+    settling: dict[str, dict[str, float | None]]
+    deviation: dict[str, dict[str, float]]
+    controller: fb.Controller
+    stability: fb.LoopStability
+    feedforward: Feedforward
+    folder: Path
+
+    def settling_time_max(self, run: str) -> float | None:
+        values = list(self.settling[run].values())
+        return None if any(v is None for v in values) else max(values)  # type: ignore[type-var]
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            run: {"settling_time": self.settling[run], "settling_time_max": self.settling_time_max(run),
+                  "deviation_peak": self.deviation[run],
+                  "max_force": float(np.abs(self.runs[run].actuator_forces).max(initial=0.0))}
+            for run in RUNS
+        }
+
+
+def _settling(run: Response, band: dict[str, float]) -> dict[str, float | None]:
+    final = run.final if run.final is not None else np.zeros(6)
+    return {k: settling_time(run.t, run.signals[i], float(final[i]), run.stop_time, max(band[k], 1e-300))[0]
+            for i, k in enumerate(SIGNALS)}
+
+
+def run_control_study(
+    out: str | Path,
+    scenario: Scenario,
+    controller: str = "skyhook",
+    feedforward: str = "allocation",
+    progress: bool = True,
+) -> ControlStudy:
+    """Run the study and write its figures and report into ``out``.
+
+    Parameters
+    ----------
+    out : path
+        Folder (created).
+    scenario : Scenario
+        With ``[[actuators]]``.
+    controller : {"skyhook", "lead", "lqr", "hinf"}
+        The feedback design for the time runs (all are shown in the transmissibility).
+    feedforward : {"allocation", "optimal"}
+    """
+    if not scenario.actuators:
+        raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
+    if feedforward not in ("allocation", "optimal"):
+        raise ScenarioError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+
+    def say(text: str) -> None:
+        if progress:
+            print(f"  control study: {text}", flush=True)
+
+    lin = linearise(scenario)
+    ctrl = design(controller, lin)
+    sim = Simulator(scenario)
+    say("passive run")
+    runs = {"passive": sim.run()}
+    say(f"feedforward ({feedforward})")
+    if feedforward == "optimal":
+        from controllers.optimal_feedforward import feedforward_optimal
+
+        ff = feedforward_optimal(scenario, progress=progress)
+    else:
+        ff = feedforward_allocation(scenario)
+    runs["feedforward"] = sim.run(forces=ff.forces)
+    say(f"feedback ({ctrl.description}) at {ctrl.sample_rate:g} Hz")
+    runs["feedback"] = sim.run(feedback=fb.feedback_law(scenario, ctrl))
+    say("feedforward and feedback")
+    runs["both"] = sim.run(forces=ff.forces, feedback=fb.feedback_law(scenario, ctrl, reference=ff.path))
+    band = {k: 0.05 * v for k, v in runs["passive"].peak.items()}
+    qs = ff.path(runs["passive"].t).T
+    settling = {name: _settling(r, band) for name, r in runs.items()}
+    deviation = {name: dict(zip(SIGNALS, (float(v) for v in np.max(np.abs(r.signals - qs), axis=1)), strict=True))
+                 for name, r in runs.items()}
+    study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder)
+    say("figures and report")
+    _time_figure(study, folder / "time.png")
+    loops = _transmissibility_figure(scenario, lin, folder / "transmissibility.png")
+    _settling_figure(study, folder / "settling.png")
+    _forces_figure(study, folder / "forces.png")
+    _report(study, scenario, loops, band, folder / "report.md")
+    return study
+
+
+# -- figures --------------------------------------------------------------------------
+def _time_figure(study: ControlStudy, path: Path) -> None:
+    fig, axes = plt.subplots(3, 2, figsize=(12, 8.5), sharex=True, layout="constrained")
+    for i, name in enumerate(SIGNALS):
+        ax = axes[i % 3, i // 3]
+        for run, r in study.runs.items():
+            ax.plot(r.t, r.signals[i] * 1e6, color=_COLORS[run], lw=1.0 if run != "passive" else 1.4,
+                    ls="--" if run == "both" else "-", label=run)
+        ax.set_ylabel(f"{name} [{'µrad' if name.startswith('r') else 'µm'}]")
+        ax.grid(True, alpha=0.3)
+        stop = study.runs["passive"].stop_time
+        if math.isfinite(stop):
+            ax.axvline(stop, color="0.6", lw=0.8, ls=":")
+    axes[0, 0].legend(fontsize=9, ncol=2)
+    axes[-1, 0].set_xlabel("time [s]")
+    axes[-1, 1].set_xlabel("time [s]")
+    fig.suptitle(f"Table motion from its initial equilibrium: passive and active ({study.runs['passive'].name}); "
+                 "dotted: the carriages stop")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -> dict[str, Any]:
+    f = np.logspace(-1, 2, 600)
+    loops: dict[str, Any] = {"passive (and with feedforward)": transmissibility(lin, f)}
+    for name in CONTROLLERS:
+        try:
+            ctrl = design(name, lin)
+        except ScenarioError:  # hinf without slycot
+            continue
+        loops[ctrl.name] = transmissibility(fb.closed_loop(lin, ctrl, check=False), f)
+    fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True, layout="constrained")
+    for i, axis in enumerate(SIGNALS):
+        ax = axes[i // 3, i % 3]
+        for k, (name, resp) in enumerate(loops.items()):
+            ax.loglog(f, resp.magnitude(axis), label=name, color="0.2" if k == 0 else None,
+                      lw=1.8 if k == 0 else 1.1)
+        ax.axhline(1.0, color="0.6", lw=0.8, ls="--")
+        ax.set_title(f"{axis} from floor {axis}")
+        ax.set_ylabel("|T| [m/m]" if i < 3 else "|T| [rad/rad]")
+        ax.grid(True, which="both", alpha=0.3)
+        if i >= 3:
+            ax.set_xlabel("frequency [Hz]")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle(f"Transmissibility with and without feedback ({scenario.name}, carriages at their start)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return loops
+
+
+def _settling_figure(study: ControlStudy, path: Path) -> None:
+    fig, ax = plt.subplots(figsize=(11, 4.8), layout="constrained")
+    labels = [*SIGNALS, "largest"]
+    width = 0.2
+    x = np.arange(len(labels))
+    top = 0.0
+    for j, run in enumerate(RUNS):
+        values = [study.settling[run][k] for k in SIGNALS] + [study.settling_time_max(run)]
+        heights = [np.nan if v is None else v for v in values]
+        top = max(top, np.nanmax(heights, initial=0.0))
+        bars = ax.bar(x + (j - 1.5) * width, heights, width, label=run, color=_COLORS[run])
+        for bar, v in zip(bars, values, strict=True):
+            text = "n/a" if v is None else f"{v:.2f}"
+            ax.text(bar.get_x() + bar.get_width() / 2, (0 if v is None else v), text, ha="center", va="bottom",
+                    fontsize=7, rotation=90)
+    ax.set_xticks(x, labels)
+    ax.set_ylim(0, 1.25 * top if top > 0 else 1.0)
+    ax.set_ylabel("5 % settling time after the stop [s]")
+    ax.set_title("Settling time per signal (band: 5 % of the passive run's peak; n/a: not settled within the run)")
+    ax.legend()
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def _forces_figure(study: ControlStudy, path: Path) -> None:
+    fig, axes = plt.subplots(3, 1, figsize=(11, 8), sharex=True, layout="constrained")
+    for ax, run in zip(axes, RUNS[1:], strict=True):
+        r = study.runs[run]
+        for k, name in enumerate(r.actuator_names):
+            ax.plot(r.t, r.actuator_forces[k], lw=0.9, label=name)
+        ax.set_ylabel("force [N]")
+        ax.set_title(f"{run}: largest {np.abs(r.actuator_forces).max():.0f} N")
+        ax.grid(True, alpha=0.3)
+    axes[0].legend(fontsize=7, ncol=6)
+    axes[-1].set_xlabel("time [s]")
+    fig.suptitle("Forces the actuators apply (after saturation and lag)")
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+# -- report ---------------------------------------------------------------------------
+def _fmt(value: float | None, unit: str = " s") -> str:
+    return "n/a" if value is None else f"{value:.3g}{unit}"
+
+
+def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any], band: dict[str, float],
+            path: Path) -> None:
+    ctrl = study.controller
+    lines = [
+        f"# Active isolation study: {scenario.name}",
+        "",
+        f"Feedforward: {study.feedforward.method}. Feedback: {ctrl.description}, run at {ctrl.sample_rate:g} Hz "
+        f"(Tustin), sampled-loop spectral radius {study.stability.spectral_radius:.4f} "
+        f"({'stable' if study.stability.stable else 'UNSTABLE'}), slowest continuous decay "
+        f"{study.stability.margin:.3g} 1/s.",
+        "With feedback alone the controller regulates to the initial equilibrium; with both, to the "
+        "feedforward's quasi-static path. Settling band: 5 % of the passive peak per signal "
+        "(" + ", ".join(f"{k} {v:.3g}" for k, v in band.items()) + "), about each run's final value.",
+        "",
+        "## Settling time after the stop and peak deviation from the quasi-static path",
+        "",
+        "| run | settling, largest | " + " | ".join(f"settling {k}" for k in SIGNALS)
+        + " | largest force |",
+        "|---|---|" + "---|" * len(SIGNALS) + "---|",
+    ]
+    for run in RUNS:
+        force = float(np.abs(study.runs[run].actuator_forces).max(initial=0.0))
+        lines.append(f"| {run} | {_fmt(study.settling_time_max(run))} | "
+                     + " | ".join(_fmt(study.settling[run][k]) for k in SIGNALS) + f" | {force:.0f} N |")
+    lines += ["", "| run | " + " | ".join(f"dev. {k}" for k in SIGNALS) + " |", "|---|" + "---|" * len(SIGNALS)]
+    for run in RUNS:
+        dev = study.deviation[run]
+        lines.append(f"| {run} | " + " | ".join(f"{dev[k] * 1e6:.3g} {'µrad' if k[0] == 'r' else 'µm'}"
+                                                 for k in SIGNALS) + " |")
+    lines += ["", "## Transmissibility peaks (same axis, carriages at their start)", "",
+              "| design | " + " | ".join(SIGNALS) + " |", "|---|" + "---|" * len(SIGNALS)]
+    for name, resp in loops.items():
+        lines.append(f"| {name} | " + " | ".join(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz"
+                                                 for a in SIGNALS) + " |")
+    lines += ["", "Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`.", ""]
+    path.write_text("\n".join(lines))
