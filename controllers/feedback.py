@@ -46,6 +46,7 @@ from isolator.linear import (
     GROUND_INPUTS,
     STATE_NAMES,
     LinearModel,
+    is_stable,
     linearise,
     state_space_response,
 )
@@ -400,12 +401,14 @@ def _plant(lin: LinearModel) -> _Plant:
     # lag states f_k' = (u_k - f_k) / tau_k drive the table through the actuator columns
     tau = np.array([1.0 / (2 * math.pi * acts[k].bandwidth) for k in lagged])  # type: ignore[operator]
     bu_table = b[:, iu]
-    direct = np.array([k not in lagged for k in range(n_a)])
-    a_full = np.block([[a, bu_table[:, lagged]], [np.zeros((nl, 12)), -np.diag(1.0 / tau) if nl else
-                                                   np.zeros((0, 0))]])
-    bu = np.vstack([bu_table * direct[None, :], np.zeros((nl, n_a))])
-    for row, k in enumerate(lagged):
-        bu[12 + row, k] = 1.0 / tau[row]
+    a_full = np.zeros((12 + nl, 12 + nl))
+    a_full[:12, :12] = a
+    a_full[:12, 12:] = bu_table[:, lagged]
+    a_full[12:, 12:] = -np.diag(1.0 / tau)
+    bu = np.zeros((12 + nl, n_a))
+    direct = [k for k in range(n_a) if k not in lagged]
+    bu[:12, direct] = bu_table[:, direct]
+    bu[12 + np.arange(nl), lagged] = 1.0 / tau
     bw = np.vstack([b[:, iw], np.zeros((nl, len(iw)))])
     cy = np.hstack([c, np.zeros((c.shape[0], nl))])
     # the sensors see the true velocity, the state plus the floor's damper feedthrough: x = xi + B1 g
@@ -464,11 +467,11 @@ def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) ->
     k = controller.system
     if list(k.output_labels) != _actuator_labels(lin.scenario) or list(k.input_labels) != list(MEASUREMENTS):
         raise ScenarioError("controller: was designed for other actuators or measurements than this plant's")
-    ak, bk, ck, dk = (np.asarray(m, dtype=float) for m in (k.A, k.B, k.C, k.D))
-    nk = ak.shape[0]
+    _, bk, _, dk = (np.asarray(m, dtype=float) for m in (k.A, k.B, k.C, k.D))
+    nk = bk.shape[0]
     # m = Cm x + Dmw w - [ref; 0];  u = Ck xc + Dk m
     ref = np.vstack([np.eye(6), np.zeros((6, 6))])
-    a = np.block([[p.a + p.bu @ dk @ p.cm, p.bu @ ck], [bk @ p.cm, ak]])
+    a = _loop_matrix(p, controller)
     b = np.block([[p.bw + p.bu @ dk @ p.dmw, -p.bu @ dk @ ref], [bk @ p.dmw, -bk @ ref]])
     c = np.hstack([p.cy, np.zeros((p.cy.shape[0], nk))])
     d = np.hstack([p.dyw, np.zeros((p.cy.shape[0], 6))])
@@ -476,8 +479,15 @@ def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) ->
                         name=f"{lin.scenario.name} with {controller.name}")
     loop = ClosedLoop(lin, controller, system)
     if check:
-        check_stability(lin, controller).raise_if_unstable()
+        _stability(lin, p, controller, a).raise_if_unstable()
     return loop
+
+
+def _loop_matrix(p: _Plant, controller: Controller) -> np.ndarray:
+    """State matrix of plant and controller in a loop (continuous time), states ``[x, x_c]``."""
+    ak, bk, ck, dk = (np.asarray(m, dtype=float) for m in (controller.system.A, controller.system.B,
+                                                          controller.system.C, controller.system.D))
+    return np.block([[p.a + p.bu @ dk @ p.cm, p.bu @ ck], [bk @ p.cm, ak]])
 
 
 @dataclass(frozen=True)
@@ -505,9 +515,7 @@ class LoopStability:
     stable: bool = field(init=False)
 
     def __post_init__(self) -> None:
-        cont = self.continuous
-        ok_c = bool(np.all(cont.real < 1e-9 * max(1.0, float(np.abs(cont).max(initial=0.0)))))
-        object.__setattr__(self, "stable", ok_c and self.spectral_radius < 1.0)
+        object.__setattr__(self, "stable", is_stable(self.continuous) and self.spectral_radius < 1.0)
 
     @property
     def spectral_radius(self) -> float:
@@ -537,10 +545,13 @@ class LoopStability:
 def check_stability(lin: LinearModel, controller: Controller, where: str = "") -> LoopStability:
     """Check the loop of ``controller`` around ``lin`` continuous and sampled."""
     p = _plant(lin)
-    k = controller.system
-    ak, bk, ck, dk = (np.asarray(m, dtype=float) for m in (k.A, k.B, k.C, k.D))
-    nk, n = ak.shape[0], p.a.shape[0]
-    a_cont = np.block([[p.a + p.bu @ dk @ p.cm, p.bu @ ck], [bk @ p.cm, ak]])
+    return _stability(lin, p, controller, _loop_matrix(p, controller), where)
+
+
+def _stability(lin: LinearModel, p: _Plant, controller: Controller, a_cont: np.ndarray,
+               where: str = "") -> LoopStability:
+    """The loop's eigenvalues: ``a_cont`` (from :func:`_loop_matrix`) and the sampled loop's."""
+    n = p.a.shape[0]
     h = 1.0 / controller.sample_rate
     m_u = p.bu.shape[1]
     big = np.zeros((n + m_u, n + m_u))
@@ -549,7 +560,7 @@ def check_stability(lin: LinearModel, controller: Controller, where: str = "") -
     phi, gam = e[:n, :n], e[:n, n:]
     kad, kbd, kcd, kdd = controller.discrete()
     # u_k = Ckd xc_k + Dkd m_k held over the period; x_{k+1} = Phi x_k + Gamma u_k; xc_{k+1} = Akd xc + Bkd m_k
-    a_disc = np.block([[phi + gam @ kdd @ p.cm, gam @ kcd], [kbd @ p.cm, kad]]) if nk else phi + gam @ kdd @ p.cm
+    a_disc = np.block([[phi + gam @ kdd @ p.cm, gam @ kcd], [kbd @ p.cm, kad]])
     where = where or f"with the carriages at {', '.join(f'{q:.4g}' for q in lin.positions)} m"
     return LoopStability(np.linalg.eigvals(a_cont), np.linalg.eigvals(a_disc), controller.sample_rate,
                          controller.name, where)

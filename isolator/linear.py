@@ -36,6 +36,7 @@ __all__ = [
     "GROUND_INPUTS",
     "STATE_NAMES",
     "LinearModel",
+    "is_stable",
     "linearise",
     "rest_positions",
     "state_space_response",
@@ -187,10 +188,7 @@ class LinearModel:
         Non-zero only in the velocity rows of the floor inputs: what the floor's
         velocity adds through the isolators' dampers at once (``-M^-1 G1``).
         """
-        n_in = len(self.input_names)
-        out = np.zeros((12, n_in))
-        out[6:, :6] = -np.linalg.solve(self.mass, self.ground_damping)
-        return out
+        return _feedthrough(self.mass, self.ground_damping, len(self.input_names))
 
     def rocking_stiffness(self) -> RockingStiffness:
         """The static rocking stiffness and its margin at this rest configuration."""
@@ -209,8 +207,20 @@ class LinearModel:
     @property
     def stable(self) -> bool:
         """All eigenvalues in the open left half-plane (up to round-off)."""
-        eig = self.eigenvalues
-        return bool(np.all(eig.real < 1e-9 * max(1.0, float(np.abs(eig).max()))))
+        return is_stable(self.eigenvalues)
+
+
+def is_stable(eigenvalues: np.ndarray) -> bool:
+    """All continuous-time eigenvalues [1/s] in the open left half-plane (up to round-off)."""
+    eig = np.asarray(eigenvalues)
+    return bool(np.all(eig.real < 1e-9 * max(1.0, float(np.abs(eig).max(initial=0.0)))))
+
+
+def _feedthrough(mass: np.ndarray, ground_damping: np.ndarray, n_inputs: int) -> np.ndarray:
+    """``B1`` (12, n_inputs): the velocity the floor's velocity adds at once through the dampers."""
+    out = np.zeros((12, n_inputs))
+    out[6:, :6] = -np.linalg.solve(mass, ground_damping)
+    return out
 
 
 def _index(names: Sequence[str] | None, labels: list[str], what: str) -> list[int]:
@@ -309,7 +319,7 @@ def _state_space(
     a = np.block([[zero, eye], [-inv_m @ stiffness, -inv_m @ damping]])
     n_in = 6 + force_input.shape[1]
     b0 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g0, force_input])])
-    b1 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g1, np.zeros_like(force_input)])])
+    b1 = _feedthrough(mass, g1, n_in)
     # x' = A x + B0 u + B1 u'  ->  xi = x - B1 u:  xi' = A xi + (A B1 + B0) u
     rot0 = pose_rotation(eq.pose[3:])
     rows = [np.hstack([eye, zero])]

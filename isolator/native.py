@@ -160,14 +160,8 @@ class NativeFunction:
             if x.size != r * c:
                 raise ValueError(f"{self.name}: input of {x.size} values, expected {r}x{c}")
         outs = [np.empty((c, r)) for (r, c) in self.out_shapes]
-        sz_arg, sz_res, sz_iw, sz_w = self._sz
-        arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
-        res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
-        iw = np.empty(max(sz_iw, 1), dtype=np.int64)
-        w = np.empty(max(sz_w, 1), dtype=np.float64)
-        status = self._fn(
-            ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0
-        )
+        pointers, _keep = self._pointers(ins, outs)
+        status = self._fn(*pointers)
         if status != 0:
             raise RuntimeError(f"{self.name}: native evaluation failed ({status})")
         return outs
@@ -182,12 +176,8 @@ class NativeFunction:
             return self.__call__
         ins = [np.empty(r * c) for (r, c) in self.in_shapes]
         outs = [np.empty((c, r)) for (r, c) in self.out_shapes]
-        sz_arg, sz_res, sz_iw, sz_w = self._sz
-        arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
-        res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
-        iw = np.empty(max(sz_iw, 1), dtype=np.int64)
-        w = np.empty(max(sz_w, 1), dtype=np.float64)
-        fn, pointers = self._fn, (ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0)
+        pointers, keep = self._pointers(ins, outs)
+        fn = self._fn
 
         def call(*inputs: np.ndarray) -> list[np.ndarray]:
             for buffer, x in zip(ins, inputs, strict=True):
@@ -196,8 +186,19 @@ class NativeFunction:
                 raise RuntimeError(f"{self.name}: native evaluation failed")
             return outs
 
-        call.buffers = (arg, res, iw, w)  # type: ignore[attr-defined]  # what the pointers point into
+        call.buffers = keep  # type: ignore[attr-defined]  # what the pointers point into
         return call
+
+    def _pointers(self, ins: list[np.ndarray], outs: list[np.ndarray]) -> tuple[tuple, tuple]:
+        """The compiled function's five arguments for these buffers, and the objects they point into
+        (keep those alive while the pointers are used)."""
+        sz_arg, sz_res, sz_iw, sz_w = self._sz
+        arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
+        res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
+        iw = np.empty(max(sz_iw, 1), dtype=np.int64)
+        w = np.empty(max(sz_w, 1), dtype=np.float64)
+        pointers = (ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0)
+        return pointers, (arg, res, iw, w, ins, outs)
 
     @staticmethod
     def _as_dm(x: np.ndarray, shape: tuple[int, int]) -> ca.DM:

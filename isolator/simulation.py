@@ -298,13 +298,11 @@ class Simulator:
         interval and the inputs (with the applied forces) at every stage."""
         period = self._controller_period(feedback)
         grid = self.grid
-        inputs = self._with_forces(self._model_inputs(substeps), substeps, forces).copy()
+        inputs = self._model_inputs(substeps).copy()  # the actuator forces are filled in as the run goes
         acts = self.layout.actuator_slice
-        commanded = None
-        if forces is not None:  # the feedforward command before saturation and lag
-            times, mid = stage_times(grid, substeps)
-            commanded = forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, -1)
-        times, _ = stage_times(grid, substeps)
+        times, mid = stage_times(grid, substeps)
+        # the feedforward command before saturation and lag
+        commanded = None if forces is None else forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, -1)
         sample_index = np.cumsum(grid.is_sample) - 1
         ticks = grid.is_sample & (sample_index % period == 0)
         stepper = _stepper(self.model, substeps)
@@ -321,14 +319,13 @@ class Simulator:
         for i, h in enumerate(steps):
             if ticks[i]:
                 u = np.asarray(feedback(float(grid.nodes[i]), motion), dtype=float).reshape(n_a)
-            if commanded is None and not lagged:
-                inputs[i, :, acts] = np.clip(u, -limits, limits)
-            else:
-                command = u[None, :] if commanded is None else commanded[i] + u[None, :]
-                command = np.broadcast_to(command, (times.shape[1], n_a))
-                applied = applied_forces(self.scenario, command, times[i], lag)
+            command = u if commanded is None else commanded[i] + u
+            if lagged:
+                applied = applied_forces(self.scenario, np.broadcast_to(command, (times.shape[1], n_a)), times[i], lag)
                 lag = applied[-1]
-                inputs[i, :, acts] = applied
+            else:  # what applied_forces does without a lag, without its per-call overhead
+                applied = np.clip(command, -limits, limits)
+            inputs[i, :, acts] = applied
             x, motion = stepper.step(x, inputs[i], float(h), p, start.state)
             out[i] = x
             if not np.all(np.isfinite(x)):
