@@ -50,8 +50,10 @@ __all__ = [
     "compare_feedforward",
     "feedforward_allocation",
     "path_demand",
+    "path_deviation",
     "quasi_static_path",
     "reaction_wrench",
+    "settling_in_band",
 ]
 
 #: spacing of the static equilibria that trace the quasi-static path [s]
@@ -296,6 +298,21 @@ def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforwa
     return Feedforward(ForceHistory(times, forces.T, names), wrench, residual, path)
 
 
+def path_deviation(run: Response, quasi_static: np.ndarray) -> dict[str, float]:
+    """Largest |signal - quasi-static path| per signal of a run [m or rad], the path given at the
+    run's samples, shape (6, N)."""
+    dev = np.max(np.abs(run.signals - quasi_static), axis=1)
+    return dict(zip(SIGNALS, (float(v) for v in dev), strict=True))
+
+
+def settling_in_band(run: Response, band: dict[str, float]) -> dict[str, float | None]:
+    """Settling time per signal [s] of a run in a given band per signal [m or rad], about the run's
+    final value (None where the run cannot show it)."""
+    final = run.final if run.final is not None else np.zeros(6)
+    return {k: settling_time(run.t, run.signals[i], float(final[i]), run.stop_time, max(band[k], 1e-300))[0]
+            for i, k in enumerate(SIGNALS)}
+
+
 @dataclass(frozen=True)
 class FeedforwardComparison:
     """The passive run against the run with feedforward, judged with one settling band.
@@ -322,9 +339,7 @@ class FeedforwardComparison:
 
     def deviation_peak(self, which: str) -> dict[str, float]:
         """Largest |signal - quasi-static path| per signal [m or rad] of ``passive`` or ``controlled``."""
-        r = self.passive if which == "passive" else self.controlled
-        dev = np.max(np.abs(r.signals - self.quasi_static), axis=1)
-        return dict(zip(SIGNALS, (float(v) for v in dev), strict=True))
+        return path_deviation(self.passive if which == "passive" else self.controlled, self.quasi_static)
 
     def reduction_db(self) -> dict[str, float]:
         """Peak deviation from the quasi-static path, controlled over passive [dB] per signal."""
@@ -387,11 +402,5 @@ def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = No
     controlled = sim.run(forces=ff.forces)
     qs = ff.path(passive.t).T
     band = {k: 0.05 * v for k, v in passive.peak.items()}
-    settling: dict[str, dict[str, float | None]] = {}
-    for which, r in (("passive", passive), ("controlled", controlled)):
-        final = r.final if r.final is not None else np.zeros(6)
-        settling[which] = {
-            k: settling_time(r.t, r.signals[i], float(final[i]), r.stop_time, max(band[k], 1e-300))[0]
-            for i, k in enumerate(SIGNALS)
-        }
+    settling = {"passive": settling_in_band(passive, band), "controlled": settling_in_band(controlled, band)}
     return FeedforwardComparison(passive, controlled, qs, band, settling, ff)

@@ -13,9 +13,9 @@ deviation ``e`` from its quasi-static path through the exact model linearised
 
 with ``w`` the cancelling wrench and ``B`` the actuators' allocation (both from
 :func:`controllers.feedforward.path_demand`). The quadratic programme (solved
-by IPOPT through ``casadi.Opti``, multiple shooting, one RK4 step per knot
-interval) minimises the deviation, normalised per signal by the passive run's,
-plus the vibration left at the end of the window, within ``max_force`` and
+in multiple-shooting form, one RK4 step per knot interval; casadi gives each
+interval's Jacobians, Clarabel solves the sparse QP) minimises the deviation,
+normalised per signal by the passive run's, plus the vibration left at the end of the window, within ``max_force`` and
 ``max_rate``. Knots are 1 ms apart near the profiles' breakpoints (where the
 demand changes fast) and coarser elsewhere.
 The quasi-static tilt is left to leveling, as with the allocation.
@@ -26,7 +26,6 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -34,13 +33,15 @@ from scipy import sparse
 
 from controllers.feedforward import (
     Feedforward,
+    QuasiStaticPath,
     path_demand,
+    path_deviation,
     quasi_static_path,
 )
 from isolator.actuation import ForceHistory
 from isolator.errors import OptimisationError, ScenarioError
 from isolator.integrator import grid_breakpoints
-from isolator.linear import linearise
+from isolator.linear import LinearModel, linearise
 from isolator.scenario import Scenario
 from isolator.simulation import Simulator
 
@@ -83,8 +84,8 @@ class OptimalSettings:
     tolerance: float = 1e-10
 
 
-def _knot_times(scenario: Scenario, settings: OptimalSettings) -> tuple[np.ndarray, float]:
-    """Knots [s] on the output sample grid (plus off-grid breakpoints), and the window's end."""
+def _knot_times(scenario: Scenario, settings: OptimalSettings) -> np.ndarray:
+    """Knots [s] on the output sample grid (plus off-grid breakpoints); the last ends the window."""
     sim = scenario.simulation
     stop = scenario.stop_time
     if not math.isfinite(stop):
@@ -103,14 +104,11 @@ def _knot_times(scenario: Scenario, settings: OptimalSettings) -> tuple[np.ndarr
         near |= (t >= b - settings.before) & (t <= b + settings.after)
     keep = (index % coarse == 0) | (near & (index % fine == 0))
     keep[0] = keep[-1] = True
-    knots = np.union1d(t[keep], bps)
-    return knots, float(knots[-1])
+    return np.union1d(t[keep], bps)
 
 
-def _stage_data(scenario: Scenario, knots: np.ndarray) -> tuple[np.ndarray, Any]:
+def _stage_data(scenario: Scenario, lin: LinearModel, path: QuasiStaticPath, knots: np.ndarray) -> np.ndarray:
     """Per interval and RK4 stage (start, middle, end): ``M^-1 K``, ``M^-1 C``, ``M^-1 B``, ``M^-1 w``."""
-    lin = linearise(scenario)
-    path = quasi_static_path(scenario)
     h = np.diff(knots)
     t = np.column_stack([knots[:-1], knots[:-1] + h / 2, knots[1:]]).ravel()
     sides = np.repeat(knots[:-1] + h / 2, 3)
@@ -120,7 +118,7 @@ def _stage_data(scenario: Scenario, knots: np.ndarray) -> tuple[np.ndarray, Any]
               (inv_m @ demand.wrench[:, :, None])[..., 0]]
     n = h.size
     flat = np.hstack([b.reshape(t.size, -1, order="F") for b in blocks])  # column-major per stage
-    return flat.reshape(n, 3 * flat.shape[1]), path
+    return flat.reshape(n, 3 * flat.shape[1])
 
 
 def _interval_function(n_a: int, tau: np.ndarray, lagged: list[int]) -> ca.Function:
@@ -291,13 +289,13 @@ def feedforward_optimal(
     -------
     Feedforward
         ``method="optimal"``; ``info`` holds the solver's status, iterations,
-        objective, knots, variables and time.
+        knots, variables, time [s] and the window's end [s].
 
     Raises
     ------
     OptimisationError
-        the QP solver (Clarabel) stopped without converging; the message gives its status and
-        the best point's objective (``exc.feedforward`` holds that point's forces).
+        The QP solver (Clarabel) stopped without converging; the message gives
+        its status (``exc.feedforward`` holds the best point's forces).
     """
     settings = settings or OptimalSettings()
     if not scenario.actuators:
@@ -305,21 +303,23 @@ def feedforward_optimal(
     began = time.perf_counter()
     acts = scenario.actuators
     n_a = len(acts)
-    knots, _ = _knot_times(scenario, settings)
+    knots = _knot_times(scenario, settings)
     h = np.diff(knots)
     n = h.size
-    data, path = _stage_data(scenario, knots)
+    lin = linearise(scenario)
+    path = quasi_static_path(scenario)
+    data = _stage_data(scenario, lin, path, knots)
     lagged = [k for k, a in enumerate(acts) if a.bandwidth is not None]
     tau = np.array([1.0 / (2 * math.pi * acts[k].bandwidth) for k in lagged])  # type: ignore[operator]
     interval = _interval_function(n_a, tau, lagged)
 
     # normalise each signal by the passive run's deviation from the quasi-static path
     passive = Simulator(scenario).run()
-    deviation = np.max(np.abs(passive.signals - path(passive.t).T), axis=1)
+    deviation = np.array(list(path_deviation(passive, path(passive.t).T).values()))
     # signals the move leaves (nearly) still weigh as if they moved 0.1 % of their group's largest
     floor = np.repeat([1e-3 * max(deviation[:3].max(), 1e-12), 1e-3 * max(deviation[3:].max(), 1e-12)], 3)
     scale = 1.0 / np.maximum(deviation, floor)
-    omega = float(np.median(np.abs(linearise(scenario).eigenvalues)))
+    omega = float(np.median(np.abs(lin.eigenvalues)))
 
     cap = np.array([a.max_force for a in acts])
     qp = _assemble(interval, len(lagged), h, data, scale, omega, cap, cap[lagged], [a.max_rate for a in acts],
@@ -336,7 +336,7 @@ def feedforward_optimal(
     if progress:
         print(f"  optimal feedforward: {info['status']} after {info['iterations']} iterations, {elapsed:.1f} s",
               flush=True)
-    demand = path_demand(scenario, linearise(scenario), path, knots, knots + 1e-12)
+    demand = path_demand(scenario, lin, path, knots, knots + 1e-12)
     residual = demand.wrench - np.einsum("nij,jn->ni", demand.allocation, forces)
     result = Feedforward(ForceHistory(knots, forces, tuple(a.name for a in acts)), demand.wrench, residual, path,
                          "optimal", info)

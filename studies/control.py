@@ -26,10 +26,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from controllers import feedback as fb
-from controllers.feedforward import Feedforward, feedforward_allocation
+from controllers.feedforward import Feedforward, feedforward_allocation, path_deviation, settling_in_band
 from isolator import SIGNALS, Response, Scenario, ScenarioError, Simulator
 from isolator.linear import LinearModel, linearise
-from isolator.settling import settling_time
 from isolator.transmissibility import transmissibility
 
 __all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
@@ -98,12 +97,6 @@ class ControlStudy:
         }
 
 
-def _settling(run: Response, band: dict[str, float]) -> dict[str, float | None]:
-    final = run.final if run.final is not None else np.zeros(6)
-    return {k: settling_time(run.t, run.signals[i], float(final[i]), run.stop_time, max(band[k], 1e-300))[0]
-            for i, k in enumerate(SIGNALS)}
-
-
 def run_control_study(
     out: str | Path,
     scenario: Scenario,
@@ -152,10 +145,9 @@ def run_control_study(
     say("feedforward and feedback")
     runs["both"] = sim.run(forces=ff.forces, feedback=fb.feedback_law(scenario, ctrl, reference=ff.path))
     band = {k: 0.05 * v for k, v in runs["passive"].peak.items()}
+    settling = {name: settling_in_band(r, band) for name, r in runs.items()}
     qs = ff.path(runs["passive"].t).T
-    settling = {name: _settling(r, band) for name, r in runs.items()}
-    deviation = {name: dict(zip(SIGNALS, (float(v) for v in np.max(np.abs(r.signals - qs), axis=1)), strict=True))
-                 for name, r in runs.items()}
+    deviation = {name: path_deviation(r, qs) for name, r in runs.items()}
     study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder)
     say("figures and report")
     _time_figure(study, folder / "time.png")
