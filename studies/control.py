@@ -237,8 +237,9 @@ def _forces_figure(study: ControlStudy, path: Path) -> None:
     fig, axes = plt.subplots(3, 1, figsize=(11, 8), sharex=True, layout="constrained")
     for ax, run in zip(axes, RUNS[1:], strict=True):
         r = study.runs[run]
+        colors = plt.cm.tab20(np.linspace(0, 1, max(len(r.actuator_names), 1)))
         for k, name in enumerate(r.actuator_names):
-            ax.plot(r.t, r.actuator_forces[k], lw=0.9, label=name)
+            ax.plot(r.t, r.actuator_forces[k], lw=0.9, label=name, color=colors[k])
         ax.set_ylabel("force [N]")
         ax.set_title(f"{run}: largest {np.abs(r.actuator_forces).max():.0f} N")
         ax.grid(True, alpha=0.3)
