@@ -26,7 +26,7 @@ from .linear import LinearModel, linearise
 from .loading import bundled_scenarios, load_scenario, load_spectrum, scenario_from_dict
 from .model import MODEL_KINDS, Model, ParameterLayout, build_model
 from .modes import Modes, modes, modes_over_travel
-from .profiles import PiecewisePolynomialProfile, Profile, SineProfile, samples, scurve, trapezoid
+from .profiles import PiecewisePolynomialProfile, Profile, SineProfile, samples, scurve, segments, shaped, trapezoid
 from .response import Response
 from .scenario import (
     SIGNALS,
@@ -35,6 +35,7 @@ from .scenario import (
     FloorSpectrum,
     Ground,
     Isolator,
+    MotionLimits,
     Point,
     Scenario,
     Settling,
@@ -63,6 +64,7 @@ __all__ = [
     "LinearModel",
     "Model",
     "Modes",
+    "MotionLimits",
     "OptimisationError",
     "ParameterLayout",
     "PiecewisePolynomialProfile",
@@ -95,7 +97,9 @@ __all__ = [
     "samples",
     "scenario_from_dict",
     "scurve",
+    "segments",
     "settling_time",
+    "shaped",
     "simulate",
     "stability",
     "static_equilibrium",

@@ -25,6 +25,7 @@ from .scenario import (
     FloorSpectrum,
     Ground,
     Isolator,
+    MotionLimits,
     Point,
     Scenario,
     Settling,
@@ -330,7 +331,9 @@ def _read_profile(r: _Reader, base_dir: Path) -> profiles.Profile:
             r.used.add("deceleration")
             prof = profiles.trapezoid(deceleration=dec, **common)
         else:
-            prof = profiles.scurve(jerk=r.number("jerk", positive=True), **common)
+            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
+            r.used.add("deceleration")
+            prof = profiles.scurve(jerk=r.number("jerk", positive=True), deceleration=dec, **common)
     elif kind == "samples":
         t, q = _read_samples(r, base_dir)
         prof = profiles.samples(t, q)
@@ -434,9 +437,18 @@ def _read_carriage(r: _Reader, base_dir: Path) -> Carriage:
         axis=r.unit_vector("axis"),
         origin=r.vector("origin", (0.0, 0.0, 0.0)),
         profile=_read_profile(_Reader(r.raw("profile"), r.key("profile")), base_dir),
+        limits=_read_limits(_Reader(r.raw("limits", {}), r.key("limits"))),
     )
     r.finish()
     return carriage
+
+
+def _read_limits(r: _Reader) -> MotionLimits:
+    keys = ("velocity", "acceleration", "jerk")
+    values = {k: r.number(k, positive=True) if r.has(k) else None for k in keys}
+    r.used.update(keys)
+    r.finish()
+    return MotionLimits(**values)
 
 
 def _check_unique_names(names: list[str], section: str) -> None:

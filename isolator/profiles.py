@@ -13,11 +13,13 @@ time inside the step, while the polynomial is evaluated at ``t``.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy.interpolate import CubicSpline
+from scipy.optimize import brentq
 
 FloatArray = NDArray[np.float64]
 
@@ -27,6 +29,8 @@ __all__ = [
     "SineProfile",
     "samples",
     "scurve",
+    "segments",
+    "shaped",
     "trapezoid",
 ]
 
@@ -73,17 +77,35 @@ class PiecewisePolynomialProfile(Profile):
         Per piece, ascending powers of ``tau = t - knots[i]``: q = sum c_k tau^k.
     kind : str
         The profile type it came from, for messages and plots.
+    spec : tuple of (str, float) pairs
+        The keys of the scenario file's profile table that build it again
+        (``type`` aside), when it came from a trapezoid or an S-curve; empty
+        otherwise. See :attr:`settings`.
     """
 
     knots: tuple[float, ...]
     coefficients: tuple[tuple[float, ...], ...]
     kind: str = "piecewise"
+    spec: tuple[tuple[str, float], ...] = field(default=(), compare=False)
     breakpoints: tuple[float, ...] = field(init=False)
     stop_time: float = field(init=False)
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "breakpoints", tuple(self.knots))
         object.__setattr__(self, "stop_time", float(self.knots[-1]))
+
+    @property
+    def settings(self) -> dict[str, float | str]:
+        """The profile as a scenario file's profile table (``type`` and its keys).
+
+        Raises
+        ------
+        ValueError
+            The profile was not built from a trapezoid's or an S-curve's keys.
+        """
+        if not self.spec:
+            raise ValueError(f"a '{self.kind}' profile has no trapezoid or scurve keys to write")
+        return {"type": self.kind, **dict(self.spec)}
 
     def _coefficient_array(self) -> FloatArray:
         return np.array(self.coefficients, dtype=float)
@@ -174,8 +196,37 @@ class SineProfile(Profile):
         return float(q.min()), float(q.max())
 
 
+def segments(
+    start: float,
+    t0: float,
+    durations: Sequence[float],
+    accelerations: Sequence[float],
+    jerks: Sequence[float],
+    kind: str = "segments",
+) -> PiecewisePolynomialProfile:
+    """A move from rest at ``start`` through segments of constant jerk.
+
+    Parameters
+    ----------
+    start : float
+        Position at rest before ``t0`` [m].
+    t0 : float
+        Start time [s].
+    durations : sequence of float
+        Segment lengths [s]; empty (zero) segments are skipped.
+    accelerations : sequence of float
+        Acceleration at each segment's start [m/s^2].
+    jerks : sequence of float
+        Constant jerk within each segment [m/s^3].
+    kind : str
+        The name the profile reports.
+    """
+    knots, coef = _from_segments(start, t0, durations, accelerations, jerks)
+    return PiecewisePolynomialProfile(knots, coef, kind=kind)
+
+
 def _from_segments(
-    start: float, t0: float, durations: list[float], accelerations: list[float], jerks: list[float]
+    start: float, t0: float, durations: Sequence[float], accelerations: Sequence[float], jerks: Sequence[float]
 ) -> tuple[tuple[float, ...], tuple[tuple[float, ...], ...]]:
     """Integrate segments of given start acceleration and jerk from rest at ``start``."""
     knots = [t0]
@@ -237,11 +288,24 @@ def trapezoid(
         [sign * acceleration, 0.0, -sign * dec],
         [0.0, 0.0, 0.0],
     )
-    return PiecewisePolynomialProfile(knots, coef, kind="trapezoid")
+    spec = {"start": start, "stroke": stroke, "velocity": velocity, "acceleration": acceleration, "t0": t0}
+    if deceleration is not None:
+        spec["deceleration"] = deceleration
+    return PiecewisePolynomialProfile(knots, coef, kind="trapezoid", spec=_spec(spec))
+
+
+def _spec(values: dict[str, float]) -> tuple[tuple[str, float], ...]:
+    return tuple((k, float(v)) for k, v in values.items())
 
 
 def scurve(
-    start: float, stroke: float, velocity: float, acceleration: float, jerk: float, t0: float = 0.0
+    start: float,
+    stroke: float,
+    velocity: float,
+    acceleration: float,
+    jerk: float,
+    t0: float = 0.0,
+    deceleration: float | None = None,
 ) -> PiecewisePolynomialProfile:
     """Jerk-limited seven-segment rest-to-rest move.
 
@@ -257,37 +321,85 @@ def scurve(
         that the move stays jerk-limited and rest-to-rest.
     t0 : float
         Start time [s].
+    deceleration : float, optional
+        Limit of the braking phase [m/s^2]; defaults to ``acceleration``.
     """
+    dec = acceleration if deceleration is None else deceleration
     distance = abs(stroke)
-    sign = 1.0 if stroke >= 0 else -1.0
+    s = 1.0 if stroke >= 0 else -1.0
 
-    def accel_phase(v: float) -> tuple[float, float]:
-        """(jerk time, whole acceleration-phase time) to reach speed v from rest."""
-        if v * jerk <= acceleration**2:
+    def phase(v: float, a: float) -> tuple[float, float]:
+        """(jerk time, whole phase time) to change speed by v with limits a and jerk."""
+        if v * jerk <= a * a:
             tj = math.sqrt(v / jerk)
             return tj, 2.0 * tj
-        tj = acceleration / jerk
-        return tj, v / acceleration + tj
+        return a / jerk, v / a + a / jerk
+
+    def travel(v: float) -> float:
+        """Distance of the accelerating and braking phases at peak speed v."""
+        return v * (phase(v, acceleration)[1] + phase(v, dec)[1]) / 2.0
 
     v = velocity
-    tj, ta = accel_phase(v)
-    if v * ta > distance:  # cannot reach the cruise speed: find the peak speed
-        v_knee = acceleration**2 / jerk
-        if v_knee * 2.0 * math.sqrt(v_knee / jerk) >= distance:
-            v = (distance * math.sqrt(jerk) / 2.0) ** (2.0 / 3.0)
-        else:
-            r = acceleration / jerk
-            v = acceleration / 2.0 * (-r + math.sqrt(r * r + 4.0 * distance / acceleration))
-        tj, ta = accel_phase(v)
-    a_peak = jerk * tj
-    t_const = max(ta - 2.0 * tj, 0.0)
-    t_cruise = max(distance - v * ta, 0.0) / v if v > 0 else 0.0
-    s = sign
-    durations = [tj, t_const, tj, t_cruise, tj, t_const, tj]
-    accels = [0.0, s * a_peak, s * a_peak, 0.0, 0.0, -s * a_peak, -s * a_peak]
+    if travel(v) > distance:  # cannot reach the cruise speed: the peak speed that covers the stroke
+        v = brentq(lambda u: travel(u) - distance, 0.0, velocity, xtol=1e-15, rtol=4.0 * np.finfo(float).eps)
+    tja, ta = phase(v, acceleration)
+    tjd, td = phase(v, dec)
+    t_cruise = max(distance - travel(v), 0.0) / v if v > 0 else 0.0
+    a_up, a_down = jerk * tja, jerk * tjd
+    durations = [tja, ta - 2.0 * tja, tja, t_cruise, tjd, td - 2.0 * tjd, tjd]
+    accels = [0.0, s * a_up, s * a_up, 0.0, 0.0, -s * a_down, -s * a_down]
     jerks = [s * jerk, 0.0, -s * jerk, 0.0, -s * jerk, 0.0, s * jerk]
-    knots, coef = _from_segments(start, t0, durations, accels, jerks)
-    return PiecewisePolynomialProfile(knots, coef, kind="scurve")
+    knots, coef = _from_segments(start, t0, [max(d, 0.0) for d in durations], accels, jerks)
+    spec = {"start": start, "stroke": stroke, "velocity": velocity, "acceleration": acceleration,
+            "jerk": jerk, "t0": t0}
+    if deceleration is not None:
+        spec["deceleration"] = deceleration
+    return PiecewisePolynomialProfile(knots, coef, kind="scurve", spec=_spec(spec))
+
+
+def shaped(profile: PiecewisePolynomialProfile, amplitudes: Sequence[float], delays: Sequence[float],
+           kind: str = "shaped") -> PiecewisePolynomialProfile:
+    """A profile convolved with an impulse sequence (input shaping).
+
+    ``q_shaped(t) = sum_i A_i q(t - t_i)`` with ``sum A_i = 1``, so the shaped
+    move has the same start and stroke, ends ``max(t_i)`` later, and keeps
+    within the speed and acceleration limits when every ``A_i >= 0``.
+
+    Parameters
+    ----------
+    profile : PiecewisePolynomialProfile
+        A rest-to-rest move (cubic pieces at most).
+    amplitudes : sequence of float
+        Impulse amplitudes, summing to 1.
+    delays : sequence of float
+        Impulse times [s], >= 0.
+    kind : str
+        The name the shaped profile reports.
+    """
+    amps = np.asarray(amplitudes, dtype=float)
+    lags = np.asarray(delays, dtype=float)
+    if amps.shape != lags.shape or amps.size == 0:
+        raise ValueError("amplitudes, delays: need one delay per amplitude")
+    if abs(amps.sum() - 1.0) > 1e-9 or np.any(lags < 0):
+        raise ValueError("amplitudes: must sum to 1, with delays >= 0")
+    if profile._coefficient_array().shape[1] > 4:
+        raise ValueError("profile: shaping takes pieces of degree 3 at most")
+    base = np.asarray(profile.knots)
+    knots = np.unique(np.concatenate([base + d for d in lags]))
+    lo, hi = knots[:-1], knots[1:]
+    mid = (lo + hi) / 2.0
+    total = [np.zeros(lo.size) for _ in range(3)]
+    a_end = np.zeros(lo.size)
+    for amp, lag in zip(amps, lags, strict=True):
+        q, v, a = profile.evaluate(lo - lag, mid - lag)
+        for k, value in enumerate((q, v, a)):
+            total[k] += amp * value
+        a_end += amp * profile.evaluate(hi - lag, mid - lag)[2]
+    jerk = (a_end - total[2]) / (hi - lo)
+    coef = np.column_stack([total[0], total[1], total[2] / 2.0, jerk / 6.0])
+    return PiecewisePolynomialProfile(
+        tuple(float(k) for k in knots), tuple(tuple(float(c) for c in row) for row in coef), kind=kind
+    )
 
 
 def samples(t: ArrayLike, q: ArrayLike) -> PiecewisePolynomialProfile:

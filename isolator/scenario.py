@@ -19,6 +19,7 @@ __all__ = [
     "FloorSpectrum",
     "Ground",
     "Isolator",
+    "MotionLimits",
     "Point",
     "Scenario",
     "Settling",
@@ -73,6 +74,25 @@ class Isolator:
 
 
 @dataclass(frozen=True)
+class MotionLimits:
+    """What a carriage's drive can do, for profile design (None: not given).
+
+    Attributes
+    ----------
+    velocity : float or None
+        Largest speed [m/s].
+    acceleration : float or None
+        Largest acceleration and deceleration [m/s^2].
+    jerk : float or None
+        Largest jerk [m/s^3].
+    """
+
+    velocity: float | None = None
+    acceleration: float | None = None
+    jerk: float | None = None
+
+
+@dataclass(frozen=True)
 class Carriage:
     """A point mass translating along an axis of its parent.
 
@@ -89,6 +109,8 @@ class Carriage:
         Position of the mass at q = 0 relative to the parent's point [m].
     profile : Profile
         q(t) [m].
+    limits : MotionLimits
+        The drive's speed, acceleration and jerk limits, for profile design.
     """
 
     name: str
@@ -97,6 +119,7 @@ class Carriage:
     axis: Vector3
     origin: Vector3
     profile: Profile
+    limits: MotionLimits = MotionLimits()
 
 
 @dataclass(frozen=True)
