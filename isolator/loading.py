@@ -332,8 +332,11 @@ def _read_profile(r: _Reader, base_dir: Path) -> profiles.Profile:
             prof = profiles.trapezoid(deceleration=dec, **common)
         else:
             dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
-            r.used.add("deceleration")
-            prof = profiles.scurve(jerk=r.number("jerk", positive=True), deceleration=dec, **common)
+            jerk_down = r.number("deceleration_jerk", positive=True) if r.has("deceleration_jerk") else None
+            r.used.update(("deceleration", "deceleration_jerk"))
+            prof = profiles.scurve(
+                jerk=r.number("jerk", positive=True), deceleration=dec, deceleration_jerk=jerk_down, **common
+            )
     elif kind == "samples":
         t, q = _read_samples(r, base_dir)
         prof = profiles.samples(t, q)

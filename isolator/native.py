@@ -69,10 +69,24 @@ class NativeFunction:
         Dense inputs and outputs.
     compile : bool
         Try to compile (True) or always use casadi's evaluator (False).
+    companions : tuple of casadi.Function
+        More functions compiled into the same library (e.g. the function's
+        ``reverse(1)``, which :meth:`external` then uses for derivatives).
+    optimisation : str
+        The compiler's optimisation flag (big derivative code compiles much
+        faster at ``-O1``).
     """
 
-    def __init__(self, function: ca.Function, compile: bool = True) -> None:
+    def __init__(
+        self,
+        function: ca.Function,
+        compile: bool = True,
+        companions: tuple[ca.Function, ...] = (),
+        optimisation: str = "-O3",
+    ) -> None:
         self.function = function
+        self.companions = companions
+        self.flags = [optimisation, *_FLAGS[1:]]
         self.name = function.name()
         self.in_shapes = [function.size_in(i) for i in range(function.n_in())]
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
@@ -102,10 +116,12 @@ class NativeFunction:
         with tempfile.TemporaryDirectory() as tmp:
             generator = ca.CodeGenerator(f"{self.name}.c", {"with_header": False})
             generator.add(self.function)
+            for extra in self.companions:
+                generator.add(extra)
             generator.generate(tmp + os.sep)
             source = Path(tmp, f"{self.name}.c").read_text()
         digest = hashlib.sha256(
-            (source + " ".join(_FLAGS) + ca.__version__ + compiler + _cpu_identity()).encode()
+            (source + " ".join(self.flags) + ca.__version__ + compiler + _cpu_identity()).encode()
         ).hexdigest()[:20]
         folder = cache_dir()
         folder.mkdir(parents=True, exist_ok=True)
@@ -122,7 +138,7 @@ class NativeFunction:
         os.close(fd)
         try:
             subprocess.run(
-                [compiler, *_FLAGS, "-o", tmp_so, str(src), "-lm"],
+                [compiler, *self.flags, "-o", tmp_so, str(src), "-lm"],
                 check=True,
                 capture_output=True,
             )
@@ -165,6 +181,13 @@ class NativeFunction:
         if status != 0:
             raise RuntimeError(f"{self.name}: native evaluation failed ({status})")
         return outs
+
+    def external(self) -> ca.Function:
+        """The compiled function as a casadi function, for symbolic graphs (derivatives from
+        companions such as ``adj1_<name>``); the original function when nothing was compiled."""
+        if self.library is None:
+            return self.function
+        return ca.external(self.name, str(self.library))
 
     def bound(self) -> Callable[..., list[np.ndarray]]:
         """A caller for many small calls from one thread, with its buffers allocated once.

@@ -306,6 +306,7 @@ def scurve(
     jerk: float,
     t0: float = 0.0,
     deceleration: float | None = None,
+    deceleration_jerk: float | None = None,
 ) -> PiecewisePolynomialProfile:
     """Jerk-limited seven-segment rest-to-rest move.
 
@@ -323,37 +324,42 @@ def scurve(
         Start time [s].
     deceleration : float, optional
         Limit of the braking phase [m/s^2]; defaults to ``acceleration``.
+    deceleration_jerk : float, optional
+        Jerk of the braking phase [m/s^3]; defaults to ``jerk``.
     """
     dec = acceleration if deceleration is None else deceleration
+    jerk_down = jerk if deceleration_jerk is None else deceleration_jerk
     distance = abs(stroke)
     s = 1.0 if stroke >= 0 else -1.0
 
-    def phase(v: float, a: float) -> tuple[float, float]:
-        """(jerk time, whole phase time) to change speed by v with limits a and jerk."""
-        if v * jerk <= a * a:
-            tj = math.sqrt(v / jerk)
+    def phase(v: float, a: float, j: float) -> tuple[float, float]:
+        """(jerk time, whole phase time) to change speed by v with limits a and j."""
+        if v * j <= a * a:
+            tj = math.sqrt(v / j)
             return tj, 2.0 * tj
-        return a / jerk, v / a + a / jerk
+        return a / j, v / a + a / j
 
     def travel(v: float) -> float:
         """Distance of the accelerating and braking phases at peak speed v."""
-        return v * (phase(v, acceleration)[1] + phase(v, dec)[1]) / 2.0
+        return v * (phase(v, acceleration, jerk)[1] + phase(v, dec, jerk_down)[1]) / 2.0
 
     v = velocity
     if travel(v) > distance:  # cannot reach the cruise speed: the peak speed that covers the stroke
         v = brentq(lambda u: travel(u) - distance, 0.0, velocity, xtol=1e-15, rtol=4.0 * np.finfo(float).eps)
-    tja, ta = phase(v, acceleration)
-    tjd, td = phase(v, dec)
+    tja, ta = phase(v, acceleration, jerk)
+    tjd, td = phase(v, dec, jerk_down)
     t_cruise = max(distance - travel(v), 0.0) / v if v > 0 else 0.0
-    a_up, a_down = jerk * tja, jerk * tjd
+    a_up, a_down = jerk * tja, jerk_down * tjd
     durations = [tja, ta - 2.0 * tja, tja, t_cruise, tjd, td - 2.0 * tjd, tjd]
     accels = [0.0, s * a_up, s * a_up, 0.0, 0.0, -s * a_down, -s * a_down]
-    jerks = [s * jerk, 0.0, -s * jerk, 0.0, -s * jerk, 0.0, s * jerk]
+    jerks = [s * jerk, 0.0, -s * jerk, 0.0, -s * jerk_down, 0.0, s * jerk_down]
     knots, coef = _from_segments(start, t0, [max(d, 0.0) for d in durations], accels, jerks)
     spec = {"start": start, "stroke": stroke, "velocity": velocity, "acceleration": acceleration,
             "jerk": jerk, "t0": t0}
     if deceleration is not None:
         spec["deceleration"] = deceleration
+    if deceleration_jerk is not None:
+        spec["deceleration_jerk"] = deceleration_jerk
     return PiecewisePolynomialProfile(knots, coef, kind="scurve", spec=_spec(spec))
 
 

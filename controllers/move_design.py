@@ -1,0 +1,277 @@
+"""Carriage moves as a few design parameters: what a profile optimiser changes.
+
+A rest-to-rest move of fixed start and stroke is a trapezoid (acceleration,
+deceleration, cruise speed, start delay) or a seven-segment S-curve (the same
+plus jerk). :class:`MoveDesign` holds one carriage's parameters and limits,
+builds its profile, and writes its segments as functions of the parameters
+(numbers or casadi expressions), so the same formulas serve the optimiser's
+symbolic model and the checks. Durations stay smooth in the parameters as long
+as every segment is at least zero long, which the optimiser imposes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from isolator.errors import ScenarioError
+from isolator.profiles import PiecewisePolynomialProfile, scurve, trapezoid
+from isolator.scenario import Carriage, Scenario
+
+__all__ = [
+    "DEFAULT_JERK_RAMP",
+    "SHAPES",
+    "DriveLimits",
+    "MoveDesign",
+    "Segment",
+    "move_designs",
+    "move_time",
+]
+
+#: profile shapes the optimiser designs
+SHAPES = ("trapezoid", "scurve")
+
+#: when neither the carriage's ``limits.jerk`` nor its S-curve gives a jerk
+#: limit: the time [s] the largest acceleration takes to build up
+DEFAULT_JERK_RAMP = 0.05
+
+
+@dataclass(frozen=True)
+class DriveLimits:
+    """A carriage drive's limits, all given (see :func:`drive_limits`).
+
+    Attributes
+    ----------
+    velocity : float
+        [m/s]
+    acceleration : float
+        Acceleration and deceleration [m/s^2].
+    jerk : float
+        [m/s^3]
+    """
+
+    velocity: float
+    acceleration: float
+    jerk: float
+
+
+def drive_limits(carriage: Carriage, index: int) -> DriveLimits:
+    """The carriage's ``limits`` with the gaps filled from its own profile.
+
+    Speed and acceleration default to the profile's (the larger of its
+    acceleration and deceleration); jerk to an S-curve's jerk, otherwise to the
+    largest acceleration over :data:`DEFAULT_JERK_RAMP`.
+    """
+    spec = _spec(carriage, index)
+    acc = max(spec["acceleration"], spec.get("deceleration", 0.0))
+    given = carriage.limits
+    velocity = given.velocity if given.velocity is not None else spec["velocity"]
+    acceleration = given.acceleration if given.acceleration is not None else acc
+    if given.jerk is not None:
+        jerk = given.jerk
+    elif "jerk" in spec:
+        jerk = spec["jerk"]
+    else:
+        jerk = acceleration / DEFAULT_JERK_RAMP
+    return DriveLimits(float(velocity), float(acceleration), float(jerk))
+
+
+def _spec(carriage: Carriage, index: int) -> dict[str, float]:
+    profile = carriage.profile
+    if not (isinstance(profile, PiecewisePolynomialProfile) and profile.kind in SHAPES and profile.spec):
+        raise ScenarioError(
+            f"carriages[{index}].profile: profile design needs a trapezoid or an scurve, "
+            f"got '{getattr(profile, 'kind', type(profile).__name__)}'"
+        )
+    return dict(profile.spec)
+
+
+@dataclass(frozen=True)
+class Segment:
+    """One constant-jerk piece of a move, its quantities numbers or casadi expressions.
+
+    Attributes
+    ----------
+    duration : [s]
+    acceleration : acceleration at its start [m/s^2]
+    jerk : [m/s^3]
+    """
+
+    duration: Any
+    acceleration: Any
+    jerk: Any
+
+
+@dataclass(frozen=True)
+class MoveDesign:
+    """One carriage's move as design parameters.
+
+    Attributes
+    ----------
+    name : str
+        The carriage.
+    shape : {"trapezoid", "scurve"}
+    start, stroke : float
+        Fixed [m].
+    t0, velocity, acceleration, deceleration : float
+        Start time [s], cruise speed [m/s], acceleration and deceleration [m/s^2].
+    jerk, deceleration_jerk : float or None
+        Jerk of the accelerating and of the braking phase [m/s^3], for an S-curve.
+    limits : DriveLimits
+    """
+
+    name: str
+    shape: str
+    start: float
+    stroke: float
+    t0: float
+    velocity: float
+    acceleration: float
+    deceleration: float
+    jerk: float | None
+    limits: DriveLimits
+    deceleration_jerk: float | None = None
+
+    # -- the parameter vector -----------------------------------------------------
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Names of the design parameters, in :attr:`values` order."""
+        base = ("t0", "velocity", "acceleration", "deceleration")
+        return (*base, "jerk", "deceleration_jerk") if self.shape == "scurve" else base
+
+    @property
+    def values(self) -> np.ndarray:
+        """The design parameters [s, m/s, m/s^2, m/s^2(, m/s^3, m/s^3)]."""
+        return np.array([getattr(self, n) for n in self.names], dtype=float)
+
+    @property
+    def scales(self) -> np.ndarray:
+        """Typical sizes of the parameters: 1 s and the limits."""
+        lim = self.limits
+        base = [1.0, lim.velocity, lim.acceleration, lim.acceleration]
+        return np.array([*base, lim.jerk, lim.jerk] if self.shape == "scurve" else base)
+
+    @property
+    def upper(self) -> np.ndarray:
+        """Upper bounds of the parameters (the start time has none)."""
+        s = self.scales
+        s[0] = math.inf
+        return s
+
+    def with_values(self, values: Sequence[float]) -> MoveDesign:
+        """The same move with new parameter values (in :attr:`names` order)."""
+        return replace(self, **{n: float(v) for n, v in zip(self.names, values, strict=True)})
+
+    # -- geometry -------------------------------------------------------------------
+    def segments(self, values: Sequence[Any] | None = None) -> list[Segment]:
+        """The move's constant-jerk segments for parameter ``values`` (default: this design's).
+
+        Works on numbers and on casadi expressions alike. A segment of negative
+        duration means the parameters do not fit the stroke.
+        """
+        _, v, a, d, *rest = self.values if values is None else values
+        s = 1.0 if self.stroke >= 0 else -1.0
+        dist = abs(self.stroke)
+        if self.shape == "trapezoid":
+            cruise = dist / v - v / (2 * a) - v / (2 * d)
+            return [Segment(v / a, s * a, 0.0), Segment(cruise, 0.0, 0.0), Segment(v / d, -s * d, 0.0)]
+        j, j_down = rest
+        ja, jd = a / j, d / j_down
+        cruise = dist / v - (v / a + ja) / 2 - (v / d + jd) / 2
+        return [
+            Segment(ja, 0.0, s * j), Segment(v / a - ja, s * a, 0.0), Segment(ja, s * a, -s * j),
+            Segment(cruise, 0.0, 0.0),
+            Segment(jd, 0.0, -s * j_down), Segment(v / d - jd, -s * d, 0.0), Segment(jd, -s * d, s * j_down),
+        ]
+
+    def stop_time(self, values: Sequence[Any] | None = None) -> Any:
+        """When the carriage comes to rest [s]."""
+        t0 = (self.values if values is None else values)[0]
+        return t0 + sum(seg.duration for seg in self.segments(values))
+
+    def profile(self) -> PiecewisePolynomialProfile:
+        """The profile these parameters make (a trapezoid or an scurve, with its keys)."""
+        common = {"start": self.start, "stroke": self.stroke, "velocity": self.velocity,
+                  "acceleration": self.acceleration, "deceleration": self.deceleration, "t0": self.t0}
+        if self.shape == "trapezoid":
+            return trapezoid(**common)
+        return scurve(jerk=float(self.jerk or 0.0), deceleration_jerk=self.deceleration_jerk, **common)
+
+    def fits(self, tolerance: float = 1e-9) -> bool:
+        """Every segment at least zero long and every parameter within its limit."""
+        lengths = [seg.duration for seg in self.segments()]
+        scale = max(1.0, self.stop_time())
+        within = np.all(self.values[1:] <= self.upper[1:] * (1 + tolerance))
+        return bool(min(lengths) >= -tolerance * scale and within)
+
+
+def move_designs(scenario: Scenario, shape: str | None = None) -> tuple[MoveDesign, ...]:
+    """Each carriage's move as design parameters, starting from its scenario profile.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Every carriage must move with a trapezoid or an scurve.
+    shape : {"trapezoid", "scurve"}, optional
+        The shape to design (default: each carriage's own). A trapezoid turned
+        into an S-curve takes the jerk limit; its segments are shortened where
+        needed so it still fits the stroke.
+
+    Raises
+    ------
+    ScenarioError
+        No carriages, a carriage that is not a trapezoid or an scurve, an unknown shape.
+    """
+    if shape is not None and shape not in SHAPES:
+        raise ScenarioError(f"shape: must be one of {', '.join(SHAPES)}, got '{shape}'")
+    if not scenario.carriages:
+        raise ScenarioError("carriages: profile design needs at least one carriage")
+    designs = []
+    for i, carriage in enumerate(scenario.carriages):
+        spec = _spec(carriage, i)
+        limits = drive_limits(carriage, i)
+        kind = shape or carriage.profile.kind  # type: ignore[attr-defined]
+        move = MoveDesign(
+            name=carriage.name, shape=kind, start=spec["start"], stroke=spec["stroke"], t0=spec.get("t0", 0.0),
+            velocity=spec["velocity"], acceleration=spec["acceleration"],
+            deceleration=spec.get("deceleration", spec["acceleration"]),
+            jerk=(spec.get("jerk", limits.jerk) if kind == "scurve" else None), limits=limits,
+            deceleration_jerk=(spec.get("deceleration_jerk", spec.get("jerk", limits.jerk)) if kind == "scurve"
+                               else None),
+        )
+        designs.append(_fitted(move))
+    return tuple(designs)
+
+
+def _fitted(move: MoveDesign) -> MoveDesign:
+    """The design with the speed and accelerations its profile really reaches.
+
+    A short stroke never reaches the cruise speed (and an S-curve perhaps not
+    its acceleration); the parameters then describe the move that is made, so
+    that every segment is at least zero long.
+    """
+    profile = move.profile()
+    t = np.union1d(np.linspace(profile.knots[0], profile.knots[-1], 4001), profile.knots)
+    _, v, a = profile.evaluate(t)
+    s = 1.0 if move.stroke >= 0 else -1.0
+    return replace(
+        move, velocity=float(np.max(s * v)), acceleration=float(np.max(s * a)), deceleration=float(np.max(-s * a))
+    )
+
+
+def move_time(scenario: Scenario, command: float | None = None) -> float:
+    """Time [s] from the move's command to the last carriage's stop.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    command : float, optional
+        When the move is commanded [s] (default: the earliest carriage start).
+    """
+    starts = [c.profile.knots[0] for c in scenario.carriages]  # type: ignore[attr-defined]
+    begin = min(starts) if command is None else command
+    return float(scenario.stop_time - begin)

@@ -1,0 +1,162 @@
+"""What a move costs: move time, 5 % settling time, cycle time, peak table motion.
+
+Every profile method (the paper's, input shapers, time-optimal, optimised) is
+judged the same way, by the true simulation: :func:`evaluate_move`. Model
+variants (isolators stiffer or softer, more or less damped, a heavier or
+lighter payload) test whether a gain survives an imperfect model.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any
+
+import numpy as np
+
+from isolator.errors import ScenarioError
+from isolator.response import Response
+from isolator.scenario import Carriage, Scenario
+from isolator.simulation import Simulator
+
+from .move_design import MoveDesign, move_time
+
+__all__ = [
+    "ROBUSTNESS_VARIANTS",
+    "ModelVariant",
+    "MoveMetrics",
+    "evaluate_move",
+    "with_moves",
+]
+
+
+@dataclass(frozen=True)
+class ModelVariant:
+    """A model that is off: isolator stiffness, damping and payload mass scaled.
+
+    Attributes
+    ----------
+    stiffness, damping : float
+        Factors on every isolator's stiffness and damping.
+    mass : float
+        Factor on the table's mass and inertia (the isolated payload).
+    """
+
+    stiffness: float = 1.0
+    damping: float = 1.0
+    mass: float = 1.0
+
+    def __post_init__(self) -> None:
+        for name in ("stiffness", "damping", "mass"):
+            value = getattr(self, name)
+            if not (math.isfinite(value) and value > 0):
+                raise ScenarioError(f"variant.{name}: must be a finite factor > 0, got {value}")
+
+    @property
+    def label(self) -> str:
+        """e.g. ``nominal``, ``k +15%``, ``c -15%, m +15%``."""
+        parts = [f"{s} {100 * (v - 1):+.0f}%" for s, v in (("k", self.stiffness), ("c", self.damping),
+                                                            ("m", self.mass)) if abs(v - 1) > 1e-12]
+        return ", ".join(parts) or "nominal"
+
+    def apply(self, scenario: Scenario) -> Scenario:
+        """The scenario with this variant's isolators and table."""
+        isolators = tuple(
+            replace(iso, stiffness=tuple(self.stiffness * k for k in iso.stiffness),
+                    damping=tuple(self.damping * c for c in iso.damping))
+            for iso in scenario.isolators
+        )
+        table = replace(scenario.table, mass=self.mass * scenario.table.mass,
+                        inertia=tuple(self.mass * i for i in scenario.table.inertia))
+        return scenario.with_changes(isolators=isolators, table=table)
+
+
+#: the variants a profile is checked against (and optimised over, when asked):
+#: stiffness, damping and payload mass each 15 % off, one at a time
+ROBUSTNESS_VARIANTS: tuple[ModelVariant, ...] = (
+    ModelVariant(),
+    ModelVariant(stiffness=0.85), ModelVariant(stiffness=1.15),
+    ModelVariant(damping=0.85), ModelVariant(damping=1.15),
+    ModelVariant(mass=0.85), ModelVariant(mass=1.15),
+)
+
+
+@dataclass(frozen=True)
+class MoveMetrics:
+    """One profile method's cost, from the true simulation.
+
+    Attributes
+    ----------
+    label : str
+    move_time : float
+        From the move's command to the last carriage's stop [s].
+    settling_time_max : float or None
+        Largest 5 % settling time over the six signals [s] (None: the run is
+        too short to show it).
+    cycle_time : float or None
+        Move plus settling [s].
+    peak : dict
+        Largest |signal| per table signal [m or rad].
+    response : Response
+    """
+
+    label: str
+    move_time: float
+    settling_time_max: float | None
+    cycle_time: float | None
+    peak: dict[str, float]
+    response: Response = field(repr=False, compare=False)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: label, move_time, settling_time_max, cycle_time, peak [s, m, rad]."""
+        return {"label": self.label, "move_time": self.move_time, "settling_time_max": self.settling_time_max,
+                "cycle_time": self.cycle_time, "peak": dict(self.peak)}
+
+
+def with_moves(scenario: Scenario, profiles: Sequence[Any]) -> Scenario:
+    """The scenario with each carriage's profile replaced (one profile or MoveDesign per carriage)."""
+    if len(profiles) != len(scenario.carriages):
+        raise ScenarioError(f"profiles: need one per carriage ({len(scenario.carriages)}), got {len(profiles)}")
+    carriages: list[Carriage] = []
+    for carriage, prof in zip(scenario.carriages, profiles, strict=True):
+        made = prof.profile() if isinstance(prof, MoveDesign) else prof
+        carriages.append(replace(carriage, profile=made))
+    return scenario.with_changes(carriages=tuple(carriages))
+
+
+def evaluate_move(
+    scenario: Scenario, label: str, command: float, variant: ModelVariant | None = None, duration: float | None = None
+) -> MoveMetrics:
+    """Simulate a scenario's move and measure it.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With the profiles to judge.
+    label : str
+    command : float
+        When the move is commanded [s] (the move time counts from there).
+    variant : ModelVariant, optional
+        Judge it on a model that is off.
+    duration : float, optional
+        Simulated time [s] (default: the scenario's, stretched to at least the
+        stop time plus the baseline's tail so settling can show).
+    """
+    run_scenario = variant.apply(scenario) if variant is not None else scenario
+    if duration is not None:
+        run_scenario = run_scenario.with_changes(simulation=replace(run_scenario.simulation, duration=duration))
+    response = Simulator(run_scenario).run()
+    moved = move_time(run_scenario, command)
+    settle = response.settling_time_max
+    return MoveMetrics(
+        label=label, move_time=moved, settling_time_max=settle,
+        cycle_time=None if settle is None else moved + settle,
+        peak={k: float(v) for k, v in response.peak.items()}, response=response,
+    )
+
+
+def spread(values: Sequence[float | None]) -> tuple[float, float]:
+    """Least and greatest of values, NaN standing for an unknown one."""
+    arr = np.array([math.nan if v is None else v for v in values], dtype=float)
+    return float(np.nanmin(arr)) if np.isfinite(arr).any() else math.nan, float(np.max(arr))
