@@ -87,7 +87,7 @@ class ProfileSettings:
     band_margin : float
         ``H`` counts deviations beyond this fraction of the band.
     residual_limit : float
-        Largest ``R + H`` for ``objective="cycle"``.
+        Largest ``R + H`` for ``objective="cycle"`` (or the starting design's, if larger).
     shooting_steps : int
         RK4 steps per shooting interval (multiple shooting).
     screen : bool
@@ -107,7 +107,7 @@ class ProfileSettings:
     step_angle: float = 0.25
     window_periods: float = 2.0
     band_margin: float = 0.5
-    residual_limit: float = 0.01
+    residual_limit: float = 0.05
     shooting_steps: int = 20
     screen: bool = True
     max_iterations: int = 100
@@ -380,22 +380,24 @@ class _Problem:
                 guesses.append(np.asarray(guess(theta0)).ravel())
             residuals.append(self._residual(vd, calibration, nlp if settings.transcription == "multiple" else None))
         mean_residual = sum(residuals) / len(residuals)
-        if settings.objective == "cycle":
-            g += residuals
-            lbg += [-math.inf] * len(residuals)
-            ubg += [settings.residual_limit] * len(residuals)
-            objective = move / max_move
-        else:
-            objective = mean_residual
         x_all = ca.vertcat(*variables)
-        self.nlp = {"x": x_all, "f": objective, "g": ca.vertcat(*g)}
-        self.residual = ca.Function("residual", [x_all], [mean_residual])
-        self.lbx, self.ubx = np.array(lbx, dtype=float), np.array(ubx, dtype=float)
-        self.lbg, self.ubg = np.array(lbg, dtype=float), np.array(ubg, dtype=float)
         self.x0 = np.array(x0, dtype=float)
         if guesses:
             first = self.n_theta + (move is not None)
             self.x0[first:] = np.concatenate(guesses)
+        if settings.objective == "cycle":
+            # each model's residual within the limit, or within the starting design's (so that it is feasible)
+            start = np.asarray(ca.Function("start", [x_all], [ca.vertcat(*residuals)])(self.x0)).ravel()
+            g += residuals
+            lbg += [-math.inf] * len(residuals)
+            ubg += list(np.maximum(settings.residual_limit, start))
+            objective = move / max_move
+        else:
+            objective = mean_residual
+        self.nlp = {"x": x_all, "f": objective, "g": ca.vertcat(*g)}
+        self.residual = ca.Function("residual", [x_all], [mean_residual])
+        self.lbx, self.ubx = np.array(lbx, dtype=float), np.array(ubx, dtype=float)
+        self.lbg, self.ubg = np.array(lbg, dtype=float), np.array(ubg, dtype=float)
         self.durations = ca.Function("durations", [self.theta], [ca.vertcat(*self.lengths)])
 
     def _length0(self, phase: _Phase) -> float:
@@ -512,7 +514,8 @@ class _Problem:
 
 def _compiled(function: ca.Function) -> ca.Function:
     """The function compiled (cached on disk) with its first derivatives, as a casadi function."""
-    return NativeFunction(function, companions=(function.forward(1), function.reverse(1)), optimisation="-O1").external()
+    companions = (function.forward(1), function.reverse(1))
+    return NativeFunction(function, companions=companions, optimisation="-O1").external()
 
 
 def _advance(step_fn: ca.Function, steps: int, x: Any, taus: Any, h: Any, coef: Any, p: np.ndarray) -> Any:
@@ -637,7 +640,7 @@ def optimise_profiles(
         designs = _warm_designs(designs, warm_start.designs)
     designs = _within_move_time(designs, command, max_move)
     if warm_start is None and settings.screen:
-        designs = _screened(scenario, designs, command, max_move, baseline, progress)
+        designs = _screened(scenario, designs, command, max_move, baseline, settings.objective, progress)
     peaks = _peak_floor(baseline.peak)
     data = [_variant_data(v.apply(scenario)) for v in settings.variants]
     if progress:
@@ -760,31 +763,31 @@ def _within_move_time(designs: tuple[MoveDesign, ...], command: float, max_move:
 
 
 def _screened(scenario: Scenario, designs: tuple[MoveDesign, ...], command: float, max_move: float,
-              baseline: MoveMetrics, progress: bool) -> tuple[MoveDesign, ...]:
+              baseline: MoveMetrics, objective: str, progress: bool) -> tuple[MoveDesign, ...]:
     """The starting design with each carriage's braking timed to its excited modes' periods, where the
-    simulation says that settles sooner (one pass over the carriages)."""
+    simulation says that settles (or ends the cycle) sooner; one pass over the carriages."""
     peaks = list(baseline.peak.values())
     best = list(designs)
-    best_score = _score(scenario, best, command)
+    best_score = _score(scenario, best, command, objective)
     tried = 0
     for i, d in enumerate(designs):
         modes = dominant_modes(scenario, i, peaks)[:3]
         for candidate in _braking_candidates(d, modes, command, max_move):
             trial = [*best[:i], candidate, *best[i + 1:]]
-            score = _score(scenario, trial, command)
+            score = _score(scenario, trial, command, objective)
             tried += 1
             if score < best_score:
                 best, best_score = trial, score
     if progress:
-        print(f"  screened {tried} braking timings: start from settling {best_score[0]:.3f} s", flush=True)
+        print(f"  screened {tried} braking timings: start from {objective} {best_score[0]:.3f} s", flush=True)
     return tuple(best)
 
 
-def _score(scenario: Scenario, designs: Sequence[MoveDesign], command: float) -> tuple[float, float]:
-    """(settling time, move time) of a design by simulation; unknown settling counts as very long."""
+def _score(scenario: Scenario, designs: Sequence[MoveDesign], command: float, objective: str) -> tuple[float, float]:
+    """(settling or cycle time, move time) of a design by simulation; unknown settling counts as very long."""
     metrics = evaluate_move(with_moves(scenario, designs), "screen", command)
-    settle = metrics.settling_time_max
-    return (math.inf if settle is None else settle, metrics.move_time)
+    settle = math.inf if metrics.settling_time_max is None else metrics.settling_time_max
+    return (settle if objective == "settling" else settle + metrics.move_time, metrics.move_time)
 
 
 def _braking_candidates(design: MoveDesign, modes: Sequence[ExcitedMode], command: float,
