@@ -28,6 +28,7 @@ __all__ = [
     "DriveLimits",
     "MoveDesign",
     "Segment",
+    "command_time",
     "move_designs",
     "move_time",
 ]
@@ -263,6 +264,11 @@ def _fitted(move: MoveDesign) -> MoveDesign:
     )
 
 
+def command_time(scenario: Scenario) -> float:
+    """When the scenario's move is commanded [s]: its first carriage start."""
+    return min(c.profile.knots[0] for c in scenario.carriages)  # type: ignore[attr-defined]
+
+
 def move_time(scenario: Scenario, command: float | None = None) -> float:
     """Time [s] from the move's command to the last carriage's stop.
 
@@ -272,6 +278,5 @@ def move_time(scenario: Scenario, command: float | None = None) -> float:
     command : float, optional
         When the move is commanded [s] (default: the earliest carriage start).
     """
-    starts = [c.profile.knots[0] for c in scenario.carriages]  # type: ignore[attr-defined]
-    begin = min(starts) if command is None else command
+    begin = command_time(scenario) if command is None else command
     return float(scenario.stop_time - begin)

@@ -27,6 +27,8 @@ __all__ = [
     "ModelVariant",
     "MoveMetrics",
     "evaluate_move",
+    "over_variants",
+    "spread",
     "with_moves",
 ]
 
@@ -140,8 +142,7 @@ def evaluate_move(
     variant : ModelVariant, optional
         Judge it on a model that is off.
     duration : float, optional
-        Simulated time [s] (default: the scenario's, stretched to at least the
-        stop time plus the baseline's tail so settling can show).
+        Simulated time [s] (default: the scenario's).
     """
     run_scenario = variant.apply(scenario) if variant is not None else scenario
     if duration is not None:
@@ -160,3 +161,9 @@ def spread(values: Sequence[float | None]) -> tuple[float, float]:
     """Least and greatest of values, NaN standing for an unknown one."""
     arr = np.array([math.nan if v is None else v for v in values], dtype=float)
     return float(np.nanmin(arr)) if np.isfinite(arr).any() else math.nan, float(np.max(arr))
+
+
+def over_variants(scenario: Scenario, label: str, command: float,
+                  variants: Sequence[ModelVariant] = ROBUSTNESS_VARIANTS) -> list[MoveMetrics]:
+    """The move measured on each model variant (labelled ``<label> (<variant>)``)."""
+    return [evaluate_move(scenario, f"{label} ({v.label})", command, v) for v in variants]

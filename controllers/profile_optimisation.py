@@ -36,6 +36,7 @@ import math
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field, replace
+from pathlib import Path
 from typing import Any
 
 import casadi as ca
@@ -43,13 +44,14 @@ import numpy as np
 
 from isolator.errors import OptimisationError, ScenarioError
 from isolator.integrator import sensed_motion
+from isolator.loading import resolve_scenario_path
 from isolator.native import NativeFunction
 from isolator.scenario import SIGNALS, Scenario
 from isolator.simulation import Simulator
 
 from .input_shaping import ExcitedMode, dominant_modes
-from .move_design import MoveDesign, move_designs
-from .move_metrics import ModelVariant, MoveMetrics, evaluate_move, with_moves
+from .move_design import MoveDesign, command_time, move_designs
+from .move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, MoveMetrics, evaluate_move, with_moves
 
 __all__ = [
     "OBJECTIVES",
@@ -57,6 +59,7 @@ __all__ = [
     "ProfileOptimisation",
     "ProfileSettings",
     "optimise_profiles",
+    "write_scenario",
 ]
 
 OBJECTIVES = ("settling", "cycle")
@@ -79,7 +82,8 @@ class ProfileSettings:
         Largest move time as a fraction over the baseline's (0.05: 5 % longer).
     variants : tuple of ModelVariant
         Models the objective is averaged over (and, for ``cycle``, each held to
-        the residual limit). The first is the nominal one used for the bands.
+        the residual limit); default: nominal, and isolator stiffness, damping
+        and payload mass each 15 % off. The bands come from the nominal model.
     step_angle : float
         RK4 step times the fastest mode's angular frequency.
     window_periods : float
@@ -103,7 +107,7 @@ class ProfileSettings:
     transcription: str = "single"
     shape: str | None = "scurve"
     max_move_time_increase: float = 0.05
-    variants: tuple[ModelVariant, ...] = (ModelVariant(),)
+    variants: tuple[ModelVariant, ...] = ROBUSTNESS_VARIANTS
     step_angle: float = 0.25
     window_periods: float = 2.0
     band_margin: float = 0.5
@@ -631,7 +635,7 @@ def optimise_profiles(
     if scenario.ground is not None and scenario.ground.motion:
         raise ScenarioError("ground.motion: profile design needs a still floor")
     baseline_designs = move_designs(scenario, None)
-    command = min(d.t0 for d in baseline_designs)
+    command = command_time(scenario)
     baseline_move = max(d.stop_time() for d in baseline_designs) - command
     max_move = (1.0 + settings.max_move_time_increase) * baseline_move
     baseline = evaluate_move(scenario, "baseline", command)
@@ -666,6 +670,7 @@ def optimise_profiles(
             "ipopt.acceptable_obj_change_tol": 1e-4,
             "ipopt.acceptable_iter": 5,
             "ipopt.print_level": 0,
+            "ipopt.sb": "yes",
             "print_time": False,
             "iteration_callback": monitor,
         }
@@ -815,3 +820,49 @@ def _braking_candidates(design: MoveDesign, modes: Sequence[ExcitedMode], comman
                 if jerk <= lim.jerk:
                     out.append(replace(design, deceleration=dec, deceleration_jerk=jerk))
     return [c for c in out if c.fits() and c.stop_time() - command <= max_move]
+
+
+def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], path: str | Path) -> Path:
+    """Write a scenario file: the source file with each designed carriage's profile replaced.
+
+    Parameters
+    ----------
+    source : str or Path or None
+        The scenario file (or bundled name) the designs were made for.
+    designs : sequence of MoveDesign
+        Per carriage, by name.
+    path : str or Path
+        The file to write; it loads with :func:`isolator.load_scenario`.
+        Relative ``file`` keys of the source are made absolute.
+    """
+    import tomllib
+
+    import tomli_w
+
+    origin = resolve_scenario_path(source)
+    with open(origin, "rb") as handle:
+        data = tomllib.load(handle)
+    _absolute_files(data, origin.parent)
+    by_name = {d.name: d for d in designs}
+    for carriage in data.get("carriages", []):
+        if carriage.get("name") in by_name:
+            carriage["profile"] = by_name[carriage["name"]].profile().settings
+    data["name"] = f"{data.get('name', origin.stem)}-optimised"
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target, "wb") as handle:
+        tomli_w.dump(data, handle)
+    return target
+
+
+def _absolute_files(data: Any, base: Path) -> None:
+    """Make every relative ``file`` key under ``data`` absolute (relative to ``base``)."""
+    if isinstance(data, dict):
+        for key, value in data.items():
+            if key == "file" and isinstance(value, str) and not Path(value).is_absolute():
+                data[key] = str((base / value).resolve())
+            else:
+                _absolute_files(value, base)
+    elif isinstance(data, list):
+        for item in data:
+            _absolute_files(item, base)

@@ -12,7 +12,7 @@ import sys
 from collections.abc import Sequence
 from pathlib import Path
 
-from .errors import IsolatorError, ScenarioError
+from .errors import IsolatorError, OptimisationError, ScenarioError
 from .loading import DEFAULT_SCENARIO, bundled_scenarios, load_scenario
 from .model import MODEL_KINDS
 
@@ -114,6 +114,28 @@ def _parser() -> argparse.ArgumentParser:
     ff.add_argument("--out", type=Path, metavar="FORCES.csv", help="write the forces file")
     ff.add_argument("--json", action="store_true", help="print JSON instead of text")
 
+    opt = sub.add_parser(
+        "optimise-profile", help="optimise the carriages' motion profiles to cut the settling or cycle time",
+        description="Optimise each carriage's S-curve (or trapezoid) through the time-varying model with casadi "
+        "and IPOPT, over model variants (isolator stiffness, damping and payload mass 15 %% off), and compare "
+        "with the scenario's own profiles by simulation.",
+    )
+    opt.add_argument("scenario", nargs="?", default=None,
+                     help=f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
+    opt.add_argument("--objective", choices=["settling", "cycle"], default="settling",
+                     help="settling: least residual vibration within the move-time limit; cycle: shortest move "
+                     "that still settles at once")
+    opt.add_argument("--max-move-time-increase", type=float, default=0.05, metavar="FRACTION",
+                     help="longest move as a fraction over the scenario's (default 0.05)")
+    opt.add_argument("--shape", choices=["scurve", "trapezoid"], default="scurve",
+                     help="profile shape to design (default scurve)")
+    opt.add_argument("--transcription", choices=["single", "multiple"], default="single",
+                     help="single or multiple shooting (default single)")
+    opt.add_argument("--nominal", action="store_true", help="optimise for the nominal model only")
+    opt.add_argument("--out", type=Path, metavar="OPTIMISED.toml", help="write the scenario with the optimised "
+                     "profiles")
+    opt.add_argument("--json", action="store_true", help="print JSON instead of text")
+
     sub.add_parser("scenarios", help="list the bundled scenarios")
     return parser
 
@@ -131,6 +153,59 @@ def _feedforward(args: argparse.Namespace) -> int:
     if args.out:
         result.feedforward.forces.to_csv(args.out)
     return _report(args.json, result.to_dict(), result.summary(), [("forces file", args.out)])
+
+
+def _optimise_profile(args: argparse.Namespace) -> int:
+    from controllers.move_design import command_time
+    from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, over_variants
+    from controllers.profile_optimisation import ProfileSettings, optimise_profiles, write_scenario
+
+    scenario = load_scenario(args.scenario)
+    settings = ProfileSettings(
+        objective=args.objective, transcription=args.transcription, shape=args.shape,
+        max_move_time_increase=args.max_move_time_increase,
+        variants=(ModelVariant(),) if args.nominal else ROBUSTNESS_VARIANTS,
+    )
+    warning = None
+    try:
+        result = optimise_profiles(scenario, settings, progress=not args.json)
+    except OptimisationError as exc:
+        if getattr(exc, "result", None) is None:
+            raise
+        result, warning = exc.result, str(exc)  # type: ignore[attr-defined]
+    start = command_time(scenario)
+    spread = {
+        "variants": [v.label for v in ROBUSTNESS_VARIANTS],
+        "baseline": [m.settling_time_max for m in over_variants(scenario, "baseline", start)],
+        "optimised": [m.settling_time_max for m in over_variants(result.scenario, "optimised", start)],
+    }
+    if args.out:
+        write_scenario(args.scenario, result.designs, args.out)
+    data = {**result.to_dict(), "robustness": spread}
+    if warning:
+        data["warning"] = warning
+        print(f"isolator: warning: {warning}", file=sys.stderr)
+    return _report(args.json, data, _profile_summary(result, spread), [("optimised scenario", args.out)])
+
+
+def _profile_summary(result, spread: dict) -> str:
+    def num(value: float | None) -> str:
+        return "n/a" if value is None else f"{value:.3f}"
+
+    lines = [f"{'':>10} {'move [s]':>9} {'settling [s]':>13} {'cycle [s]':>10}"]
+    for m in (result.baseline, result.optimised):
+        lines.append(f"{m.label:>10} {m.move_time:>9.3f} {num(m.settling_time_max):>13} {num(m.cycle_time):>10}")
+    for d in result.designs:
+        values = ", ".join(f"{n} {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
+        lines.append(f"{d.name} ({d.shape}): {values}")
+    for run in ("baseline", "optimised"):
+        values = [v for v in spread[run] if v is not None]
+        if values:
+            lines.append(f"settling over model variants ({run}): {min(values):.3f} .. {max(values):.3f} s")
+    s = result
+    lines.append(f"IPOPT {s.status}, {s.iterations} iterations, {s.build_time:.2f} s building, "
+                 f"{s.solve_time:.2f} s solving")
+    return "\n".join(lines)
 
 
 def _report(
@@ -285,7 +360,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         if args.command == "study":
             return _study(args)
         handlers = {"modes": _modes, "transmissibility": _transmissibility, "stability": _stability,
-                    "criteria": _criteria, "feedforward": _feedforward}
+                    "criteria": _criteria, "feedforward": _feedforward,
+                    "optimise-profile": _optimise_profile}
         if args.command in handlers:
             if args.command != "stability":
                 import matplotlib

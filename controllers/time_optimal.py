@@ -1,0 +1,59 @@
+"""Time-optimal jerk-limited moves from ruckig, the fastest a drive's limits allow.
+
+Each carriage moves alone from rest to rest within its ``limits`` (speed,
+acceleration, jerk; see :func:`controllers.move_design.drive_limits`), starting
+when its scenario profile starts. Ruckig returns each move as seven
+constant-jerk phases; they become an exact piecewise-cubic profile.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+from isolator.errors import ScenarioError
+from isolator.profiles import PiecewisePolynomialProfile, segments
+from isolator.scenario import Scenario
+
+from .move_design import move_designs
+
+__all__ = ["time_optimal_profile", "time_optimal_scenario"]
+
+
+def time_optimal_profile(start: float, stroke: float, t0: float, velocity: float, acceleration: float,
+                         jerk: float) -> PiecewisePolynomialProfile:
+    """Ruckig's time-optimal rest-to-rest move.
+
+    Parameters
+    ----------
+    start, stroke : float
+        [m]
+    t0 : float
+        Start time [s].
+    velocity, acceleration, jerk : float
+        Limits [m/s, m/s^2, m/s^3], > 0.
+    """
+    from ruckig import InputParameter, Result, Ruckig, Trajectory
+
+    inp = InputParameter(1)
+    inp.current_position = [start]
+    inp.target_position = [start + stroke]
+    inp.max_velocity = [velocity]
+    inp.max_acceleration = [acceleration]
+    inp.max_jerk = [jerk]
+    trajectory = Trajectory(1)
+    result = Ruckig(1).calculate(inp, trajectory)
+    if result not in (Result.Working, Result.Finished):
+        raise ScenarioError(f"limits: ruckig found no move ({result})")
+    phase = trajectory.profiles[0][0]
+    return segments(start, t0, list(phase.t), list(phase.a[:7]), list(phase.j), kind="time-optimal")
+
+
+def time_optimal_scenario(scenario: Scenario) -> Scenario:
+    """The scenario with every carriage's move replaced by ruckig's time-optimal one within its limits."""
+    carriages = []
+    for design, carriage in zip(move_designs(scenario), scenario.carriages, strict=True):
+        lim = design.limits
+        profile = time_optimal_profile(design.start, design.stroke, design.t0, lim.velocity, lim.acceleration,
+                                       lim.jerk)
+        carriages.append(replace(carriage, profile=profile))
+    return scenario.with_changes(carriages=tuple(carriages))
