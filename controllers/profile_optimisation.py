@@ -719,7 +719,9 @@ def _fmt(value: float | None) -> str:
 
 
 def _designs_of(problem: _Problem, x: np.ndarray) -> tuple[MoveDesign, ...]:
-    theta = x[: problem.n_theta] * problem.scales
+    """The designs at a solver point, held within their bounds (IPOPT may overstep them by its tolerance)."""
+    n = problem.n_theta
+    theta = np.clip(x[:n], problem.lbx[:n], problem.ubx[:n]) * problem.scales
     out, at = [], 0
     for d in problem.designs:
         out.append(d.with_values(theta[at: at + len(d.names)]))

@@ -47,10 +47,12 @@ def _parser() -> argparse.ArgumentParser:
                      help="actuator forces file (t and one column per actuator, N)")
 
     study = sub.add_parser("study", help="run a study that writes figures and a report")
-    study.add_argument("name", choices=["paper", "control"],
-                       help="paper: reproduce Shin, Sun and Kim; control: passive, feedforward, feedback and both")
+    study.add_argument("name", choices=["paper", "control", "profiles"],
+                       help="paper: reproduce Shin, Sun and Kim; control: passive, feedforward, feedback and both; "
+                       "profiles: paper profile, input shapers, time-optimal and optimised moves")
     study.add_argument("scenario", nargs="?", default=None,
-                       help="control: scenario with [[actuators]] (default: paper-table-3-2-active)")
+                       help="control: scenario with [[actuators]] (default: paper-table-3-2-active); "
+                       f"profiles: (default: {DEFAULT_SCENARIO})")
     study.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     study.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
     study.add_argument("--controller", choices=["skyhook", "lead", "lqr", "hinf"], default="skyhook",
@@ -347,6 +349,16 @@ def _study(args: argparse.Namespace) -> int:
         for run in ("passive", "feedforward", "feedback", "both"):
             value = study.settling_time_max(run)
             print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
+        print(f"report: {args.out / 'report.md'}")
+    elif args.name == "profiles":
+        from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant
+        from studies.profiles import run_profile_study
+
+        variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
+        profiles = run_profile_study(args.out, load_scenario(args.scenario), variants)
+        for name, m in profiles.methods.items():
+            settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
+            print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
         print(f"report: {args.out / 'report.md'}")
     return 0
 

@@ -1,0 +1,270 @@
+"""How the stage should move: the paper's profile, input shapers, time-optimal and optimised moves.
+
+Run it with ``isolator study profiles [SCENARIO] --out DIR``. Every method is
+judged by the true simulation, with each run's own 5 % band:
+
+* ``profiles.png``: each carriage's speed and acceleration per method;
+* ``response.png``: the table's six signals after the stop, paper profile
+  against the optimised ones (settling-time and cycle-time objectives);
+* ``times.png``: move, settling and cycle time per method;
+* ``robustness.png``: settling time per method on the model variants
+  (isolator stiffness, damping, payload mass 15 % off);
+* ``report.md``: the numbers, the optimised parameters, the dominant modes
+  the shapers are tuned to, and what each method assumes.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from controllers.input_shaping import SHAPERS, dominant_modes, shaped_scenario
+from controllers.move_design import command_time
+from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, MoveMetrics, evaluate_move, over_variants
+from controllers.profile_optimisation import ProfileOptimisation, ProfileSettings, optimise_profiles
+from controllers.time_optimal import time_optimal_scenario
+from isolator import SIGNALS, Scenario
+
+__all__ = ["ProfileStudy", "run_profile_study"]
+
+_UNITS = {"x": ("µm", 1e6), "y": ("µm", 1e6), "z": ("µm", 1e6), "rx": ("µrad", 1e6), "ry": ("µrad", 1e6),
+          "rz": ("µrad", 1e6)}
+
+
+@dataclass(frozen=True)
+class ProfileStudy:
+    """Every method's move, measured.
+
+    Attributes
+    ----------
+    methods : dict of str to MoveMetrics
+        ``paper``, ``zv``, ``zvd``, ``ei``, ``time-optimal``, ``optimised (settling)``,
+        ``optimised (cycle)``, nominal model.
+    scenarios : dict of str to Scenario
+        The scenario each method runs.
+    variants : dict of str to list of MoveMetrics
+        Per method, the move on each model variant.
+    optimisations : dict of str to ProfileOptimisation
+        ``settling`` and ``cycle``.
+    folder : Path
+    """
+
+    methods: dict[str, MoveMetrics]
+    scenarios: dict[str, Scenario]
+    variants: dict[str, list[MoveMetrics]]
+    optimisations: dict[str, ProfileOptimisation]
+    folder: Path
+
+
+def run_profile_study(
+    folder: str | Path,
+    scenario: Scenario,
+    variants: tuple[ModelVariant, ...] = ROBUSTNESS_VARIANTS,
+    progress: bool = True,
+) -> ProfileStudy:
+    """Compare the profile methods on a scenario; write figures and ``report.md`` to ``folder``.
+
+    Parameters
+    ----------
+    folder : str or Path
+    scenario : Scenario
+        Carriages with trapezoids or S-curves (the "paper" profile).
+    variants : tuple of ModelVariant
+        Optimised over, and every method checked on.
+    progress : bool
+        Print a line per step.
+    """
+    out = Path(folder)
+    out.mkdir(parents=True, exist_ok=True)
+    command = command_time(scenario)
+    scenarios: dict[str, Scenario] = {"paper": scenario}
+    peaks = list(evaluate_move(scenario, "paper", command).peak.values())
+    for kind in SHAPERS:
+        scenarios[kind.upper()] = shaped_scenario(scenario, kind, peaks)
+    scenarios["time-optimal"] = time_optimal_scenario(scenario)
+    optimisations = {}
+    for objective in ("settling", "cycle"):
+        if progress:
+            print(f"optimising for the {objective} time ...", flush=True)
+        result = optimise_profiles(scenario, ProfileSettings(objective=objective, variants=variants),
+                                   progress=progress)
+        optimisations[objective] = result
+        scenarios[f"optimised ({objective})"] = result.scenario
+    if progress:
+        print("measuring every method on the model variants ...", flush=True)
+    methods = {name: evaluate_move(sc, name, command) for name, sc in scenarios.items()}
+    spread = {name: over_variants(sc, name, command, variants) for name, sc in scenarios.items()}
+    study = ProfileStudy(methods, scenarios, spread, optimisations, out)
+    _plot_profiles(study)
+    _plot_response(study)
+    _plot_times(study)
+    _plot_robustness(study, variants)
+    _write_report(study, scenario, peaks, variants)
+    return study
+
+
+def _colours(names: list[str]) -> dict[str, object]:
+    cmap = plt.get_cmap("tab10")
+    return {n: ("0.3" if n == "paper" else cmap(i)) for i, n in enumerate(names)}
+
+
+def _plot_profiles(study: ProfileStudy) -> None:
+    names = list(study.scenarios)
+    colours = _colours(names)
+    carriages = study.scenarios["paper"].carriages
+    fig, axes = plt.subplots(2, len(carriages), figsize=(6 * len(carriages), 7), sharex=True, squeeze=False)
+    for j, carriage in enumerate(carriages):
+        stop = max(sc.carriages[j].profile.stop_time for sc in study.scenarios.values())
+        t = np.linspace(max(0.0, stop - 1.6), stop + 0.2, 2000)
+        for name, sc in study.scenarios.items():
+            _, v, a = sc.carriages[j].profile.evaluate(t)
+            axes[0, j].plot(t, v, color=colours[name], label=name)
+            axes[1, j].plot(t, a, color=colours[name], label=name)
+        axes[0, j].set_title(f"{carriage.name}: the end of the move")
+        axes[0, j].set_ylabel("speed [m/s]")
+        axes[1, j].set_ylabel("acceleration [m/s²]")
+        axes[1, j].set_xlabel("time [s]")
+        for ax in axes[:, j]:
+            ax.grid(True, alpha=0.3)
+    axes[0, -1].legend(fontsize=8, loc="lower left")
+    fig.suptitle("Carriage profiles: the braking phase that sets the residual vibration")
+    fig.tight_layout()
+    fig.savefig(study.folder / "profiles.png", dpi=120)
+    plt.close(fig)
+
+
+def _plot_response(study: ProfileStudy) -> None:
+    shown = ["paper", "ZV", "optimised (settling)", "optimised (cycle)"]
+    colours = _colours(list(study.scenarios))
+    fig, axes = plt.subplots(2, 3, figsize=(15, 7.5), sharex=True)
+    for ax, signal in zip(axes.T.ravel(), SIGNALS, strict=True):
+        unit, scale = _UNITS[signal]
+        for name in shown:
+            r = study.methods[name].response
+            stop = r.stop_time
+            keep = r.t >= stop - 1.0
+            i = SIGNALS.index(signal)
+            ax.plot(r.t[keep] - stop, (r.signals[i, keep] - r.final[i]) * scale, color=colours[name], label=name)
+            band = 0.05 * r.peak[signal] * scale
+            ax.axhline(band, color=colours[name], lw=0.6, ls=":")
+            ax.axhline(-band, color=colours[name], lw=0.6, ls=":")
+        ax.axvline(0.0, color="k", lw=0.8)
+        ax.set_title(f"{signal} about its final value (dotted: 5 % bands)")
+        ax.set_ylabel(f"{signal} [{unit}]")
+        ax.grid(True, alpha=0.3)
+    for ax in axes[-1]:
+        ax.set_xlabel("time after the stop [s]")
+    axes[0, 0].legend(fontsize=8)
+    fig.suptitle("Table response around the stop: paper profile, ZV shaping and the optimised moves")
+    fig.tight_layout()
+    fig.savefig(study.folder / "response.png", dpi=120)
+    plt.close(fig)
+
+
+def _num(value: float | None) -> float:
+    return math.nan if value is None else value
+
+
+def _plot_times(study: ProfileStudy) -> None:
+    names = list(study.methods)
+    x = np.arange(len(names))
+    fig, ax = plt.subplots(figsize=(12, 5))
+    moves = [study.methods[n].move_time for n in names]
+    settles = [_num(study.methods[n].settling_time_max) for n in names]
+    ax.bar(x, moves, color="tab:blue", label="move")
+    ax.bar(x, settles, bottom=moves, color="tab:red", label="5 % settling")
+    for xi, m, s in zip(x, moves, settles, strict=True):
+        ax.text(xi, m + (0 if math.isnan(s) else s) + 0.05, f"{m + s:.2f} s\n(settle {s:.2f})", ha="center",
+                fontsize=8)
+    ax.set_xticks(x, names, rotation=20)
+    ax.set_ylabel("time from the move's command [s]")
+    ax.set_ylim(min(moves) * 0.9, max(m + (0 if math.isnan(s) else s) for m, s in zip(moves, settles,
+                                                                                         strict=True)) * 1.08)
+    ax.set_title("Cycle time = move + 5 % settling, per profile method (nominal model)")
+    ax.legend()
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(study.folder / "times.png", dpi=120)
+    plt.close(fig)
+
+
+def _plot_robustness(study: ProfileStudy, variants: tuple[ModelVariant, ...]) -> None:
+    names = list(study.variants)
+    fig, ax = plt.subplots(figsize=(12, 5))
+    width = 0.8 / len(variants)
+    cmap = plt.get_cmap("viridis")
+    for k, variant in enumerate(variants):
+        values = [_num(study.variants[n][k].settling_time_max) for n in names]
+        ax.bar(np.arange(len(names)) + (k - (len(variants) - 1) / 2) * width, values, width,
+               color=cmap(k / max(1, len(variants) - 1)), label=variant.label)
+    ax.set_xticks(np.arange(len(names)), names, rotation=20)
+    ax.set_ylabel("largest 5 % settling time [s]")
+    ax.set_title("Settling time on models that are off (isolator stiffness k, damping c, payload mass m)")
+    ax.legend(fontsize=8, ncol=4)
+    ax.grid(True, axis="y", alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(study.folder / "robustness.png", dpi=120)
+    plt.close(fig)
+
+
+def _write_report(study: ProfileStudy, scenario: Scenario, peaks: list[float],
+                  variants: tuple[ModelVariant, ...]) -> None:
+    def f(value: float | None) -> str:
+        return "n/a" if value is None else f"{value:.3f}"
+
+    lines = [f"# Profile study: {scenario.name}", "",
+             "Every method is judged by the exact time-varying simulation; the settling time is the paper's "
+             "5 % criterion (band: 5 % of each signal's own peak in that run). Move time counts from the "
+             f"move's command (t = {command_time(scenario):g} s); cycle = move + settling.", "",
+             "| method | move [s] | settling [s] | cycle [s] | settling over the model variants [s] |",
+             "|---|---|---|---|---|"]
+    for name, m in study.methods.items():
+        values = [v.settling_time_max for v in study.variants[name] if v.settling_time_max is not None]
+        span = f"{min(values):.3f} .. {max(values):.3f}" if values else "n/a"
+        lines.append(f"| {name} | {m.move_time:.3f} | {f(m.settling_time_max)} | {f(m.cycle_time)} | {span} |")
+    paper = study.methods["paper"]
+    best = study.methods["optimised (settling)"]
+    lines += ["", "## Targets", ""]
+    if paper.settling_time_max and best.settling_time_max is not None:
+        ratio = best.settling_time_max / paper.settling_time_max
+        lines.append(f"- Settling time of the settling-optimised move: {100 * ratio:.1f} % of the paper profile's "
+                     f"(target at most 10 %), with the move {100 * (best.move_time / paper.move_time - 1):.1f} % "
+                     "longer (target at most 5 %).")
+    zv, cyc = study.methods["ZV"], study.methods["optimised (cycle)"]
+    if zv.cycle_time is not None and cyc.cycle_time is not None:
+        lines.append(f"- Cycle time of the cycle-optimised move: {cyc.cycle_time:.3f} s against ZV shaping's "
+                     f"{zv.cycle_time:.3f} s.")
+    lines += ["", "## Peak table motion per method", "",
+              "| method | " + " | ".join(f"{s} [{_UNITS[s][0]}]" for s in SIGNALS) + " |",
+              "|---|" + "---|" * len(SIGNALS)]
+    for name, m in study.methods.items():
+        lines.append(f"| {name} | " + " | ".join(f"{m.peak[s] * _UNITS[s][1]:.3g}" for s in SIGNALS) + " |")
+    lines += ["", "## Optimised parameters", ""]
+    for objective, result in study.optimisations.items():
+        lines.append(f"**{objective}** (IPOPT {result.status}, {result.iterations} iterations, "
+                     f"{result.build_time + result.solve_time:.1f} s, over {len(variants)} models):")
+        lines.append("")
+        for d in result.designs:
+            values = ", ".join(f"{n} = {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
+            lines.append(f"- {d.name} ({d.shape}): {values}")
+        lines.append("")
+    lines += ["## Dominant modes (input shapers are tuned to the first of each carriage)", ""]
+    for i, carriage in enumerate(scenario.carriages):
+        ranked = dominant_modes(scenario, i, peaks)[:3]
+        text = ", ".join(f"{m.frequency:.3f} Hz (ζ {m.damping:.3f}, weight {m.weight:.3g})" for m in ranked)
+        lines.append(f"- {carriage.name}: {text}")
+    lines += ["", "## Assumptions", "",
+              "- Limits: each carriage's `limits` (speed, acceleration, jerk), by default its own profile's "
+              "speed and acceleration, and a jerk that builds the acceleration in 50 ms for a trapezoid.",
+              "- Shapers: ZV, ZVD and EI (5 % tolerance, Singhose's damped fit) convolved with the paper's "
+              "trapezoids, each carriage tuned to the mode it excites most at the end position.",
+              "- Time-optimal: ruckig, each carriage alone, within its limits, from its own start.",
+              "- Optimised: S-curves with separate accelerating and braking jerk, start delay, cruise speed; "
+              "objective in each run's own band units over the model variants "
+              f"({', '.join(v.label for v in variants)}).",
+              "", "Figures: `profiles.png`, `response.png`, `times.png`, `robustness.png`."]
+    (study.folder / "report.md").write_text("\n".join(lines) + "\n")
