@@ -103,9 +103,10 @@ def shaper(kind: str, frequency: float, damping: float) -> Shaper:
 
 
 def residual_vibration(train: Shaper, frequency: float, damping: float) -> float:
-    """Vibration left by the impulse train in a mode, relative to a single unit impulse.
+    """Vibration left by the impulse train in a mode, relative to a single unit impulse at its last time.
 
-    ``exp(-zeta w t_N) |sum A_i exp(zeta w t_i) exp(j w_d t_i)|`` (Singer and Seering, 1990).
+    ``exp(-zeta w t_N) |sum A_i exp(zeta w t_i) exp(j w_d t_i)|`` (Singer and Seering, 1990; the
+    convention the EI shaper's 5 % refers to).
     """
     w = 2 * math.pi * frequency
     wd = w * math.sqrt(1 - damping**2)

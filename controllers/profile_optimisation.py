@@ -310,6 +310,7 @@ class _Problem:
         peaks: np.ndarray,
         command: float,
         max_move: float,
+        phases: Sequence[_Phase] | None = None,
     ) -> None:
         sim = Simulator(scenario)
         self.model = sim.model
@@ -320,6 +321,9 @@ class _Problem:
         self.peaks = peaks
         self.step = settings.step_angle / max(d.omega_max for d in data)
         self.phases = _phases(designs, lambda length: min(MAX_PHASE_STEPS, max(8, math.ceil(length / self.step))))
+        if phases is not None and [(p.first, p.last, p.pieces) for p in phases] == [
+                (p.first, p.last, p.pieces) for p in self.phases]:
+            self.phases = list(phases)  # an earlier problem's steps, so that its solver point fits
         # the largest step a phase may stretch to: three nominal steps, or half as long again as it starts
         self.caps = [max(3.0 * self.step, 1.5 * self._length0(ph) / ph.steps) for ph in self.phases]
         sizes = [len(d.names) for d in designs]
@@ -403,6 +407,9 @@ class _Problem:
         self.lbx, self.ubx = np.array(lbx, dtype=float), np.array(ubx, dtype=float)
         self.lbg, self.ubg = np.array(lbg, dtype=float), np.array(ubg, dtype=float)
         self.durations = ca.Function("durations", [self.theta], [ca.vertcat(*self.lengths)])
+        #: what a solver point fits: the phases, their steps, the transcription and the objective
+        self.structure = (tuple(self.phases), settings.transcription, settings.objective, len(data),
+                          int(self.x0.size), int(self.lbg.size))
 
     def _length0(self, phase: _Phase) -> float:
         """The phase's length [s] in the starting design."""
@@ -658,7 +665,8 @@ def optimise_profiles(
     for _ in range(4):
         rounds += 1
         t0 = time.perf_counter()
-        problem = _Problem(scenario, designs, settings, data, peaks, command, max_move)
+        earlier = point["structure"][0] if point is not None and "structure" in point else None
+        problem = _Problem(scenario, designs, settings, data, peaks, command, max_move, earlier)
         monitor = _Monitor(problem, progress, 1e-6)
         options = {
             "ipopt.hessian_approximation": "limited-memory",
@@ -675,7 +683,7 @@ def optimise_profiles(
             "iteration_callback": monitor,
         }
         args = {"x0": problem.x0, "lbx": problem.lbx, "ubx": problem.ubx, "lbg": problem.lbg, "ubg": problem.ubg}
-        if point is not None and point["x"].size == problem.x0.size and point["lam_g"].size == problem.lbg.size:
+        if point is not None and point.get("structure") == problem.structure:
             options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6})
             args.update({"x0": point["x"], "lam_x0": point["lam_x"], "lam_g0": point["lam_g"]})
         solver = ca.nlpsol("profiles", "ipopt", problem.nlp, options)
@@ -687,7 +695,8 @@ def optimise_profiles(
         status = str(stats["return_status"])
         iterations += int(stats.get("iter_count", 0))
         x = np.asarray(out["x"]).ravel()
-        point = {"x": x, "lam_x": np.asarray(out["lam_x"]).ravel(), "lam_g": np.asarray(out["lam_g"]).ravel()}
+        point = {"x": x, "lam_x": np.asarray(out["lam_x"]).ravel(), "lam_g": np.asarray(out["lam_g"]).ravel(),
+                 "structure": problem.structure}
         if status not in _SUCCESS:
             best = monitor.best[1] if monitor.best is not None else None
             result = None
