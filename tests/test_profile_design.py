@@ -25,7 +25,8 @@ def test_scurve_with_its_own_braking_is_continuous_within_limits_and_reaches_the
     assert q[-1] == pytest.approx(0.1 + stroke, abs=1e-12)
     assert np.max(np.abs(v)) <= 0.2 + 1e-12
     s = math.copysign(1.0, stroke)
-    assert np.max(s * a) <= 0.5 + 1e-9 and np.max(-s * a) <= dec + 1e-9
+    assert np.max(s * a) <= 0.5 + 1e-9
+    assert np.max(-s * a) <= dec + 1e-9
     dt = t[1] - t[0]
     assert np.max(np.abs(np.diff(a))) / dt <= max(10.0, jerk_down) * 1.001  # acceleration continuous
     assert np.allclose(np.diff(q) / dt, (v[1:] + v[:-1]) / 2, atol=1e-6)
@@ -105,7 +106,8 @@ def test_limits_are_read_and_checked():
     data = base_dict()
     data["carriages"][0]["limits"] = {"velocity": 0.5, "jerk": 20.0}
     sc = scenario_from_dict(data)
-    assert sc.carriages[0].limits.jerk == 20.0 and sc.carriages[0].limits.acceleration is None
+    assert sc.carriages[0].limits.jerk == 20.0
+    assert sc.carriages[0].limits.acceleration is None
     assert move_designs(sc)[0].limits.jerk == 20.0
     data["carriages"][0]["limits"] = {"jerk": -1.0}
     with pytest.raises(ScenarioError, match=r"carriages\[0\]\.limits\.jerk: must be > 0"):
