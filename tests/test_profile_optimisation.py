@@ -116,3 +116,12 @@ def test_profile_study_writes_figures_and_report(tmp_path, capsys):
     for method in ("| ZV |", "| time-optimal |", "optimised (cycle)"):
         assert method in report
     assert "target at most 10 %" in report
+
+
+def test_trapezoids_can_be_designed_too_and_gain_less(paper, settled):
+    """A rectangular braking pulse cannot cancel modes damped at 10-20 %; an S-curve's two ramps can."""
+    trap = po.optimise_profiles(paper, po.ProfileSettings(variants=NOMINAL, shape="trapezoid"))
+    assert {d.shape for d in trap.designs} == {"trapezoid"}
+    assert trap.optimised.settling_time_max < trap.baseline.settling_time_max
+    assert trap.optimised.settling_time_max > settled.optimised.settling_time_max
+    assert trap.scenario.carriages[0].profile.settings["type"] == "trapezoid"
