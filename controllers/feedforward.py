@@ -47,6 +47,7 @@ __all__ = [
     "FeedforwardComparison",
     "PathDemand",
     "allocation_matrix",
+    "carriage_inertia_wrench",
     "compare_feedforward",
     "feedforward_allocation",
     "path_demand",
@@ -92,12 +93,24 @@ def reaction_wrench(scenario: Scenario, t: np.ndarray, piece_time: np.ndarray | 
     qdd = np.zeros((n, t.size))
     for i, c in enumerate(scenario.carriages):
         q[i], _, qdd[i] = c.profile.evaluate(t, piece_time)
+    wrench = carriage_inertia_wrench(scenario, q, qdd)
+    return np.hstack([np.einsum("nij,nj->ni", rot, wrench[:, :3]), np.einsum("nij,nj->ni", rot, wrench[:, 3:])])
+
+
+def carriage_inertia_wrench(scenario: Scenario, q: np.ndarray, qdd: np.ndarray) -> np.ndarray:
+    """``sum m_i a_i`` and ``sum m_i d_i x a_i`` in the table's axes, (N, 6) [N, N m].
+
+    ``d_i`` are the carriage masses' positions about the table's mass centre
+    at coordinates ``q`` (n, N) and ``a_i`` their accelerations relative to the
+    table for coordinate accelerations ``qdd`` (n, N); a carriage's
+    acceleration carries the carriages riding on it.
+    """
     pos = scenario.carriage_positions(q)  # (n, 3, N)
     acc = scenario.carriage_positions(qdd) - scenario.carriage_positions(np.zeros_like(qdd))
     m = np.array([c.mass for c in scenario.carriages])[:, None, None]
     force = np.sum(m * acc, axis=0).T
     moment = np.sum(m * np.cross(pos, acc, axis=1), axis=0).T
-    return np.hstack([np.einsum("nij,nj->ni", rot, force), np.einsum("nij,nj->ni", rot, moment)])
+    return np.hstack([force, moment])
 
 
 @dataclass(frozen=True)

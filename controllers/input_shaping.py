@@ -22,6 +22,9 @@ from isolator.linear import linearise
 from isolator.profiles import PiecewisePolynomialProfile, shaped
 from isolator.scenario import Scenario
 
+from .feedforward import carriage_inertia_wrench
+from .move_metrics import with_moves
+
 __all__ = [
     "SHAPERS",
     "ExcitedMode",
@@ -164,7 +167,9 @@ def dominant_modes(scenario: Scenario, carriage: int, peaks: Sequence[float] | N
     a, b, c = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)[:6]
     wrench_cols = [list(sys.input_labels).index(n) for n in ("force:x", "force:y", "force:z",
                                                             "torque:x", "torque:y", "torque:z")]
-    u = _reaction_wrench(scenario, finals, carriage)
+    unit = np.zeros((finals.size, 1))
+    unit[carriage] = 1.0
+    u = -carriage_inertia_wrench(scenario, finals[:, None], unit)[0]  # the push on the table
     scale = np.ones(6) if peaks is None else np.maximum(np.asarray(peaks, dtype=float), 1e-300)
     lam, v = np.linalg.eig(a)
     w = np.linalg.inv(v)
@@ -175,34 +180,6 @@ def dominant_modes(scenario: Scenario, carriage: int, peaks: Sequence[float] | N
         omega = abs(lam[i])
         modes.append(ExcitedMode(omega / (2 * math.pi), -lam[i].real / omega, float(np.max(response / scale))))
     return sorted(modes, key=lambda m: -m.weight)
-
-
-def _reaction_wrench(scenario: Scenario, q: np.ndarray, index: int) -> np.ndarray:
-    """Wrench [N, N m] on the table (mass centre, world axes) per unit acceleration of carriage ``index``."""
-    positions = scenario.carriage_positions(q)  # (n, 3), table frame at rest
-    riders = _subtree(scenario, index)
-    axis = np.asarray(scenario.carriages[index].axis, dtype=float)
-    force = np.zeros(3)
-    torque = np.zeros(3)
-    for k in riders:
-        m = scenario.carriages[k].mass
-        force -= m * axis
-        torque -= m * np.cross(positions[k], axis)
-    return np.concatenate([force, torque])
-
-
-def _subtree(scenario: Scenario, index: int) -> list[int]:
-    """The carriage and every carriage it carries."""
-    parents = scenario.parent_indices()
-    out = [index]
-    for k in range(len(scenario.carriages)):
-        j = parents[k]
-        while j >= 0:
-            if j == index:
-                out.append(k)
-                break
-            j = parents[j]
-    return out
 
 
 def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None = None, modes: int = 1) -> Scenario:
@@ -218,7 +195,7 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
         Shape for this many of each carriage's most excited modes (the
         shapers convolved; each adds its own duration).
     """
-    carriages = []
+    profiles = []
     for i, carriage in enumerate(scenario.carriages):
         profile = carriage.profile
         if not isinstance(profile, PiecewisePolynomialProfile) or math.isinf(profile.stop_time):
@@ -228,8 +205,7 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
             train = shaper(kind, mode.frequency, mode.damping)
             amps = np.outer(amps, train.amplitudes).ravel()
             times = np.add.outer(times, train.times).ravel()
-        carriages.append(carriage.__class__(**{**carriage.__dict__, "profile": shaped(profile, amps, times,
-                                                                                       kind=f"{kind}-shaped")}))
-    return scenario.with_changes(carriages=tuple(carriages))
+        profiles.append(shaped(profile, amps, times, kind=f"{kind}-shaped"))
+    return with_moves(scenario, profiles)
 
 

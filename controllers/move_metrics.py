@@ -13,8 +13,6 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-import numpy as np
-
 from isolator.errors import ScenarioError
 from isolator.response import Response
 from isolator.scenario import Carriage, Scenario
@@ -28,7 +26,6 @@ __all__ = [
     "MoveMetrics",
     "evaluate_move",
     "over_variants",
-    "spread",
     "with_moves",
 ]
 
@@ -155,12 +152,6 @@ def evaluate_move(
         cycle_time=None if settle is None else moved + settle,
         peak={k: float(v) for k, v in response.peak.items()}, response=response,
     )
-
-
-def spread(values: Sequence[float | None]) -> tuple[float, float]:
-    """Least and greatest of values, NaN standing for an unknown one."""
-    arr = np.array([math.nan if v is None else v for v in values], dtype=float)
-    return float(np.nanmin(arr)) if np.isfinite(arr).any() else math.nan, float(np.max(arr))
 
 
 def over_variants(scenario: Scenario, label: str, command: float,

@@ -45,12 +45,14 @@ import numpy as np
 from isolator.errors import OptimisationError, ScenarioError
 from isolator.integrator import sensed_motion
 from isolator.loading import resolve_scenario_path
+from isolator.model import ParameterLayout
 from isolator.native import NativeFunction
+from isolator.profiles import segment_starts
 from isolator.scenario import SIGNALS, Scenario
-from isolator.simulation import Simulator
+from isolator.simulation import Simulator, get_model
 
 from .input_shaping import ExcitedMode, dominant_modes
-from .move_design import MoveDesign, command_time, move_designs
+from .move_design import MoveDesign, command_time, move_designs, move_time
 from .move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, MoveMetrics, evaluate_move, with_moves
 
 __all__ = [
@@ -226,14 +228,17 @@ def _variant_data(scenario: Scenario) -> _VariantData:
     return _VariantData(sim.parameters, start.state, final, float(np.max(np.abs(eig))), slowest)
 
 
+def _floors(values: np.ndarray) -> np.ndarray:
+    """Per signal, 1e-3 of the largest value of its kind (translations, rotations); 1e-12 when all are 0."""
+    tops = np.repeat([np.max(values[:3]), np.max(values[3:])], 3)
+    return np.where(tops > 0, 1e-3 * tops, 1e-12)
+
+
 def _peak_floor(peak: dict[str, float]) -> np.ndarray:
     """Each signal's peak [m, rad], floored at 1e-3 of the largest of its kind (a signal that
     symmetry keeps at zero must not dominate)."""
     values = np.array([peak[s] for s in SIGNALS], dtype=float)
-    for part in (slice(0, 3), slice(3, 6)):
-        top = values[part].max()
-        values[part] = np.maximum(values[part], 1e-3 * top if top > 0 else 1e-12)
-    return values
+    return np.maximum(values, _floors(values))
 
 
 # -- phases ------------------------------------------------------------------------------------
@@ -273,13 +278,10 @@ def _phases(designs: Sequence[MoveDesign], steps_for: Callable[[float], int]) ->
 
 def _carriage_state(design: MoveDesign, values: Any) -> list[tuple[Any, Any, Any, Any]]:
     """(q, v, a, jerk) at the start of each segment, then at rest at the end."""
-    q, v = design.start, 0.0
-    out = []
-    for seg in design.segments(values):
-        out.append((q, v, seg.acceleration, seg.jerk))
-        dt = seg.duration
-        q = q + v * dt + seg.acceleration * dt**2 / 2 + seg.jerk * dt**3 / 6
-        v = v + seg.acceleration * dt + seg.jerk * dt**2 / 2
+    segs = design.segments(values)
+    starts = segment_starts(design.start, [g.duration for g in segs], [g.acceleration for g in segs],
+                            [g.jerk for g in segs])
+    out = [(q, v, g.acceleration, g.jerk) for (q, v), g in zip(starts, segs, strict=False)]
     out.append((design.start + design.stroke, 0.0, 0.0, 0.0))
     return out
 
@@ -312,9 +314,8 @@ class _Problem:
         max_move: float,
         phases: Sequence[_Phase] | None = None,
     ) -> None:
-        sim = Simulator(scenario)
-        self.model = sim.model
-        self.layout = sim.layout
+        self.layout = ParameterLayout.of(scenario)
+        self.model = get_model(self.layout, "exact")
         self.scenario = scenario
         self.designs = designs
         self.settings = settings
@@ -325,7 +326,12 @@ class _Problem:
                 (p.first, p.last, p.pieces) for p in self.phases]:
             self.phases = list(phases)  # an earlier problem's steps, so that its solver point fits
         # the largest step a phase may stretch to: three nominal steps, or half as long again as it starts
-        self.caps = [max(3.0 * self.step, 1.5 * self._length0(ph) / ph.steps) for ph in self.phases]
+        times = _event_times(designs, [d.values for d in designs])
+        self.caps = [
+            max(3.0 * self.step, 1.5 * float(times[ph.last[0]][ph.last[1]] - times[ph.first[0]][ph.first[1]])
+                / ph.steps)
+            for ph in self.phases
+        ]
         sizes = [len(d.names) for d in designs]
         self.theta = ca.MX.sym("theta", sum(sizes))
         self.n_theta = int(self.theta.shape[0])
@@ -411,11 +417,6 @@ class _Problem:
         self.structure = (tuple(self.phases), settings.transcription, settings.objective, len(data),
                           int(self.x0.size), int(self.lbg.size))
 
-    def _length0(self, phase: _Phase) -> float:
-        """The phase's length [s] in the starting design."""
-        times = _event_times(self.designs, [d.values for d in self.designs])
-        return float(times[phase.last[0]][phase.last[1]] - times[phase.first[0]][phase.first[1]])
-
     # -- the run through the move ------------------------------------------------------------------
     def _trajectory(self, vd: _VariantData, nlp: tuple | None) -> tuple[Any, Any, Any, list]:
         """Integrate one variant through the phases.
@@ -469,7 +470,7 @@ class _Problem:
         """``R + H`` of one model variant: the window after the stop, in bands."""
         x, power, _, _ = self._trajectory(vd, nlp)
         peak = ca.DM(self.peaks * calibration) * power ** (1.0 / PEAK_POWER)
-        floor = 1e-3 * np.repeat([np.max(self.peaks[:3]), np.max(self.peaks[3:])], 3)
+        floor = _floors(self.peaks)
         band = ca.vertcat(*[self.scenario.settling.band(s, ca.fmax(peak[i], floor[i])) for i, s in enumerate(SIGNALS)])
         n = len(self.designs)
         n_window = max(4, math.ceil(self.window / self.step))
@@ -641,12 +642,10 @@ def optimise_profiles(
     settings.check()
     if scenario.ground is not None and scenario.ground.motion:
         raise ScenarioError("ground.motion: profile design needs a still floor")
-    baseline_designs = move_designs(scenario, None)
-    command = command_time(scenario)
-    baseline_move = max(d.stop_time() for d in baseline_designs) - command
-    max_move = (1.0 + settings.max_move_time_increase) * baseline_move
-    baseline = evaluate_move(scenario, "baseline", command)
     designs = move_designs(scenario, settings.shape)
+    command = command_time(scenario)
+    max_move = (1.0 + settings.max_move_time_increase) * move_time(scenario, command)
+    baseline = evaluate_move(scenario, "baseline", command)
     if warm_start is not None:
         designs = _warm_designs(designs, warm_start.designs)
     designs = _within_move_time(designs, command, max_move)

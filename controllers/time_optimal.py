@@ -8,13 +8,12 @@ constant-jerk phases; they become an exact piecewise-cubic profile.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 from isolator.errors import ScenarioError
 from isolator.profiles import PiecewisePolynomialProfile, segments
 from isolator.scenario import Scenario
 
 from .move_design import move_designs
+from .move_metrics import with_moves
 
 __all__ = ["time_optimal_profile", "time_optimal_scenario"]
 
@@ -50,10 +49,8 @@ def time_optimal_profile(start: float, stroke: float, t0: float, velocity: float
 
 def time_optimal_scenario(scenario: Scenario) -> Scenario:
     """The scenario with every carriage's move replaced by ruckig's time-optimal one within its limits."""
-    carriages = []
-    for design, carriage in zip(move_designs(scenario), scenario.carriages, strict=True):
-        lim = design.limits
-        profile = time_optimal_profile(design.start, design.stroke, design.t0, lim.velocity, lim.acceleration,
-                                       lim.jerk)
-        carriages.append(replace(carriage, profile=profile))
-    return scenario.with_changes(carriages=tuple(carriages))
+    profiles = [
+        time_optimal_profile(d.start, d.stroke, d.t0, d.limits.velocity, d.limits.acceleration, d.limits.jerk)
+        for d in move_designs(scenario)
+    ]
+    return with_moves(scenario, profiles)

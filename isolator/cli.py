@@ -204,9 +204,8 @@ def _profile_summary(result, spread: dict) -> str:
         values = [v for v in spread[run] if v is not None]
         if values:
             lines.append(f"settling over model variants ({run}): {min(values):.3f} .. {max(values):.3f} s")
-    s = result
-    lines.append(f"IPOPT {s.status}, {s.iterations} iterations, {s.build_time:.2f} s building, "
-                 f"{s.solve_time:.2f} s solving")
+    lines.append(f"IPOPT {result.status}, {result.iterations} iterations, {result.build_time:.2f} s building, "
+                 f"{result.solve_time:.2f} s solving")
     return "\n".join(lines)
 
 

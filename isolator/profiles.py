@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -29,6 +30,7 @@ __all__ = [
     "SineProfile",
     "samples",
     "scurve",
+    "segment_starts",
     "segments",
     "shaped",
     "trapezoid",
@@ -225,19 +227,34 @@ def segments(
     return PiecewisePolynomialProfile(knots, coef, kind=kind)
 
 
+def segment_starts(
+    start: Any, durations: Sequence[Any], accelerations: Sequence[Any], jerks: Sequence[Any]
+) -> list[tuple[Any, Any]]:
+    """Position [m] and speed [m/s] at the start of each constant-jerk segment, then at the end.
+
+    From rest at ``start``; plain arithmetic, so the quantities may be numbers
+    or casadi expressions (the profile optimiser's).
+    """
+    q, v = start, 0.0
+    out = [(q, v)]
+    for duration, a0, jerk in zip(durations, accelerations, jerks, strict=True):
+        q = q + v * duration + a0 * duration**2 / 2.0 + jerk * duration**3 / 6.0
+        v = v + a0 * duration + jerk * duration**2 / 2.0
+        out.append((q, v))
+    return out
+
+
 def _from_segments(
     start: float, t0: float, durations: Sequence[float], accelerations: Sequence[float], jerks: Sequence[float]
 ) -> tuple[tuple[float, ...], tuple[tuple[float, ...], ...]]:
     """Integrate segments of given start acceleration and jerk from rest at ``start``."""
     knots = [t0]
     coefficients = []
-    q, v = start, 0.0
-    for duration, a0, jerk in zip(durations, accelerations, jerks, strict=True):
+    states = segment_starts(start, durations, accelerations, jerks)
+    for (q, v), duration, a0, jerk in zip(states, durations, accelerations, jerks, strict=False):
         if duration <= 0.0:
             continue
         coefficients.append((q, v, a0 / 2.0, jerk / 6.0))
-        q = q + v * duration + a0 * duration**2 / 2.0 + jerk * duration**3 / 6.0
-        v = v + a0 * duration + jerk * duration**2 / 2.0
         knots.append(knots[-1] + duration)
     if not coefficients:  # no motion at all: one empty piece holding the start
         coefficients.append((start, 0.0, 0.0, 0.0))
