@@ -4,12 +4,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import casadi as ca
 import numpy as np
 
 from .errors import UnstableTableError
 from .model import Model, build_linearisation
+from .native import NativeFunction
 
-__all__ = ["DOF_NAMES", "Equilibrium", "RockingStiffness", "rocking_stiffness", "static_equilibrium"]
+__all__ = [
+    "DOF_NAMES",
+    "Equilibrium",
+    "RockingStiffness",
+    "rocking_stiffness",
+    "static_equilibria",
+    "static_equilibrium",
+]
 
 DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 
@@ -148,45 +157,147 @@ def static_equilibrium(
         No equilibrium, or one with a divergent mode (the table would tip);
         the message gives the rocking-stiffness margin.
     """
+    return static_equilibria(model, np.asarray(p, dtype=float)[None, :], positions, where, check)[0]
+
+
+def static_equilibria(
+    model: Model, params: np.ndarray, positions: np.ndarray, where: str = "at rest", check: bool = True
+) -> list[Equilibrium]:
+    """:func:`static_equilibrium` for many parameter vectors at once (Newton's method run side by side).
+
+    Parameters
+    ----------
+    model : Model
+    params : ndarray (runs, parameters)
+    positions : ndarray
+        Carriage coordinates [m], the same for every run.
+    where : str
+        Words for messages.
+    check : bool
+        Raise when an equilibrium is unstable.
+
+    Raises
+    ------
+    UnstableTableError
+        For the first run without a stable equilibrium; the message names the
+        run when there are several.
+    """
+    params = np.atleast_2d(np.asarray(params, dtype=float))
+    runs = params.shape[0]
+    solver = _solver(model)
     c = model.layout.rest_inputs(positions)
-    z = np.zeros(6)
-    weight = abs(float(p[0])) * float(p[1]) + 1.0
-    converged = False
+    z = np.zeros((runs, 6))
+    tolerance = 1e-11 * (np.abs(params[:, 0]) * params[:, 1] + 1.0)
+    active = np.ones(runs, dtype=bool)
+    failed = np.zeros(runs, dtype=bool)
     for _ in range(40):
-        r, jac = model.static_residual(z, c, p)
-        r = np.asarray(r, dtype=float).ravel()
-        if not np.all(np.isfinite(r)):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
             break
-        if np.max(np.abs(r)) <= 1e-11 * weight:
-            converged = True
-            break
-        dz = np.linalg.lstsq(np.asarray(jac, dtype=float), -r, rcond=None)[0]
-        z = z + dz
-        if np.max(np.abs(dz)) < 1e-15:
-            converged = True
-            break
-        if np.max(np.abs(z[3:])) > 1.0:
-            break
-    if not converged:
-        rock = rocking_stiffness(model, p, positions, np.zeros(6))
+        r, jac = solver.residual(z[idx], c, params[idx])
+        bad = ~np.all(np.isfinite(r), axis=1)
+        done = ~bad & (np.max(np.abs(r), axis=1) <= tolerance[idx])
+        failed[idx[bad]] = True
+        step = idx[~bad & ~done]
+        active[idx[bad | done]] = False
+        if step.size == 0:
+            continue
+        keep = ~bad & ~done
+        dz = -np.einsum("nij,nj->ni", np.linalg.pinv(jac[keep]), r[keep])
+        z[step] += dz
+        small = np.max(np.abs(dz), axis=1) < 1e-15
+        tipped = np.max(np.abs(z[step, 3:]), axis=1) > 1.0
+        failed[step[tipped & ~small]] = True
+        active[step[small | tipped]] = False
+    failed |= active  # did not converge
+    label = (lambda i: f"run {i}: ") if runs > 1 else (lambda i: "")
+    if failed.any():
+        i = int(np.argmax(failed))
+        rock = rocking_stiffness(model, params[i], positions, np.zeros(6))
         raise UnstableTableError(
-            f"no static equilibrium {where}: the isolators cannot hold the table upright; "
+            f"{label(i)}no static equilibrium {where}: the isolators cannot hold the table upright; "
             f"{rock.describe()} (the mass centre is too high for the isolator spacing, or they are too soft)"
         )
-    state = np.asarray(model.pose_state(z), dtype=float).ravel()
-    a = np.asarray(model.state_jacobian(state, c, p), dtype=float)
-    eig, vec = np.linalg.eig(a)
-    scale = float(np.max(np.abs(eig), initial=0.0))
-    worst = int(np.argmax(eig.real))
-    if check and eig.real[worst] > 1e-9 * scale + 1e-9:
+    states, jacobians = solver.linear(z, c, params)
+    eigenvalues = np.linalg.eigvals(jacobians)
+    scale = np.max(np.abs(eigenvalues), axis=1, initial=0.0)
+    growth = np.max(eigenvalues.real, axis=1)
+    unstable = growth > 1e-9 * scale + 1e-9
+    if check and unstable.any():
+        i = int(np.argmax(unstable))
+        eig, vec = np.linalg.eig(jacobians[i])
+        worst = int(np.argmax(eig.real))
         dof = _dominant_dof(model, vec[:, worst])
-        rock = rocking_stiffness(model, p, positions, z)
+        rock = rocking_stiffness(model, params[i], positions, z[i])
         raise UnstableTableError(
-            f"unstable table {where}: a mode mostly in {dof} grows at {eig.real[worst]:.3g} 1/s; "
+            f"{label(i)}unstable table {where}: a mode mostly in {dof} grows at {eig.real[worst]:.3g} 1/s; "
             f"{rock.describe()}; the mass centre is too high for the isolator spacing "
             "(or an isolator is too soft) and the table would tip"
         )
-    return Equilibrium(z, state, np.asarray(positions, float), eig)
+    q = np.asarray(positions, float)
+    return [Equilibrium(z[i], states[i], q, eigenvalues[i]) for i in range(runs)]
+
+
+class _Solver:
+    """A model's static residual and rest linearisation, compiled for blocks of runs."""
+
+    BLOCK = 32
+
+    def __init__(self, model: Model) -> None:
+        b = self.BLOCK
+        self.n_states = model.n_states
+        self._residual = NativeFunction(_renamed(model.static_residual.map(b), f"isolator_static_{_tag(model)}_b{b}"))
+        z, c, p = ca.SX.sym("z", 6), ca.SX.sym("c", model.layout.input_size), ca.SX.sym("p", model.layout.size)
+        x = model.pose_state(z)
+        one = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
+        self._linear = NativeFunction(_renamed(one.map(b), f"isolator_rest_{_tag(model)}_b{b}"), optimisation="-O1")
+
+    def _blocks(self, fn: NativeFunction, z: np.ndarray, c: np.ndarray, params: np.ndarray) -> list[list[np.ndarray]]:
+        b = self.BLOCK
+        out = []
+        for lo in range(0, z.shape[0], b):
+            zz, pp = z[lo : lo + b], params[lo : lo + b]
+            n = zz.shape[0]
+            if n < b:
+                zz = np.vstack([zz, np.repeat(zz[-1:], b - n, axis=0)])
+                pp = np.vstack([pp, np.repeat(pp[-1:], b - n, axis=0)])
+            out.append([*fn(zz, np.tile(c, (b, 1)), pp), n])
+        return out
+
+    def residual(self, z: np.ndarray, c: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Residuals (runs, 6) and their Jacobians (runs, 6, 6) at poses ``z``."""
+        parts = self._blocks(self._residual, z, c, params)
+        r = np.vstack([res.reshape(self.BLOCK, 6)[:n] for res, _, n in parts])
+        jac = np.vstack([j.reshape(self.BLOCK, 6, 6)[:n].transpose(0, 2, 1) for _, j, n in parts])
+        return r, jac
+
+    def linear(self, z: np.ndarray, c: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Rest states (runs, n_states) and state Jacobians (runs, n_states, n_states) at poses ``z``."""
+        nx = self.n_states
+        parts = self._blocks(self._linear, z, c, params)
+        x = np.vstack([s.reshape(self.BLOCK, nx)[:n] for s, _, n in parts])
+        a = np.vstack([j.reshape(self.BLOCK, nx, nx)[:n].transpose(0, 2, 1) for _, j, n in parts])
+        return x, a
+
+
+_SOLVERS: dict[tuple, _Solver] = {}
+
+
+def _solver(model: Model) -> _Solver:
+    key = (model.layout, model.kind)
+    if key not in _SOLVERS:
+        _SOLVERS[key] = _Solver(model)
+    return _SOLVERS[key]
+
+
+def _renamed(fn: ca.Function, name: str) -> ca.Function:
+    args = fn.mx_in()
+    return ca.Function(name, args, [ca.densify(out) for out in fn.call(args)])
+
+
+def _tag(model: Model) -> str:
+    lay = model.layout
+    return f"{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}_g{int(lay.ground)}"
 
 
 def _dominant_dof(model: Model, vector: np.ndarray) -> str:

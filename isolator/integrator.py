@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 
 import casadi as ca
 import numpy as np
@@ -20,7 +21,17 @@ from .model import Model, ParameterLayout, quaternion_to_matrix
 from .native import NativeFunction
 from .scenario import Scenario, SimulationSettings
 
-__all__ = ["Stepper", "TimeGrid", "grid_breakpoints", "model_inputs", "sensed_motion", "stage_times", "time_grid"]
+__all__ = [
+    "Stepper",
+    "TimeGrid",
+    "grid_breakpoints",
+    "inputs_at",
+    "model_inputs",
+    "sensed_motion",
+    "signal_function",
+    "stage_times",
+    "time_grid",
+]
 
 CHUNK = 512
 
@@ -90,16 +101,25 @@ def stage_times(grid: TimeGrid, substeps: int) -> tuple[np.ndarray, np.ndarray]:
 def model_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarray:
     """The model's inputs ``u`` at every RK stage time of every grid interval.
 
-    Carriage (q, q', q''), then the floor's motion when the scenario has some,
-    then zero actuator forces (see :class:`isolator.model.ParameterLayout`).
-
     Returns
     -------
     ndarray, shape (intervals, 2 substeps + 1, input size)
         One-sided within each interval: the profile piece is chosen by the
         interval's midpoint.
     """
-    times, mid = stage_times(grid, substeps)
+    return inputs_at(scenario, *stage_times(grid, substeps))
+
+
+def inputs_at(scenario: Scenario, times: np.ndarray, mid: np.ndarray) -> np.ndarray:
+    """The model's inputs ``u`` at ``times`` [s], each on the profile piece that holds ``mid`` [s].
+
+    Carriage (q, q', q''), then the floor's motion when the scenario has some,
+    then zero actuator forces (see :class:`isolator.model.ParameterLayout`).
+
+    Returns
+    -------
+    ndarray, shape (*times.shape, input size)
+    """
     n = len(scenario.carriages)
     layout = ParameterLayout.of(scenario)
     out = np.zeros((*times.shape, layout.input_size))
@@ -113,7 +133,7 @@ def model_inputs(scenario: Scenario, grid: TimeGrid, substeps: int) -> np.ndarra
     return out
 
 
-def sensed_motion(kind: str, x: ca.MX, reference: ca.MX) -> ca.MX:
+def sensed_motion(kind: str, x: ca.MX | ca.SX, reference: ca.MX | ca.SX) -> ca.MX | ca.SX:
     """The table's motion as ideal inertial sensors report it, (12,).
 
     Displacement of the mass centre [m] and rotation vector of ``R R_ref^T``
@@ -134,6 +154,14 @@ def sensed_motion(kind: str, x: ca.MX, reference: ca.MX) -> ca.MX:
     angles = 2 * ca.atan2(norm, rel_w) / norm * rel_v
     omega_world = quaternion_to_matrix(x[3:7]) @ x[10:13]
     return ca.vertcat(x[0:3] - reference[0:3], angles, x[7:10], omega_world)
+
+
+@lru_cache(maxsize=8)
+def signal_function(kind: str, n_states: int) -> ca.Function:
+    """``(x, reference) -> (6,)``: the six table signals of a state (the first half of
+    :func:`sensed_motion`), scalar code."""
+    x, reference = ca.SX.sym("x", n_states), ca.SX.sym("x_ref", n_states)
+    return ca.Function("table_signals", [x, reference], [sensed_motion(kind, x, reference)[:6]])
 
 
 class Stepper:

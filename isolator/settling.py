@@ -9,7 +9,7 @@ import numpy as np
 
 from .scenario import SIGNALS, Settling
 
-__all__ = ["SettlingResult", "settling_time"]
+__all__ = ["SettlingResult", "settling_metrics", "settling_time", "settling_times"]
 
 #: peaks below this are numerical noise: such a signal does not move [m or rad]
 MOTION_FLOOR = 1e-13
@@ -72,21 +72,49 @@ def settling_time(
     reason : str
         Why the time is None ("" otherwise).
     """
+    return settling_times(t, np.asarray(s)[None, :], np.array([final]), stop_time, np.array([band]), hold)[0]
+
+
+def settling_times(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray,
+    stop_time: float,
+    band: np.ndarray,
+    hold: float = 0.0,
+) -> list[tuple[float | None, str]]:
+    """:func:`settling_time` of several signals (rows of ``signals``) at once.
+
+    Parameters
+    ----------
+    t : ndarray (samples,)
+        [s].
+    signals : ndarray (k, samples)
+        [m or rad].
+    final, band : ndarray (k,)
+        Final values and band half-widths (> 0) [m or rad].
+    stop_time, hold : float
+        [s], as in :func:`settling_time`.
+    """
+    k = signals.shape[0]
     if math.isinf(stop_time):
-        return None, "a carriage never stops (sine profile): no settling time"
+        return [(None, "a carriage never stops (sine profile): no settling time")] * k
     if stop_time > t[-1]:
-        return None, f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s"
-    after = t >= stop_time - 1e-12
-    outside = np.abs(s[after] - final) > band
-    if not outside.any():
-        return 0.0, ""
-    last = t[after][np.nonzero(outside)[0][-1]]
-    if last >= t[-1] or t[-1] - last < hold:
-        return None, (
-            f"still outside the band {t[-1] - last:.3g} s before the run ends; "
-            "lengthen simulation.duration"
-        )
-    return float(last - stop_time), ""
+        return [(None, f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s")] * k
+    first = int(np.searchsorted(t, stop_time - 1e-12, side="left"))
+    outside = np.abs(signals[:, first:] - np.asarray(final, float)[:, None]) > np.asarray(band, float)[:, None]
+    any_outside = outside.any(axis=1)
+    last = t[first:][outside.shape[1] - 1 - np.argmax(outside[:, ::-1], axis=1)] if outside.shape[1] else t[:0]
+    out: list[tuple[float | None, str]] = []
+    for i in range(k):
+        if not any_outside[i]:
+            out.append((0.0, ""))
+        elif last[i] >= t[-1] or t[-1] - last[i] < hold:
+            out.append((None, f"still outside the band {t[-1] - last[i]:.3g} s before the run ends; "
+                              "lengthen simulation.duration"))
+        else:
+            out.append((float(last[i] - stop_time), ""))
+    return out
 
 
 def settling_metrics(
@@ -98,14 +126,17 @@ def settling_metrics(
     hold: float = 0.0,
 ) -> dict[str, SettlingResult]:
     """Settling of each of the six table signals, keyed by name (``SIGNALS``)."""
+    peaks = np.max(np.abs(signals), axis=1) if signals.shape[1] else np.zeros(len(SIGNALS))
+    bands = np.array([settling.band(name, float(peak)) for name, peak in zip(SIGNALS, peaks, strict=True)])
+    still = np.zeros(len(SIGNALS), dtype=bool)
+    if final is not None and settling.tolerance is None:
+        still = peaks <= MOTION_FLOOR
+    target = np.zeros(len(SIGNALS)) if final is None else np.asarray(final, dtype=float)
+    moving = np.nonzero(~still)[0]
+    times = settling_times(t, signals[moving], target[moving], stop_time, np.maximum(bands[moving], 1e-300), hold)
+    results = dict(zip(moving.tolist(), times, strict=True))
     out: dict[str, SettlingResult] = {}
     for i, name in enumerate(SIGNALS):
-        peak = float(np.max(np.abs(signals[i]))) if signals.shape[1] else 0.0
-        band = settling.band(name, peak)
-        if final is not None and settling.tolerance is None and peak <= MOTION_FLOOR:
-            time, reason = 0.0, "does not move"
-        else:
-            target = 0.0 if final is None else float(final[i])
-            time, reason = settling_time(t, signals[i], target, stop_time, max(band, 1e-300), hold)
-        out[name] = SettlingResult(time, peak, band, reason)
+        time, reason = results.get(i, (0.0, "does not move"))
+        out[name] = SettlingResult(time, float(peaks[i]), float(bands[i]), reason)
     return out

@@ -11,14 +11,24 @@ from typing import Protocol
 import numpy as np
 
 from .actuation import ForceHistory, applied_forces
-from .equilibrium import Equilibrium, static_equilibrium
+from .dop853 import DenseStepper, StepPlan, step_plan
+from .equilibrium import Equilibrium, static_equilibria
 from .errors import ScenarioError, SimulationError
-from .integrator import Stepper, TimeGrid, model_inputs, stage_times, time_grid
+from .integrator import (
+    Stepper,
+    TimeGrid,
+    grid_breakpoints,
+    inputs_at,
+    model_inputs,
+    signal_function,
+    stage_times,
+    time_grid,
+)
 from .model import MODEL_KINDS, Model, ParameterLayout, build_model
 from .profiles import SineProfile
 from .response import Response
 from .scenario import Scenario
-from .settling import settling_metrics
+from .settling import SettlingResult, settling_metrics
 
 __all__ = [
     "BatchResult",
@@ -32,9 +42,14 @@ __all__ = [
 
 #: largest |lambda| h per RK4 step; keeps the relative error well below 1e-6
 STEP_ANGLE = 0.05
+#: largest |lambda| h per DOP853 step (Table 3.2: 1.4e-8 relative RMS at 0.8)
+DENSE_STEP_ANGLE = 0.8
+#: longest DOP853 step [s]; shorter ones come in ratios of 2^(1/8)
+MAX_DENSE_STEP = 0.05
 
 _MODELS: dict[tuple[ParameterLayout, str], Model] = {}
 _STEPPERS: dict[tuple[ParameterLayout, str, int], Stepper] = {}
+_DENSE: dict[tuple[ParameterLayout, str, int, bool], DenseStepper] = {}
 
 
 def get_model(layout: ParameterLayout, kind: str = "exact") -> Model:
@@ -52,6 +67,22 @@ def _stepper(model: Model, substeps: int) -> Stepper:
     if key not in _STEPPERS:
         _STEPPERS[key] = Stepper(model, substeps)
     return _STEPPERS[key]
+
+
+def _dense_stepper(model: Model, per_step: int, with_states: bool) -> DenseStepper:
+    key = (model.layout, model.kind, per_step, with_states)
+    if key not in _DENSE:
+        _DENSE[key] = DenseStepper(model, per_step, signal_function(model.kind, model.n_states), with_states)
+    return _DENSE[key]
+
+
+@dataclass(frozen=True)
+class Method:
+    """How a run is integrated: DOP853 steps (``plan``) or RK4 on the sample grid (``substeps``)."""
+
+    substeps: int
+    plan: StepPlan | None = None
+    plan_key: int = 0
 
 
 @dataclass(frozen=True)
@@ -121,7 +152,11 @@ class Simulator:
         self.stop_time = scenario.stop_time
         settings = scenario.simulation
         self.grid: TimeGrid = time_grid(settings, scenario.breakpoints)
+        self._breakpoints = grid_breakpoints(settings, scenario.breakpoints)
+        self._positions = (scenario.initial_positions(), scenario.final_positions())
         self._inputs: dict[int, np.ndarray] = {}
+        self._plans: dict[int, tuple[StepPlan, np.ndarray]] = {}
+        self._sample_inputs: np.ndarray | None = None
         drives = [c.profile for c in scenario.carriages]
         drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
         self._forcing = max((abs(d.omega) for d in drives if isinstance(d, SineProfile)), default=0.0)
@@ -156,14 +191,15 @@ class Simulator:
     # -- pieces ----------------------------------------------------------------
     def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
         """Initial and final static equilibria (final None if a carriage never stops)."""
-        start = static_equilibrium(
-            self.model, p, self.scenario.initial_positions(), "with the carriages at their start"
-        )
-        finals = self.scenario.final_positions()
-        end = None
-        if finals is not None:
-            end = static_equilibrium(self.model, p, finals, "with the carriages at their final positions")
-        return start, end
+        start, end = self._equilibria(np.asarray(p, dtype=float)[None, :])
+        return start[0], end[0]
+
+    def _equilibria(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
+        first, last = self._positions
+        start = static_equilibria(self.model, params, first, "with the carriages at their start")
+        if last is None:
+            return start, [None] * len(start)
+        return start, list(static_equilibria(self.model, params, last, "with the carriages at their final positions"))
 
     def substeps_for(self, omega_max: float) -> int:
         """RK4 steps per grid interval for a fastest eigenvalue ``omega_max`` [rad/s]."""
@@ -171,10 +207,42 @@ class Simulator:
         omega = max(omega_max, self._forcing)
         return max(1, math.ceil(omega * dt / STEP_ANGLE))
 
+    def method_for(self, omega_max: float) -> Method:
+        """The cheaper integration for a fastest eigenvalue ``omega_max`` [rad/s].
+
+        DOP853 steps with |lambda| h <= ``DENSE_STEP_ANGLE`` between the breakpoints,
+        unless breakpoints are so dense (sampled profiles) that RK4 on the sample
+        grid costs fewer right-hand-side evaluations.
+        """
+        substeps = self.substeps_for(omega_max)
+        omega = max(omega_max, self._forcing, 1e-12)
+        key = max(0, math.ceil(8 * math.log2(MAX_DENSE_STEP * omega / DENSE_STEP_ANGLE)))
+        if key not in self._plans:
+            plan = step_plan(self.grid.samples, self._breakpoints, MAX_DENSE_STEP * 2.0 ** (-key / 8))
+            self._plans[key] = (plan, np.empty(0))
+        plan = self._plans[key][0]
+        if plan.evaluations >= 4 * substeps * (self.grid.nodes.size - 1):
+            return Method(substeps)
+        return Method(substeps, plan, key)
+
     def _model_inputs(self, substeps: int) -> np.ndarray:
         if substeps not in self._inputs:
             self._inputs[substeps] = model_inputs(self.scenario, self.grid, substeps)
         return self._inputs[substeps]
+
+    def _plan_inputs(self, method: Method) -> np.ndarray:
+        plan, inputs = self._plans[method.plan_key]
+        if inputs.size == 0 and plan.start.size:
+            inputs = np.ascontiguousarray(inputs_at(self.scenario, *plan.stage_times()))
+            self._plans[method.plan_key] = (plan, inputs)
+        return inputs
+
+    def _at_samples(self) -> np.ndarray:
+        """The model's inputs at the output samples (carriage positions, floor motion)."""
+        if self._sample_inputs is None:
+            t = self.grid.samples
+            self._sample_inputs = inputs_at(self.scenario, t, t)
+        return self._sample_inputs
 
     # -- runs --------------------------------------------------------------------
     def run(
@@ -209,11 +277,18 @@ class Simulator:
             The table has no stable equilibrium.
         SimulationError
             The run diverged.
+
+        Notes
+        -----
+        Plain carriage transients are integrated with DOP853 steps between the
+        breakpoints and read at the samples from its dense output (see
+        :mod:`isolator.dop853`); runs with actuator forces or feedback step
+        RK4 on the sample grid, the controller ticking between intervals.
         """
         p = self.parameter_vector(changes) if p is None else np.asarray(p, dtype=float)
         start, end = self.equilibria(p)
-        substeps = self.substeps_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        return self._run(p, start, end, substeps, forces, feedback)
+        method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
+        return self._run(p, start, end, method, forces, feedback)
 
     def _with_forces(self, inputs: np.ndarray, substeps: int, forces: ForceHistory | None) -> np.ndarray:
         """The inputs with the actuators' applied forces at every stage time."""
@@ -234,50 +309,65 @@ class Simulator:
         p: np.ndarray,
         start: Equilibrium,
         end: Equilibrium | None,
-        substeps: int,
+        method: Method,
         forces: ForceHistory | None = None,
         feedback: FeedbackLaw | None = None,
     ) -> Response:
         grid = self.grid
-        if feedback is None:
-            inputs = self._with_forces(self._model_inputs(substeps), substeps, forces)
-            states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+        n = len(self.scenario.carriages)
+        if forces is None and feedback is None and method.plan is not None:
+            stepper = _dense_stepper(self.model, method.plan.per_step, True)
+            signals, states = stepper.run(start.state, method.plan, self._plan_inputs(method), p, start.state)
+            states = np.vstack([start.state, states])
+            signals = _with_start(signals)
+            at_samples = self._at_samples()
         else:
-            states, inputs = self._run_feedback(p, start, substeps, forces, feedback)
-        states = np.vstack([start.state, states])[grid.is_sample]
+            substeps = method.substeps
+            if feedback is None:
+                inputs = self._with_forces(self._model_inputs(substeps), substeps, forces)
+                states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+            else:
+                states, inputs = self._run_feedback(p, start, substeps, forces, feedback)
+            states = np.vstack([start.state, states])[grid.is_sample]
+            signals = None
+            at_samples = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
         t = grid.samples
         bad = ~np.all(np.isfinite(states), axis=1)
         if bad.any():
             raise SimulationError(f"the run diverged: non-finite state at t = {t[np.argmax(bad)]:.4g} s")
-        signals = self.signals(states, start)
-        too_far = np.max(np.abs(signals[3:]), axis=0) > 0.2
-        if too_far.any():
-            raise SimulationError(
-                f"the run diverged: the table turned by more than 0.2 rad at t = {t[np.argmax(too_far)]:.4g} s"
-            )
+        if signals is None:
+            signals = self.signals(states, start)
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
-        hold = _slowest_period(end.eigenvalues) if end is not None else 0.0
-        metrics = settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold)
-        n = len(self.scenario.carriages)
-        at_nodes = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
-        q = at_nodes[:, :n].T
-        applied = at_nodes[:, self.layout.actuator_slice].T
+        metrics = self._metrics(signals, final, end)
         return Response(
             name=self.scenario.name,
             model=self.model.kind,
             t=t,
             signals=signals,
             carriage_names=tuple(c.name for c in self.scenario.carriages),
-            q=q,
+            q=at_samples[:, :n].T,
             stop_time=self.stop_time,
             final=final,
             settling=metrics,
             states=states,
             actuator_names=tuple(a.name for a in self.scenario.actuators),
-            actuator_forces=applied,
+            actuator_forces=at_samples[:, self.layout.actuator_slice].T,
         )
+
+    def _metrics(
+        self, signals: np.ndarray, final: np.ndarray | None, end: Equilibrium | None
+    ) -> dict[str, SettlingResult]:
+        """Settling of the six signals (6, samples) of a run that did not produce NaN."""
+        t = self.grid.samples
+        too_far = np.max(np.abs(signals[3:]), axis=0) > 0.2
+        if too_far.any():
+            raise SimulationError(
+                f"the run diverged: the table turned by more than 0.2 rad at t = {t[np.argmax(too_far)]:.4g} s"
+            )
+        hold = _slowest_period(end.eigenvalues) if end is not None else 0.0
+        return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold)
 
     def _controller_period(self, feedback: FeedbackLaw) -> int:
         """Output samples per controller tick."""
@@ -333,11 +423,13 @@ class Simulator:
                 break
         return out, inputs
 
-    def signals(self, states: np.ndarray, start: Equilibrium) -> np.ndarray:
-        """The six table signals (6, N) of model states (N, n_states), relative to ``start``."""
+    def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray:
+        """The six table signals (6, N) of model states (N, n_states), relative to ``start``
+        (an equilibrium, or reference states, one per row)."""
+        reference = start.state if isinstance(start, Equilibrium) else np.asarray(start, dtype=float)
         if self.model.kind == "exact":
-            return table_signals(states, start.state)
-        return (states[:, 0:6] - start.state[0:6]).T
+            return table_signals(states, reference)
+        return np.ascontiguousarray((states[:, 0:6] - reference[..., 0:6]).T)
 
     def run_batch(
         self,
@@ -348,6 +440,11 @@ class Simulator:
     ) -> BatchResult:
         """Many runs with isolator stiffness and damping scaled per run.
 
+        The equilibria of all runs are solved side by side, the runs share one
+        step plan (set by the fastest eigenvalue of any run) and the compiled
+        stepping runs in ``workers`` threads, each returning only the six
+        signals that the metrics need.
+
         Parameters
         ----------
         stiffness, damping : sequence of float
@@ -356,42 +453,80 @@ class Simulator:
             Threads (the compiled stepping releases the GIL).
         progress : bool
             Print a progress line every 10 %.
+
+        Raises
+        ------
+        UnstableTableError
+            A run's table has no stable equilibrium (the message names the run).
+        SimulationError
+            A run diverged (the message names the run).
         """
         if len(stiffness) != len(damping):
             raise ScenarioError("damping: needs one scale per stiffness scale")
-        params = [self.scaled_parameters(k, c) for k, c in zip(stiffness, damping, strict=False)]
-        eqs = [self.equilibria(p) for p in params]
-        omega = max(max(s.max_frequency, e.max_frequency if e else 0.0) for s, e in eqs)
-        substeps = self.substeps_for(omega)
-        self._model_inputs(substeps)
-        _stepper(self.model, substeps)  # build before the threads start
-        n = len(params)
+        n = len(stiffness)
+        nan = float("nan")
+        if n == 0:
+            return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)))
+        params = np.array([self.scaled_parameters(k, c) for k, c in zip(stiffness, damping, strict=True)])
+        starts, ends = self._equilibria(params)
+        methods = [
+            self.method_for(max(s.max_frequency, e.max_frequency if e else 0.0)) for s, e in zip(starts, ends, strict=True)
+        ]
+        for method in {m.plan_key: m for m in methods}.values():  # build before the threads start
+            if method.plan is not None:
+                self._plan_inputs(method)
+                _dense_stepper(self.model, method.plan.per_step, False)
+            else:
+                self._model_inputs(method.substeps)
+                _stepper(self.model, method.substeps)
+        t = self.grid.samples
+        finals = None
+        if ends[0] is not None:
+            finals = self.signals(np.array([e.state for e in ends]), np.array([s.state for s in starts])).T
+        settling = np.full((n, 6), nan)
+        peak = np.zeros((n, 6))
         done = [0]
 
-        def one(i: int) -> Response:
-            r = self._run(params[i], eqs[i][0], eqs[i][1], substeps)
+        def one(i: int) -> None:
+            start, end, method = starts[i], ends[i], methods[i]
+            try:
+                if method.plan is None:
+                    metrics = self._run(params[i], start, end, method).settling
+                else:
+                    stepper = _dense_stepper(self.model, method.plan.per_step, False)
+                    sig, _ = stepper.run(start.state, method.plan, self._plan_inputs(method), params[i], start.state)
+                    if not np.all(np.isfinite(sig)):
+                        bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
+                        raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
+                    metrics = self._metrics(_with_start(sig), None if finals is None else finals[i], end)
+            except SimulationError as exc:
+                raise SimulationError(f"run {i} (stiffness x{stiffness[i]:g}, damping x{damping[i]:g}): {exc}") from None
+            for j, result in enumerate(metrics.values()):
+                settling[i, j] = nan if result.time is None else result.time
+                peak[i, j] = result.peak
             done[0] += 1
             if progress and n >= 10 and done[0] % max(1, n // 10) == 0:
                 print(f"  batch: {done[0]}/{n} runs", flush=True)
-            return r
 
         with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-            responses = list(pool.map(one, range(n)))
-        nan = float("nan")
-        st = np.array([[nan if v is None else v for v in r.settling_time.values()] for r in responses])
-        smax = np.array([nan if r.settling_time_max is None else r.settling_time_max for r in responses])
-        peak = np.array([list(r.peak.values()) for r in responses])
-        return BatchResult(st.reshape(n, 6), smax, peak.reshape(n, 6))
+            list(pool.map(one, range(n)))
+        with np.errstate(all="ignore"):
+            worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), nan)
+        return BatchResult(settling, worst, peak)
 
 
 def relative_rotation_vector(quats: np.ndarray, reference: np.ndarray) -> np.ndarray:
-    """Rotation vectors [rad] of R(q) R(q0)^T for quaternions (w, x, y, z), shape (N, 3)."""
+    """Rotation vectors [rad] of R(q) R(q0)^T for quaternions (w, x, y, z), shape (N, 3).
+
+    ``reference`` is one quaternion (4,) or one per row (N, 4).
+    """
     q = quats / np.linalg.norm(quats, axis=1, keepdims=True)
-    r = np.asarray(reference, dtype=float) / np.linalg.norm(reference)
-    w0, v0 = r[0], -r[1:]  # conjugate of the reference
+    ref = np.asarray(reference, dtype=float)
+    r = ref / np.linalg.norm(ref, axis=-1, keepdims=True)
+    w0, v0 = r[..., 0], -r[..., 1:]  # conjugate of the reference
     w, v = q[:, 0], q[:, 1:]
-    rel_w = w * w0 - v @ v0
-    rel_v = w[:, None] * v0 + w0 * v + np.cross(v, v0)
+    rel_w = w * w0 - np.sum(v * v0, axis=-1)
+    rel_v = w[:, None] * v0 + np.atleast_1d(w0)[..., None] * v + np.cross(v, v0)
     sign = np.where(rel_w < 0, -1.0, 1.0)
     rel_w, rel_v = rel_w * sign, rel_v * sign[:, None]
     norm = np.linalg.norm(rel_v, axis=1)
@@ -404,10 +539,18 @@ def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """The six table signals (6, N) of states (N, >= 7) holding position and quaternion (w, x, y, z).
 
     Displacement of the mass centre [m] and rotation vector of R R_ref^T [rad],
-    relative to the state ``reference``.
+    relative to the state ``reference`` (one state, or one per row).
     """
-    angles = relative_rotation_vector(states[:, 3:7], reference[3:7])
-    return np.vstack([(states[:, 0:3] - reference[0:3]).T, angles.T])
+    reference = np.asarray(reference, dtype=float)
+    angles = relative_rotation_vector(states[:, 3:7], reference[..., 3:7])
+    return np.ascontiguousarray(np.vstack([(states[:, 0:3] - reference[..., 0:3]).T, angles.T]))
+
+
+def _with_start(signals: np.ndarray) -> np.ndarray:
+    """Signals (samples - 1, 6) after the start as (6, samples) rows, C order, zero at the start."""
+    out = np.zeros((6, signals.shape[0] + 1))
+    out[:, 1:] = signals.T
+    return out
 
 
 def _slowest_period(eigenvalues: np.ndarray) -> float:

@@ -1,0 +1,305 @@
+"""Fixed-step DOP853 with dense output, compiled: long steps between breakpoints, samples interpolated.
+
+The table's modes are a few hertz, so an eighth-order Runge-Kutta step can be
+tens of milliseconds long and still far more accurate than the 1 kHz output
+needs. The steps never straddle a profile breakpoint: every segment between
+breakpoints gets a whole number of equal steps, and each output sample is read
+from its step's seventh-order continuous extension (Hairer, Norsett and
+Wanner, *Solving Ordinary Differential Equations I*, II.6; the coefficients
+are scipy's DOP853 ones, with the dense output rewritten in powers of the step
+fraction). One compiled call runs a chunk of steps, the samples they contain
+and the six table signals at those samples.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+
+import casadi as ca
+import numpy as np
+from numpy.polynomial import polynomial as poly
+from scipy.integrate._ivp import dop853_coefficients as coefficients
+
+from .model import Model
+from .native import NativeFunction
+
+__all__ = ["STAGES", "DenseStepper", "StepPlan", "Tableau", "dop853_tableau", "step_plan"]
+
+#: right-hand-side evaluations per step (twelve, the end point, three for the dense output)
+STAGES = coefficients.N_STAGES_EXTENDED
+#: steps per compiled call
+CHUNK = 128
+
+
+@dataclass(frozen=True)
+class Tableau:
+    """An explicit Runge-Kutta method whose stage ``end`` is the step's new state.
+
+    Attributes
+    ----------
+    a : ndarray (stages, stages)
+        Strictly lower-triangular stage coefficients.
+    c : ndarray (stages,)
+        Stage times as fractions of the step.
+    end : int
+        The stage evaluated at the new state (its row of ``a`` holds the weights).
+    dense : ndarray (stages, degree)
+        ``y(t0 + s h) = y0 + h sum_i K_i sum_j dense[i, j] s^(j+1)`` for ``0 <= s <= 1``.
+    """
+
+    a: np.ndarray
+    c: np.ndarray
+    end: int
+    dense: np.ndarray
+
+    @property
+    def weights(self) -> np.ndarray:
+        return self.a[self.end, : self.end]
+
+
+@lru_cache(maxsize=1)
+def dop853_tableau() -> Tableau:
+    """Dormand and Prince's 8(5,3) method with its 7th-order continuous extension, 16 stages.
+
+    Returns
+    -------
+    Tableau
+        Stage 12 is the right-hand side at the new state; stages 13-15 serve
+        the dense output only.
+    """
+    a = np.array(coefficients.A, dtype=float)
+    c = np.array(coefficients.C, dtype=float)
+    end = coefficients.N_STAGES
+    # scipy's form: y = y0 + x (F0 + (1-x) (F1 + x (F2 + (1-x) (F3 + x (F4 + (1-x) (F5 + x F6))))))
+    # with F0 = dy, F1 = h K0 - dy, F2 = 2 dy - h (K_end + K0), F3.. = h D K, dy = h sum b K.
+    n_f = coefficients.INTERPOLATOR_POWER
+    f_of_k = np.zeros((n_f, STAGES))  # F_j = h * f_of_k[j] @ K
+    dy = np.zeros(STAGES)
+    dy[:end] = a[end, :end]
+    f_of_k[0] = dy
+    f_of_k[1] = -dy
+    f_of_k[1, 0] += 1.0
+    f_of_k[2] = 2 * dy
+    f_of_k[2, [0, end]] -= 1.0
+    f_of_k[3:] = coefficients.D
+    x, one_minus_x = np.array([0.0, 1.0]), np.array([1.0, -1.0])
+    basis = []
+    factor = np.array([1.0])
+    for j in range(n_f):  # the polynomial multiplying F_j: x, x(1-x), x^2(1-x), x^2(1-x)^2, ...
+        factor = poly.polymul(factor, x if j % 2 == 0 else one_minus_x)
+        basis.append(factor)
+    powers = np.zeros((n_f, n_f))  # powers[j, k]: coefficient of x^(k+1) in basis j
+    for j, b in enumerate(basis):
+        powers[j, : b.size - 1] = b[1:]
+    return Tableau(a, c, end, f_of_k.T @ powers)
+
+
+@dataclass(frozen=True)
+class StepPlan:
+    """Where the steps fall and which samples each one interpolates.
+
+    Attributes
+    ----------
+    start : ndarray (steps,)
+        Step start times [s].
+    length : ndarray (steps,)
+        Step lengths [s].
+    first : ndarray (steps,) of bool
+        The step starts a segment (after a breakpoint): its first stage is
+        evaluated afresh rather than taken from the previous step's end.
+    fraction : ndarray (steps, per_step)
+        Fractions of the step at which samples are read (padded with 1).
+    sample_slots : ndarray (samples - 1,)
+        Index into the flattened (steps x per_step) outputs of each sample after the first.
+    """
+
+    start: np.ndarray
+    length: np.ndarray
+    first: np.ndarray
+    fraction: np.ndarray
+    sample_slots: np.ndarray
+
+    @property
+    def per_step(self) -> int:
+        return int(self.fraction.shape[1])
+
+    @property
+    def evaluations(self) -> int:
+        """Right-hand-side evaluations of a run."""
+        return int(self.start.size * (STAGES - 1) + np.count_nonzero(self.first))
+
+    def stage_times(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every step's stage times and its midpoint (which selects the profile piece) [s],
+        each (steps, stages)."""
+        c = dop853_tableau().c
+        times = self.start[:, None] + self.length[:, None] * c[None, :]
+        mid = np.broadcast_to((self.start + self.length / 2)[:, None], times.shape)
+        return times, mid
+
+
+def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> StepPlan:
+    """Equal steps of at most ``max_step`` [s] in every segment between breakpoints.
+
+    Parameters
+    ----------
+    samples : ndarray
+        Output times [s], increasing, from 0.
+    breakpoints : ndarray
+        Times [s] inside the run where an input is not smooth.
+    max_step : float
+        [s], > 0.
+    """
+    end = float(samples[-1])
+    edges = np.unique(np.concatenate([[0.0], breakpoints[(breakpoints > 0) & (breakpoints < end)], [end]]))
+    counts = np.maximum(1, np.ceil(np.diff(edges) / max_step - 1e-9).astype(int))
+    lengths = np.diff(edges) / counts
+    seg = np.repeat(np.arange(counts.size), counts)
+    index = np.arange(seg.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    start = edges[seg] + index * lengths[seg]
+    length = lengths[seg]
+    first = index == 0
+    stop = np.append(start[1:], end)
+    # a sample belongs to the step it ends or lies inside: start < t <= stop (the first sample is the initial state)
+    owner = np.clip(np.searchsorted(stop, samples[1:] - 1e-12 * max(1.0, end), side="left"), 0, start.size - 1)
+    counts_per = np.bincount(owner, minlength=start.size)
+    per_step = max(1, int(counts_per.max(initial=1)))
+    per_step = 4 * math.ceil(per_step / 4)  # fewer compiled variants
+    rank = np.arange(owner.size) - np.repeat(np.cumsum(counts_per) - counts_per, counts_per)
+    fraction = np.ones((start.size, per_step))
+    fraction[owner, rank] = np.clip((samples[1:] - start[owner]) / length[owner], 0.0, 1.0)
+    return StepPlan(start, length, first, fraction, owner * per_step + rank)
+
+
+class DenseStepper:
+    """Compiled DOP853 steps of one model, with ``per_step`` interpolated samples per step.
+
+    Parameters
+    ----------
+    model : Model
+    per_step : int
+        Sample slots per step.
+    signals : casadi.Function
+        ``(x, reference) -> (6,)``: the table signals of a state (SX).
+    with_states : bool
+        Also return the model's states at the samples (False: the signals only, cheaper).
+    compile : bool
+        Compile to native code (False: casadi's evaluator).
+    """
+
+    def __init__(
+        self, model: Model, per_step: int, signals: ca.Function, with_states: bool = True, compile: bool = True
+    ) -> None:
+        tab = dop853_tableau()
+        nx, nu, npar = model.n_states, model.layout.input_size, model.layout.size
+        x = ca.MX.sym("x", nx)
+        carried = ca.MX.sym("k_end", nx)
+        u = ca.MX.sym("u", nu, STAGES)
+        h = ca.MX.sym("h")
+        first = ca.MX.sym("first")
+        fraction = ca.MX.sym("s", 1, per_step)
+        p = ca.MX.sym("p", npar)
+        reference = ca.MX.sym("x_ref", nx)
+        k = [ca.if_else(first, model.rhs(x, u[:, 0], p), carried, True)]
+        for i in range(1, STAGES):
+            row = tab.a[i, :i]
+            increment = sum((float(w) * k[j] for j, w in enumerate(row) if w != 0.0), ca.MX.zeros(nx))
+            xi = x + h * increment
+            if i == tab.end:
+                x_new = xi
+            k.append(model.rhs(xi, u[:, i], p))
+        samples = _sampler(nx, per_step, signals, with_states)
+        outputs = samples.call([x, ca.horzcat(*k), h, fraction, reference])
+        step = ca.Function(
+            "dop853_step", [x, carried, u, h, first, fraction, p, reference], [x_new, k[tab.end], *outputs]
+        )
+        acc = step.mapaccum("acc", CHUNK, [0, 1], [0, 1])
+        x0, k0 = ca.MX.sym("x0", nx), ca.MX.sym("k0", nx)
+        uu = ca.MX.sym("U", nu, STAGES * CHUNK)
+        hh, ff = ca.MX.sym("H", 1, CHUNK), ca.MX.sym("F", 1, CHUNK)
+        ss = ca.MX.sym("S", 1, per_step * CHUNK)
+        pp, rr = ca.MX.sym("p", npar), ca.MX.sym("r", nx)
+        out = acc(x0, k0, uu, hh, ff, ss, ca.repmat(pp, 1, CHUNK), ca.repmat(rr, 1, CHUNK))
+        lay = model.layout
+        self.name = (
+            f"isolator_dop853_{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
+            f"_g{int(lay.ground)}_m{per_step}{'_x' if with_states else ''}"
+        )
+        self.model = model
+        self.per_step = per_step
+        self.with_states = with_states
+        self.chunk = NativeFunction(
+            ca.Function(self.name, [x0, k0, uu, hh, ff, ss, pp, rr], [out[0][:, -1], out[1][:, -1], *out[2:]]),
+            compile=compile,
+        )
+
+    def run(
+        self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """Table signals (and states) at the samples after the first.
+
+        Parameters
+        ----------
+        x0 : ndarray (n_states,)
+            State at t = 0.
+        plan : StepPlan
+            With ``plan.per_step == self.per_step``.
+        inputs : ndarray (steps, stages, input size)
+            The model's inputs at every stage time.
+        p : ndarray
+            Parameter vector.
+        reference : ndarray (n_states,)
+            The state the signals are measured from.
+
+        Returns
+        -------
+        signals : ndarray (samples - 1, 6)
+        states : ndarray (samples - 1, n_states) or None
+            None unless built ``with_states``.
+        """
+        n = plan.start.size
+        m = self.per_step
+        nx = self.model.n_states
+        signals = np.empty((n * m, 6))
+        states = np.empty((n * m, nx)) if self.with_states else None
+        x = np.asarray(x0, dtype=float)
+        k_end = np.zeros(nx)
+        flags = plan.first.astype(float)
+        for lo in range(0, n, CHUNK):
+            hi = min(lo + CHUNK, n)
+            u, h, f, s = inputs[lo:hi], plan.length[lo:hi], flags[lo:hi], plan.fraction[lo:hi]
+            if hi - lo < CHUNK:  # pad with empty steps
+                pad = CHUNK - (hi - lo)
+                u = np.concatenate([u, np.repeat(u[-1:], pad, axis=0)])
+                h = np.concatenate([h, np.zeros(pad)])
+                f = np.concatenate([f, np.ones(pad)])
+                s = np.concatenate([s, np.ones((pad, m))])
+            if u.shape[-1] == 0:
+                u = np.zeros((CHUNK * STAGES, 0))
+            x, k_end, sig, *rest = self.chunk(x, k_end, u, h, f, s, p, reference)
+            x, k_end = x.ravel().copy(), k_end.ravel().copy()
+            signals[lo * m : hi * m] = sig[: (hi - lo) * m]
+            if states is not None:
+                states[lo * m : hi * m] = rest[0][: (hi - lo) * m]
+        slots = plan.sample_slots
+        return signals[slots], None if states is None else states[slots]
+
+
+def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:
+    """``(x0, K, h, s, reference) -> (signals, [states])`` at step fractions ``s`` (scalar code)."""
+    tab = dop853_tableau()
+    x0, slopes, h = ca.SX.sym("x0", nx), ca.SX.sym("K", nx, STAGES), ca.SX.sym("h")
+    fraction, reference = ca.SX.sym("s", 1, per_step), ca.SX.sym("r", nx)
+    coef = h * (slopes @ ca.DM(tab.dense))
+    degree = tab.dense.shape[1]
+    columns = []
+    for m in range(per_step):
+        acc = coef[:, degree - 1]
+        for j in range(degree - 2, -1, -1):
+            acc = coef[:, j] + fraction[m] * acc
+        columns.append(x0 + fraction[m] * acc)
+    outputs = [ca.horzcat(*[signals(c, reference) for c in columns])]
+    if with_states:
+        outputs.append(ca.horzcat(*columns))
+    return ca.Function("dop853_samples", [x0, slopes, h, fraction, reference], outputs)
