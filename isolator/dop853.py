@@ -113,6 +113,9 @@ class StepPlan:
         Fractions of the step at which samples are read (padded with 1).
     sample_slots : ndarray (samples - 1,)
         Index into the flattened (steps x per_step) outputs of each sample after the first.
+    steps : int
+        Steps that advance time; the arrays are padded with empty steps (length 0)
+        to a whole number of compiled chunks.
     """
 
     start: np.ndarray
@@ -120,6 +123,7 @@ class StepPlan:
     first: np.ndarray
     fraction: np.ndarray
     sample_slots: np.ndarray
+    steps: int
 
     @property
     def per_step(self) -> int:
@@ -128,7 +132,7 @@ class StepPlan:
     @property
     def evaluations(self) -> int:
         """Right-hand-side evaluations of a run."""
-        return int(self.start.size * (STAGES - 1) + np.count_nonzero(self.first))
+        return int(self.steps * (STAGES - 1) + np.count_nonzero(self.first[: self.steps]))
 
     def stage_times(self) -> tuple[np.ndarray, np.ndarray]:
         """Every step's stage times and its midpoint (which selects the profile piece) [s],
@@ -167,9 +171,15 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
     per_step = max(1, int(counts_per.max(initial=1)))
     per_step = 4 * math.ceil(per_step / 4)  # fewer compiled variants
     rank = np.arange(owner.size) - np.repeat(np.cumsum(counts_per) - counts_per, counts_per)
-    fraction = np.ones((start.size, per_step))
+    steps = start.size
+    padded = CHUNK * math.ceil(steps / CHUNK)
+    fraction = np.ones((padded, per_step))
     fraction[owner, rank] = np.clip((samples[1:] - start[owner]) / length[owner], 0.0, 1.0)
-    return StepPlan(start, length, first, fraction, owner * per_step + rank)
+    pad = padded - steps
+    start = np.concatenate([start, np.full(pad, end)])
+    length = np.concatenate([length, np.zeros(pad)])
+    first = np.concatenate([first, np.ones(pad, dtype=bool)])
+    return StepPlan(start, length, first, fraction, owner * per_step + rank, steps)
 
 
 class DenseStepper:
@@ -178,6 +188,8 @@ class DenseStepper:
     Parameters
     ----------
     model : Model
+        Stepped through its staged right-hand side when it has one
+        (:attr:`Model.staged_rhs`), else through ``rhs``.
     per_step : int
         Sample slots per step.
     signals : casadi.Function
@@ -192,7 +204,8 @@ class DenseStepper:
         self, model: Model, per_step: int, signals: ca.Function, with_states: bool = True, compile: bool = True
     ) -> None:
         tab = dop853_tableau()
-        nx, nu, npar = model.n_states, model.layout.input_size, model.layout.size
+        rhs = model.staged_rhs if model.staged_rhs is not None else model.rhs
+        nx, nu, npar = model.n_states, rhs.size1_in(1), model.layout.size
         x = ca.MX.sym("x", nx)
         carried = ca.MX.sym("k_end", nx)
         u = ca.MX.sym("u", nu, STAGES)
@@ -201,14 +214,14 @@ class DenseStepper:
         fraction = ca.MX.sym("s", 1, per_step)
         p = ca.MX.sym("p", npar)
         reference = ca.MX.sym("x_ref", nx)
-        k = [ca.if_else(first, model.rhs(x, u[:, 0], p), carried, True)]
+        k = [ca.if_else(first, rhs(x, u[:, 0], p), carried, True)]
         for i in range(1, STAGES):
             row = tab.a[i, :i]
             increment = sum((float(w) * k[j] for j, w in enumerate(row) if w != 0.0), ca.MX.zeros(nx))
             xi = x + h * increment
             if i == tab.end:
                 x_new = xi
-            k.append(model.rhs(xi, u[:, i], p))
+            k.append(rhs(xi, u[:, i], p))
         samples = _sampler(nx, per_step, signals, with_states)
         outputs = samples.call([x, ca.horzcat(*k), h, fraction, reference])
         step = ca.Function(
@@ -246,7 +259,8 @@ class DenseStepper:
         plan : StepPlan
             With ``plan.per_step == self.per_step``.
         inputs : ndarray (steps, stages, input size)
-            The model's inputs at every stage time.
+            The model's inputs at every stage time: ``model.staged_inputs``
+            of them when the model has a staged form.
         p : ndarray
             Parameter vector.
         reference : ndarray (n_states,)
@@ -258,32 +272,61 @@ class DenseStepper:
         states : ndarray (samples - 1, n_states) or None
             None unless built ``with_states``.
         """
-        n = plan.start.size
+        n = plan.start.size  # a whole number of chunks
         m = self.per_step
         nx = self.model.n_states
         signals = np.empty((n * m, 6))
         states = np.empty((n * m, nx)) if self.with_states else None
-        x = np.asarray(x0, dtype=float)
-        k_end = np.zeros(nx)
-        flags = plan.first.astype(float)
-        for lo in range(0, n, CHUNK):
-            hi = min(lo + CHUNK, n)
-            u, h, f, s = inputs[lo:hi], plan.length[lo:hi], flags[lo:hi], plan.fraction[lo:hi]
-            if hi - lo < CHUNK:  # pad with empty steps
-                pad = CHUNK - (hi - lo)
-                u = np.concatenate([u, np.repeat(u[-1:], pad, axis=0)])
-                h = np.concatenate([h, np.zeros(pad)])
-                f = np.concatenate([f, np.ones(pad)])
-                s = np.concatenate([s, np.ones((pad, m))])
-            if u.shape[-1] == 0:
-                u = np.zeros((CHUNK * STAGES, 0))
-            x, k_end, sig, *rest = self.chunk(x, k_end, u, h, f, s, p, reference)
-            x, k_end = x.ravel().copy(), k_end.ravel().copy()
-            signals[lo * m : hi * m] = sig[: (hi - lo) * m]
-            if states is not None:
-                states[lo * m : hi * m] = rest[0][: (hi - lo) * m]
+        if self.chunk.native and inputs.shape[-1]:
+            self._run_native(x0, plan, inputs, p, reference, signals, states)
+        else:
+            x = np.asarray(x0, dtype=float)
+            k_end = np.zeros(nx)
+            flags = plan.first.astype(float)
+            for lo in range(0, n, CHUNK):
+                hi = lo + CHUNK
+                u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((CHUNK * STAGES, 0))
+                x, k_end, sig, *rest = self.chunk(
+                    x, k_end, u, plan.length[lo:hi], flags[lo:hi], plan.fraction[lo:hi], p, reference
+                )
+                x, k_end = x.ravel(), k_end.ravel()
+                signals[lo * m : hi * m] = sig
+                if states is not None:
+                    states[lo * m : hi * m] = rest[0]
         slots = plan.sample_slots
         return signals[slots], None if states is None else states[slots]
+
+    def _run_native(
+        self,
+        x0: np.ndarray,
+        plan: StepPlan,
+        inputs: np.ndarray,
+        p: np.ndarray,
+        reference: np.ndarray,
+        signals: np.ndarray,
+        states: np.ndarray | None,
+    ) -> None:
+        """The chunks called on buffer addresses: no copies, outputs written in place."""
+        nx = self.model.n_states
+        m = self.per_step
+        arrays = [np.ascontiguousarray(a, dtype=float) for a in (inputs, plan.length, plan.first, plan.fraction)]
+        p, reference = np.ascontiguousarray(p, dtype=float), np.ascontiguousarray(reference, dtype=float)
+        carried = np.zeros((2, 2, nx))  # (x, k_end) ping-pong between calls
+        carried[0, 0] = x0
+        u, h, f, s = (a.ctypes.data for a in arrays)
+        strides = [a.strides[0] * CHUNK for a in arrays]
+        out_sig, out_st = signals.ctypes.data, 0 if states is None else states.ctypes.data
+        sig_stride, st_stride = 8 * 6 * m * CHUNK, 8 * nx * m * CHUNK
+        here, pp, rr = carried.ctypes.data, p.ctypes.data, reference.ctypes.data
+        row = 8 * nx
+        for k in range(plan.start.size // CHUNK):
+            src, dst = here + (k % 2) * 2 * row, here + ((k + 1) % 2) * 2 * row
+            ins = [src, src + row, u + k * strides[0], h + k * strides[1], f + k * strides[2], s + k * strides[3], pp, rr]
+            outs = [dst, dst + row, out_sig + k * sig_stride]
+            if states is not None:
+                outs.append(out_st + k * st_stride)
+            self.chunk.call_addresses(ins, outs)
+        del arrays
 
 
 def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:

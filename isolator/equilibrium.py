@@ -9,7 +9,7 @@ import numpy as np
 
 from .errors import UnstableTableError
 from .model import Model, build_linearisation
-from .native import NativeFunction
+from .native import MappedFunction
 
 __all__ = [
     "DOF_NAMES",
@@ -203,7 +203,10 @@ def static_equilibria(
         if step.size == 0:
             continue
         keep = ~bad & ~done
-        dz = -np.einsum("nij,nj->ni", np.linalg.pinv(jac[keep]), r[keep])
+        try:
+            dz = -np.linalg.solve(jac[keep], r[keep][:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:  # a free direction (no stiffness along it): least squares
+            dz = -np.einsum("nij,nj->ni", np.linalg.pinv(jac[keep]), r[keep])
         z[step] += dz
         small = np.max(np.abs(dz), axis=1) < 1e-15
         tipped = np.max(np.abs(z[step, 3:]), axis=1) > 1.0
@@ -241,43 +244,12 @@ def static_equilibria(
 class _Solver:
     """A model's static residual and rest linearisation, compiled for blocks of runs."""
 
-    BLOCK = 32
-
     def __init__(self, model: Model) -> None:
-        b = self.BLOCK
-        self.n_states = model.n_states
-        self._residual = NativeFunction(_renamed(model.static_residual.map(b), f"isolator_static_{_tag(model)}_b{b}"))
+        self.residual = MappedFunction(model.static_residual, f"isolator_static_{_tag(model)}")
         z, c, p = ca.SX.sym("z", 6), ca.SX.sym("c", model.layout.input_size), ca.SX.sym("p", model.layout.size)
         x = model.pose_state(z)
-        one = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
-        self._linear = NativeFunction(_renamed(one.map(b), f"isolator_rest_{_tag(model)}_b{b}"), optimisation="-O1")
-
-    def _blocks(self, fn: NativeFunction, z: np.ndarray, c: np.ndarray, params: np.ndarray) -> list[list[np.ndarray]]:
-        b = self.BLOCK
-        out = []
-        for lo in range(0, z.shape[0], b):
-            zz, pp = z[lo : lo + b], params[lo : lo + b]
-            n = zz.shape[0]
-            if n < b:
-                zz = np.vstack([zz, np.repeat(zz[-1:], b - n, axis=0)])
-                pp = np.vstack([pp, np.repeat(pp[-1:], b - n, axis=0)])
-            out.append([*fn(zz, np.tile(c, (b, 1)), pp), n])
-        return out
-
-    def residual(self, z: np.ndarray, c: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residuals (runs, 6) and their Jacobians (runs, 6, 6) at poses ``z``."""
-        parts = self._blocks(self._residual, z, c, params)
-        r = np.vstack([res.reshape(self.BLOCK, 6)[:n] for res, _, n in parts])
-        jac = np.vstack([j.reshape(self.BLOCK, 6, 6)[:n].transpose(0, 2, 1) for _, j, n in parts])
-        return r, jac
-
-    def linear(self, z: np.ndarray, c: np.ndarray, params: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Rest states (runs, n_states) and state Jacobians (runs, n_states, n_states) at poses ``z``."""
-        nx = self.n_states
-        parts = self._blocks(self._linear, z, c, params)
-        x = np.vstack([s.reshape(self.BLOCK, nx)[:n] for s, _, n in parts])
-        a = np.vstack([j.reshape(self.BLOCK, nx, nx)[:n].transpose(0, 2, 1) for _, j, n in parts])
-        return x, a
+        rest = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
+        self.linear = MappedFunction(rest, f"isolator_rest_{_tag(model)}", optimisation="-O1")
 
 
 _SOLVERS: dict[tuple, _Solver] = {}
@@ -288,11 +260,6 @@ def _solver(model: Model) -> _Solver:
     if key not in _SOLVERS:
         _SOLVERS[key] = _Solver(model)
     return _SOLVERS[key]
-
-
-def _renamed(fn: ca.Function, name: str) -> ca.Function:
-    args = fn.mx_in()
-    return ca.Function(name, args, [ca.densify(out) for out in fn.call(args)])
 
 
 def _tag(model: Model) -> str:

@@ -142,8 +142,8 @@ def sensed_motion(kind: str, x: ca.MX | ca.SX, reference: ca.MX | ca.SX) -> ca.M
     """
     if kind != "exact":
         return ca.vertcat(x[:6] - reference[:6], x[6:12])
-    q = x[3:7] / ca.norm_2(x[3:7])
-    r = reference[3:7] / ca.norm_2(reference[3:7])
+    # the rotation vector below does not change when either quaternion is scaled: no normalisation
+    q, r = x[3:7], reference[3:7]
     w0, v0 = r[0], -r[1:4]
     w, v = q[0], q[1:4]
     rel_w = w * w0 - ca.dot(v, v0)

@@ -39,9 +39,12 @@ __all__ = [
     "ParameterLayout",
     "build_linearisation",
     "build_model",
+    "KINEMATICS",
     "carriage_kinematics",
     "newton_euler_residual",
+    "pack_kinematics",
     "pose_rotation",
+    "unpack_kinematics",
 ]
 
 MODEL_KINDS = ("exact", "paper")
@@ -271,6 +274,25 @@ def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...
     return out
 
 
+#: the carriage moments in the order :func:`pack_kinematics` stores them, with their sizes
+KINEMATICS = (("m", 1), ("S", 3), ("Sd", 3), ("Sdd", 3), ("Jc", 9), ("Hd", 3), ("B", 9))
+
+
+def pack_kinematics(kin: dict[str, ca.SX]) -> ca.SX:
+    """The carriage moments of :func:`carriage_kinematics` as one column (``KINEMATICS`` order)."""
+    return ca.vertcat(*[ca.vec(kin[name]) for name, _ in KINEMATICS])
+
+
+def unpack_kinematics(packed: ca.SX) -> dict[str, ca.SX]:
+    """Inverse of :func:`pack_kinematics`."""
+    out, i = {}, 0
+    for name, size in KINEMATICS:
+        block = packed[i : i + size]
+        out[name] = ca.reshape(block, 3, 3) if size == 9 else block
+        i += size
+    return out
+
+
 def isolator_preloads(prm: dict[str, ca.SX], carriage_mass: ca.SX) -> ca.SX:
     """Vertical static force of each isolator at the reference pose [N], (3, m).
 
@@ -300,6 +322,7 @@ def newton_euler_residual(
     ground: ca.SX | None = None,
     actuator_forces: ca.SX | None = None,
     wrench: ca.SX | None = None,
+    kin: dict[str, ca.SX] | None = None,
 ) -> ca.SX:
     """Newton's and Euler's laws for the table with its carriages, table frame.
 
@@ -331,6 +354,9 @@ def newton_euler_residual(
         Actuator forces [N] along their world directions at their table points.
     wrench : SX (6,), optional
         Force [N] and moment [N m] applied at the table's mass centre, world axes.
+    kin : dict, optional
+        The carriages' moments (:func:`carriage_kinematics`) when already
+        known; ``c`` is then not used.
 
     Returns
     -------
@@ -340,7 +366,8 @@ def newton_euler_residual(
         laws. Linear in ``acc_body`` and ``alpha_body`` with the constant-form
         mass matrix [[m I, -[S]x], [[S]x, J + Jc]].
     """
-    kin = carriage_kinematics(c, prm, parents)
+    if kin is None:
+        kin = carriage_kinematics(c, prm, parents)
     m_tot = prm["table_mass"] + kin["m"]
     g_world = ca.vertcat(0, 0, -prm["gravity"])
     J = ca.diag(prm["inertia"])
@@ -403,6 +430,17 @@ class Model:
         table at rest: zero at a static equilibrium.
     pose_state : casadi.Function
         ``(z) -> x`` the state at rest in pose z.
+    state_jacobian : casadi.Function
+        ``(x, c, p) -> d(dx/dt)/dx``.
+    linear_matrices : casadi.Function or None
+        The paper model's ``(c, p) -> (M, C, K, F)``.
+    staged_inputs, staged_rhs : casadi.Function or None
+        The right-hand side split in two: ``staged_inputs (c, p) -> v`` holds
+        what depends on time only (the carriages' mass moments and the
+        inverse mass matrix, then the floor's motion and the actuator forces)
+        and ``staged_rhs (x, v, p) -> dx/dt`` the rest, so that ``v`` can be
+        computed once per stage time for many runs (exact model; None for
+        the paper model).
     """
 
     kind: str
@@ -413,6 +451,8 @@ class Model:
     pose_state: ca.Function
     state_jacobian: ca.Function
     linear_matrices: ca.Function | None = None
+    staged_inputs: ca.Function | None = None
+    staged_rhs: ca.Function | None = None
 
 
 def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
@@ -459,6 +499,7 @@ def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
         bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
         accel = _solve_blocks(mass, -bias)
         xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
+        staged = _staged(layout, x, rot, acc_vars, c, p, prm, extra)
         static = newton_euler_residual(
             z[:3], cardan_matrix(z[3:]), zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents, **rest_extra
         )
@@ -485,6 +526,7 @@ def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
         rest_force = ca.substitute(force, c, rest)
         static = rest_stiff @ z - rest_force
         pose = ca.vertcat(z, ca.SX.zeros(6, 1))
+        staged = (None, None)
         linear = ca.Function(
             "paper_matrices", [c, p], [mass, damp, stiff, force], ["c", "p"], ["M", "C", "K", "F"]
         )
@@ -495,7 +537,39 @@ def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
     )
     pose_fn = ca.Function("pose_state", [z], [pose], ["z"], ["x"])
     jac = ca.Function("state_jacobian", [x, c, p], [ca.jacobian(xdot, x)], ["x", "c", "p"], ["A"])
-    return Model(kind, layout, int(x.shape[0]), rhs, static_fn, pose_fn, jac, linear)
+    return Model(kind, layout, int(x.shape[0]), rhs, static_fn, pose_fn, jac, linear, *staged)
+
+
+def _staged(
+    layout: ParameterLayout,
+    x: ca.SX,
+    rot: ca.SX,
+    acc_vars: ca.SX,
+    c: ca.SX,
+    p: ca.SX,
+    prm: dict[str, ca.SX],
+    extra: dict[str, ca.SX | None],
+) -> tuple[ca.Function, ca.Function]:
+    """The exact model's right-hand side with its time-only part (moments, inverse mass matrix) as inputs."""
+    n = layout.n_carriages
+    size = sum(k for _, k in KINEMATICS)
+    rest = c[3 * n :]
+    v = ca.SX.sym("v", size + 36 + rest.shape[0])
+    kin = unpack_kinematics(v[:size])
+    inv_mass = ca.reshape(v[size : size + 36], 6, 6)
+    moved = {k: None if e is None else ca.substitute(e, rest, v[size + 36 :]) for k, e in extra.items()}
+    pos, qt, vel, w = x[0:3], x[3:7], x[7:10], x[10:13]
+    res = newton_euler_residual(pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin, **moved)
+    bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
+    accel = -inv_mass @ bias
+    xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
+    packed = pack_kinematics(carriage_kinematics(c[: 3 * n], prm, layout.parents))
+    mass = ca.substitute(ca.jacobian(res, acc_vars), v[:size], packed)
+    inputs = ca.vertcat(packed, ca.vec(_solve_blocks(mass, ca.SX.eye(6))), rest)
+    return (
+        ca.Function("staged_inputs", [c, p], [inputs], ["c", "p"], ["v"]),
+        ca.Function("staged_rhs", [x, v, p], [xdot], ["x", "v", "p"], ["xdot"]),
+    )
 
 
 @lru_cache(maxsize=32)
@@ -552,8 +626,8 @@ def _solve_blocks(mass: ca.SX, rhs: ca.SX) -> ca.SX:
     a_rt, a_rr = mass[3:, :3], mass[3:, 3:]
     inv_tt = ca.inv(a_tt)
     schur = a_rr - a_rt @ inv_tt @ a_tr
-    alpha = ca.solve(schur, rhs[3:] - a_rt @ inv_tt @ rhs[:3])
-    acc = inv_tt @ (rhs[:3] - a_tr @ alpha)
+    alpha = ca.solve(schur, rhs[3:, :] - a_rt @ inv_tt @ rhs[:3, :])
+    acc = inv_tt @ (rhs[:3, :] - a_tr @ alpha)
     return ca.vertcat(acc, alpha)
 
 

@@ -18,13 +18,13 @@ import subprocess
 import tempfile
 import threading
 import warnings
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-__all__ = ["NativeFunction", "cache_dir"]
+__all__ = ["MappedFunction", "NativeFunction", "cache_dir"]
 
 # fast-math without the finite-math assumption: NaN and infinity still propagate,
 # so a diverging run is still detected; -march=native is safe because the cache
@@ -92,6 +92,7 @@ class NativeFunction:
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
         self.library: Path | None = None
         self._lib = None
+        self._local = threading.local()
         if compile:
             try:
                 self.library = self._build()
@@ -182,6 +183,34 @@ class NativeFunction:
             raise RuntimeError(f"{self.name}: native evaluation failed ({status})")
         return outs
 
+    def call_addresses(self, inputs: Sequence[int], outputs: Sequence[int]) -> None:
+        """Evaluate on raw buffer addresses (no checks, no copies; compiled functions only).
+
+        Parameters
+        ----------
+        inputs, outputs : sequence of int
+            Addresses of float64 buffers holding each input and receiving each
+            output, in casadi's column-major layout; the caller keeps the
+            buffers alive and of the right sizes.
+        """
+        if self._lib is None:
+            raise RuntimeError(f"{self.name}: not compiled")
+        sz_arg, sz_res, _, _ = self._sz
+        arg = (ctypes.c_void_p * max(sz_arg, len(inputs)))(*inputs)
+        res = (ctypes.c_void_p * max(sz_res, len(outputs)))(*outputs)
+        iw, w = self._work()
+        if self._fn(arg, res, iw.ctypes.data, w.ctypes.data, 0) != 0:
+            raise RuntimeError(f"{self.name}: native evaluation failed")
+
+    def _work(self) -> tuple[np.ndarray, np.ndarray]:
+        """This thread's work arrays (reused: big fresh ones cost page faults on every call)."""
+        work = getattr(self._local, "work", None)
+        if work is None:
+            _, _, sz_iw, sz_w = self._sz
+            work = (np.empty(max(sz_iw, 1), dtype=np.int64), np.empty(max(sz_w, 1), dtype=np.float64))
+            self._local.work = work
+        return work
+
     def external(self) -> ca.Function:
         """The compiled function as a casadi function, for symbolic graphs (derivatives from
         companions such as ``adj1_<name>``); the original function when nothing was compiled."""
@@ -215,11 +244,10 @@ class NativeFunction:
     def _pointers(self, ins: list[np.ndarray], outs: list[np.ndarray]) -> tuple[tuple, tuple]:
         """The compiled function's five arguments for these buffers, and the objects they point into
         (keep those alive while the pointers are used)."""
-        sz_arg, sz_res, sz_iw, sz_w = self._sz
+        sz_arg, sz_res, _, _ = self._sz
         arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
         res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
-        iw = np.empty(max(sz_iw, 1), dtype=np.int64)
-        w = np.empty(max(sz_w, 1), dtype=np.float64)
+        iw, w = self._work()
         pointers = (ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0)
         return pointers, (arg, res, iw, w, ins, outs)
 
@@ -227,3 +255,61 @@ class NativeFunction:
     def _as_dm(x: np.ndarray, shape: tuple[int, int]) -> ca.DM:
         r, c = shape
         return ca.DM(np.asarray(x, dtype=float).reshape(c, r).T)
+
+
+class MappedFunction:
+    """A casadi function evaluated column by column for many argument sets, compiled in blocks.
+
+    Parameters
+    ----------
+    function : casadi.Function
+        Of column-vector inputs and outputs (outputs may be matrices).
+    name : str
+        Name of the compiled block function.
+    block : int
+        Argument sets per compiled call (the last call is padded).
+    optimisation : str
+        Compiler optimisation flag.
+    """
+
+    def __init__(self, function: ca.Function, name: str, block: int = 32, optimisation: str = "-O3") -> None:
+        mapped = function.map(block)
+        args = mapped.mx_in()
+        self.block = block
+        self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
+        self.native = NativeFunction(
+            ca.Function(name, args, [ca.densify(o) for o in mapped.call(args)]), optimisation=optimisation
+        )
+
+    def __call__(self, *inputs: np.ndarray) -> list[np.ndarray]:
+        """Evaluate for ``N`` argument sets.
+
+        Parameters
+        ----------
+        *inputs : ndarray
+            Each (N, size), or (size,) for a value shared by all sets.
+
+        Returns
+        -------
+        list of ndarray
+            One per output, (N, rows) for column outputs and (N, rows, columns) otherwise.
+        """
+        n = max((x.shape[0] for x in inputs if np.ndim(x) == 2), default=1)
+        b = self.block
+        outs = [np.empty((n, r, c)) for r, c in self.out_shapes]
+        for lo in range(0, n, b):
+            hi = min(lo + b, n)
+            args = []
+            for x in inputs:
+                x = np.asarray(x, dtype=float)
+                if x.ndim == 1:
+                    args.append(np.broadcast_to(x, (b, x.size)))
+                    continue
+                part = x[lo:hi]
+                if hi - lo < b:
+                    part = np.concatenate([part, np.repeat(part[-1:], b - (hi - lo), axis=0)])
+                args.append(part)
+            for out, value, (r, c) in zip(outs, self.native(*args), self.out_shapes, strict=True):
+                # casadi's column-major (r, c) blocks side by side: value is (b c, r)
+                out[lo:hi] = value.reshape(b, c, r)[: hi - lo].transpose(0, 2, 1)
+        return [o[:, :, 0] if c == 1 else o for o, (r, c) in zip(outs, self.out_shapes, strict=True)]

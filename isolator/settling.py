@@ -9,7 +9,7 @@ import numpy as np
 
 from .scenario import SIGNALS, Settling
 
-__all__ = ["SettlingResult", "settling_metrics", "settling_time", "settling_times"]
+__all__ = ["SettlingResult", "settling_metrics", "settling_time", "settling_times", "signal_peaks"]
 
 #: peaks below this are numerical noise: such a signal does not move [m or rad]
 MOTION_FLOOR = 1e-13
@@ -117,6 +117,13 @@ def settling_times(
     return out
 
 
+def signal_peaks(signals: np.ndarray) -> np.ndarray:
+    """max |s| of each row of ``signals`` (0 for no samples)."""
+    if not signals.shape[1]:
+        return np.zeros(signals.shape[0])
+    return np.maximum(signals.max(axis=1), -signals.min(axis=1))
+
+
 def settling_metrics(
     t: np.ndarray,
     signals: np.ndarray,
@@ -124,9 +131,14 @@ def settling_metrics(
     stop_time: float,
     settling: Settling,
     hold: float = 0.0,
+    peaks: np.ndarray | None = None,
 ) -> dict[str, SettlingResult]:
-    """Settling of each of the six table signals, keyed by name (``SIGNALS``)."""
-    peaks = np.max(np.abs(signals), axis=1) if signals.shape[1] else np.zeros(len(SIGNALS))
+    """Settling of each of the six table signals, keyed by name (``SIGNALS``).
+
+    ``peaks`` (max |signal| per row), when the caller has them already.
+    """
+    if peaks is None:
+        peaks = signal_peaks(signals)
     bands = np.array([settling.band(name, float(peak)) for name, peak in zip(SIGNALS, peaks, strict=True)])
     still = np.zeros(len(SIGNALS), dtype=bool)
     if final is not None and settling.tolerance is None:
