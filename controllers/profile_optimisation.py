@@ -683,7 +683,11 @@ def optimise_profiles(
         }
         args = {"x0": problem.x0, "lbx": problem.lbx, "ubx": problem.ubx, "lbg": problem.lbg, "ubg": problem.ubg}
         if point is not None and point.get("structure") == problem.structure:
-            options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6})
+            # start at the earlier answer itself: IPOPT's default pushes it off its active bounds
+            options.update({"ipopt.warm_start_init_point": "yes", "ipopt.mu_init": 1e-6,
+                            "ipopt.warm_start_bound_push": 1e-9, "ipopt.warm_start_bound_frac": 1e-9,
+                            "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_slack_bound_frac": 1e-9,
+                            "ipopt.warm_start_mult_bound_push": 1e-9})
             args.update({"x0": point["x"], "lam_x0": point["lam_x"], "lam_g0": point["lam_g"]})
         solver = ca.nlpsol("profiles", "ipopt", problem.nlp, options)
         build += time.perf_counter() - t0
@@ -711,6 +715,8 @@ def optimise_profiles(
             error = OptimisationError(message)
             error.result = result  # type: ignore[attr-defined]
             raise error
+        if monitor.best is not None and monitor.best[0] < float(out["f"]):
+            x = monitor.best[1]  # IPOPT may stop at an acceptable point worse than one it passed
         value = float(problem.residual(x))
         designs = _designs_of(problem, x)
         lengths = np.asarray(problem.durations(x[: problem.n_theta])).ravel()
@@ -765,10 +771,11 @@ def _within_move_time(designs: tuple[MoveDesign, ...], command: float, max_move:
     """A starting design that ends within the move-time limit (an S-curve from a trapezoid runs longer).
 
     Speeds the slow carriages up within their limits, else leaves the design
-    for IPOPT to repair."""
+    for IPOPT to repair. An answer that meets the limit within the solver's
+    tolerance (a warm start) is kept as it is."""
     out = []
     for d in designs:
-        if d.stop_time() - command > max_move:
+        if d.stop_time() - command > max_move * (1 + 1e-6) + 1e-9:
             lim = d.limits
             jerk = lim.jerk if d.shape == "scurve" else None
             d = replace(d, velocity=lim.velocity, acceleration=lim.acceleration, deceleration=lim.acceleration,

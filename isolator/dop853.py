@@ -272,6 +272,16 @@ class DenseStepper:
         states : ndarray (samples - 1, n_states) or None
             None unless built ``with_states``.
         """
+        signals, states = self.run_slots(x0, plan, inputs, p, reference)
+        slots = plan.sample_slots
+        return signals[slots], None if states is None else states[slots]
+
+    def run_slots(
+        self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray | None]:
+        """:meth:`run` before the samples are picked out: every step's slots (``plan.sample_slots``
+        index them). Unused slots repeat a sample's value (a step's end), so maxima over all
+        slots are maxima over the samples after the first."""
         n = plan.start.size  # a whole number of chunks
         m = self.per_step
         nx = self.model.n_states
@@ -293,8 +303,7 @@ class DenseStepper:
                 signals[lo * m : hi * m] = sig
                 if states is not None:
                     states[lo * m : hi * m] = rest[0]
-        slots = plan.sample_slots
-        return signals[slots], None if states is None else states[slots]
+        return signals, states
 
     def _run_native(
         self,
@@ -321,7 +330,8 @@ class DenseStepper:
         row = 8 * nx
         for k in range(plan.start.size // CHUNK):
             src, dst = here + (k % 2) * 2 * row, here + ((k + 1) % 2) * 2 * row
-            ins = [src, src + row, u + k * strides[0], h + k * strides[1], f + k * strides[2], s + k * strides[3], pp, rr]
+            at = [base + k * stride for base, stride in zip((u, h, f, s), strides, strict=True)]
+            ins = [src, src + row, *at, pp, rr]
             outs = [dst, dst + row, out_sig + k * sig_stride]
             if states is not None:
                 outs.append(out_st + k * st_stride)

@@ -39,12 +39,9 @@ __all__ = [
     "ParameterLayout",
     "build_linearisation",
     "build_model",
-    "KINEMATICS",
     "carriage_kinematics",
     "newton_euler_residual",
-    "pack_kinematics",
     "pose_rotation",
-    "unpack_kinematics",
 ]
 
 MODEL_KINDS = ("exact", "paper")
@@ -274,23 +271,43 @@ def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...
     return out
 
 
-#: the carriage moments in the order :func:`pack_kinematics` stores them, with their sizes
-KINEMATICS = (("m", 1), ("S", 3), ("Sd", 3), ("Sdd", 3), ("Jc", 9), ("Hd", 3), ("B", 9))
+def _upper(m: ca.SX) -> ca.SX:
+    """The upper triangle of a symmetric matrix, row by row."""
+    n = m.shape[0]
+    return ca.vertcat(*[m[i, j] for i in range(n) for j in range(i, n)])
 
 
-def pack_kinematics(kin: dict[str, ca.SX]) -> ca.SX:
-    """The carriage moments of :func:`carriage_kinematics` as one column (``KINEMATICS`` order)."""
-    return ca.vertcat(*[ca.vec(kin[name]) for name, _ in KINEMATICS])
-
-
-def unpack_kinematics(packed: ca.SX) -> dict[str, ca.SX]:
-    """Inverse of :func:`pack_kinematics`."""
-    out, i = {}, 0
-    for name, size in KINEMATICS:
-        block = packed[i : i + size]
-        out[name] = ca.reshape(block, 3, 3) if size == 9 else block
-        i += size
+def _symmetric(values: ca.SX, n: int) -> ca.SX:
+    """Inverse of :func:`_upper`."""
+    out = ca.SX.zeros(n, n)
+    k = 0
+    for i in range(n):
+        for j in range(i, n):
+            out[i, j] = out[j, i] = values[k]
+            k += 1
     return out
+
+
+#: time-only values of the staged exact model: (name, packed size); ``Jc`` and the inverse mass matrix
+#: ``Minv`` are symmetric, stored as upper triangles
+TIME_ONLY = (("S", 3), ("Sd", 3), ("Sdd", 3), ("Jc", 6), ("Hd", 3), ("B", 9), ("Minv", 21))
+
+
+def _pack_time_only(kin: dict[str, ca.SX], inv_mass: ca.SX) -> ca.SX:
+    parts = {**kin, "Jc": _upper(kin["Jc"]), "B": ca.vec(kin["B"]), "Minv": _upper(inv_mass)}
+    return ca.vertcat(*[parts[name] for name, _ in TIME_ONLY])
+
+
+def _unpack_time_only(packed: ca.SX, carriage_mass: ca.SX) -> tuple[dict[str, ca.SX], ca.SX]:
+    """The carriage moments (with their constant total mass) and the inverse mass matrix."""
+    out, i = {"m": carriage_mass}, 0
+    for name, size in TIME_ONLY:
+        block = packed[i : i + size]
+        out[name] = {"Jc": lambda b: _symmetric(b, 3), "B": lambda b: ca.reshape(b, 3, 3),
+                     "Minv": lambda b: _symmetric(b, 6)}.get(name, lambda b: b)(block)
+        i += size
+    inv_mass = out.pop("Minv")
+    return out, inv_mass
 
 
 def isolator_preloads(prm: dict[str, ca.SX], carriage_mass: ca.SX) -> ca.SX:
@@ -552,20 +569,23 @@ def _staged(
 ) -> tuple[ca.Function, ca.Function]:
     """The exact model's right-hand side with its time-only part (moments, inverse mass matrix) as inputs."""
     n = layout.n_carriages
-    size = sum(k for _, k in KINEMATICS)
+    size = sum(k for _, k in TIME_ONLY)
     rest = c[3 * n :]
-    v = ca.SX.sym("v", size + 36 + rest.shape[0])
-    kin = unpack_kinematics(v[:size])
-    inv_mass = ca.reshape(v[size : size + 36], 6, 6)
-    moved = {k: None if e is None else ca.substitute(e, rest, v[size + 36 :]) for k, e in extra.items()}
+    v = ca.SX.sym("v", size + rest.shape[0])
+    kin, inv_mass = _unpack_time_only(v[:size], ca.sum1(prm["masses"]))
+    moved = {k: None if e is None else ca.substitute(e, rest, v[size:]) for k, e in extra.items()}
     pos, qt, vel, w = x[0:3], x[3:7], x[7:10], x[10:13]
-    res = newton_euler_residual(pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin, **moved)
+    res = newton_euler_residual(
+        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin, **moved
+    )
     bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
     accel = -inv_mass @ bias
     xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
-    packed = pack_kinematics(carriage_kinematics(c[: 3 * n], prm, layout.parents))
-    mass = ca.substitute(ca.jacobian(res, acc_vars), v[:size], packed)
-    inputs = ca.vertcat(packed, ca.vec(_solve_blocks(mass, ca.SX.eye(6))), rest)
+    moments = carriage_kinematics(c[: 3 * n], prm, layout.parents)
+    mass = ca.jacobian(newton_euler_residual(
+        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=moments, **extra
+    ), acc_vars)
+    inputs = ca.vertcat(_pack_time_only(moments, _solve_blocks(mass, ca.SX.eye(6))), rest)
     return (
         ca.Function("staged_inputs", [c, p], [inputs], ["c", "p"], ["v"]),
         ca.Function("staged_rhs", [x, v, p], [xdot], ["x", "v", "p"], ["xdot"]),
