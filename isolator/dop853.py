@@ -106,9 +106,9 @@ class StepPlan:
         Step start times [s].
     length : ndarray (steps,)
         Step lengths [s].
-    first : ndarray (steps,) of bool
-        The step starts a segment (after a breakpoint): its first stage is
-        evaluated afresh rather than taken from the previous step's end.
+    first : ndarray (steps,)
+        1.0 where the step starts a segment (after a breakpoint): its first
+        stage is evaluated afresh rather than taken from the previous step's end.
     fraction : ndarray (steps, per_step)
         Fractions of the step at which samples are read (padded with 1).
     sample_slots : ndarray (samples - 1,)
@@ -178,7 +178,7 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
     pad = padded - steps
     start = np.concatenate([start, np.full(pad, end)])
     length = np.concatenate([length, np.zeros(pad)])
-    first = np.concatenate([first, np.ones(pad, dtype=bool)])
+    first = np.concatenate([first, np.ones(pad, dtype=bool)]).astype(float)
     return StepPlan(start, length, first, fraction, owner * per_step + rank, steps)
 
 
@@ -292,7 +292,7 @@ class DenseStepper:
         else:
             x = np.asarray(x0, dtype=float)
             k_end = np.zeros(nx)
-            flags = plan.first.astype(float)
+            flags = plan.first
             for lo in range(0, n, CHUNK):
                 hi = lo + CHUNK
                 u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((CHUNK * STAGES, 0))
@@ -318,8 +318,8 @@ class DenseStepper:
         """The chunks called on buffer addresses: no copies, outputs written in place."""
         nx = self.model.n_states
         m = self.per_step
-        arrays = [np.ascontiguousarray(a, dtype=float) for a in (inputs, plan.length, plan.first, plan.fraction)]
-        p, reference = np.ascontiguousarray(p, dtype=float), np.ascontiguousarray(reference, dtype=float)
+        arrays = [_contiguous(a) for a in (inputs, plan.length, plan.first, plan.fraction)]
+        p, reference = _contiguous(p), _contiguous(reference)
         carried = np.zeros((2, 2, nx))  # (x, k_end) ping-pong between calls
         carried[0, 0] = x0
         u, h, f, s = (a.ctypes.data for a in arrays)
@@ -337,6 +337,13 @@ class DenseStepper:
                 outs.append(out_st + k * st_stride)
             self.chunk.call_addresses(ins, outs)
         del arrays
+
+
+def _contiguous(a: np.ndarray) -> np.ndarray:
+    """``a`` itself when it is already a C-ordered float array."""
+    if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous:
+        return a
+    return np.ascontiguousarray(a, dtype=float)
 
 
 def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:

@@ -173,6 +173,7 @@ class Simulator:
         settings = scenario.simulation
         self.grid: TimeGrid = time_grid(settings, scenario.breakpoints)
         self._breakpoints = grid_breakpoints(settings, scenario.breakpoints)
+        self._samples = self.grid.samples
         self._positions = (scenario.initial_positions(), scenario.final_positions())
         self._inputs: dict[int, np.ndarray] = {}
         self._plans: dict[int, StepPlan] = {}
@@ -262,7 +263,7 @@ class Simulator:
             if staged is not None:
                 flat = inputs.reshape(-1, inputs.shape[-1])
                 inputs = _staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
-            if len(self._staged) >= 8:
+            if len(self._staged) >= 16:
                 self._staged.pop(next(iter(self._staged)))
             self._staged[key] = np.ascontiguousarray(inputs)
         return self._staged[key]
@@ -396,7 +397,7 @@ class Simulator:
     ) -> dict[str, SettlingResult]:
         """Settling of the six signals (6, samples from sample ``first`` on) of a run without NaN;
         ``peaks`` over the whole run when the samples are not all there."""
-        t = self.grid.samples[first:]
+        t = self._samples[first:]
         peaks = signal_peaks(signals) if peaks is None else peaks
         if np.max(peaks[3:]) > 0.2:
             too_far = np.max(np.abs(signals[3:]), axis=0) > 0.2
@@ -537,13 +538,14 @@ class Simulator:
                     raw, _ = stepper.run_slots(
                         start.state, method.plan, plan_inputs[method.plan_key], params[i], start.state
                     )
-                    peaks = signal_peaks(raw.T)  # NaN propagates
+                    rows = np.ascontiguousarray(raw.T)  # (6, slots): row reductions are fast
+                    peaks = signal_peaks(rows)  # NaN propagates
                     if not np.all(np.isfinite(peaks)):
                         sig = raw[method.plan.sample_slots]
                         bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                         raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
                     # only the samples from the stop on matter beyond the peaks
-                    tail = np.ascontiguousarray(raw[method.plan.sample_slots[tail_from - 1 :]].T)
+                    tail = rows[:, method.plan.sample_slots[tail_from - 1 :]]
                     metrics = self._metrics(tail, None if finals is None else finals[i], end, peaks, tail_from)
             except SimulationError as exc:
                 what = f"run {i} (stiffness x{stiffness[i]:g}, damping x{damping[i]:g})"
