@@ -110,7 +110,7 @@ class StepPlan:
         1.0 where the step starts a segment (after a breakpoint): its first
         stage is evaluated afresh rather than taken from the previous step's end.
     fraction : ndarray (steps, per_step)
-        Fractions of the step at which samples are read (padded with 1).
+        Fractions of the step at which samples are read; -1 marks an unused slot.
     sample_slots : ndarray (samples - 1,)
         Index into the flattened (steps x per_step) outputs of each sample after the first.
     steps : int
@@ -173,7 +173,7 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
     rank = np.arange(owner.size) - np.repeat(np.cumsum(counts_per) - counts_per, counts_per)
     steps = start.size
     padded = CHUNK * math.ceil(steps / CHUNK)
-    fraction = np.ones((padded, per_step))
+    fraction = np.full((padded, per_step), -1.0)
     fraction[owner, rank] = np.clip((samples[1:] - start[owner]) / length[owner], 0.0, 1.0)
     pad = padded - steps
     start = np.concatenate([start, np.full(pad, end)])
@@ -272,23 +272,31 @@ class DenseStepper:
         states : ndarray (samples - 1, n_states) or None
             None unless built ``with_states``.
         """
-        signals, states = self.run_slots(x0, plan, inputs, p, reference)
+        signals, states, _ = self.run_slots(x0, plan, inputs, p, reference)
         slots = plan.sample_slots
         return signals[slots], None if states is None else states[slots]
 
     def run_slots(
         self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """:meth:`run` before the samples are picked out: every step's slots (``plan.sample_slots``
-        index them). Unused slots repeat a sample's value (a step's end), so maxima over all
-        slots are maxima over the samples after the first."""
+    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
+        """:meth:`run` before the samples are picked out.
+
+        Returns
+        -------
+        signals : ndarray (steps x per_step, 6)
+            At every step's slots (``plan.sample_slots`` picks the samples out).
+        states : ndarray (steps x per_step, n_states) or None
+        peaks : ndarray (steps, 6)
+            max |signal| over each step's samples (0 for a step without one).
+        """
         n = plan.start.size  # a whole number of chunks
         m = self.per_step
         nx = self.model.n_states
         signals = np.empty((n * m, 6))
+        peaks = np.empty((n, 6))
         states = np.empty((n * m, nx)) if self.with_states else None
         if self.chunk.native and inputs.shape[-1]:
-            self._run_native(x0, plan, inputs, p, reference, signals, states)
+            self._run_native(x0, plan, inputs, p, reference, signals, peaks, states)
         else:
             x = np.asarray(x0, dtype=float)
             k_end = np.zeros(nx)
@@ -296,14 +304,15 @@ class DenseStepper:
             for lo in range(0, n, CHUNK):
                 hi = lo + CHUNK
                 u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((CHUNK * STAGES, 0))
-                x, k_end, sig, *rest = self.chunk(
+                x, k_end, sig, peak, *rest = self.chunk(
                     x, k_end, u, plan.length[lo:hi], flags[lo:hi], plan.fraction[lo:hi], p, reference
                 )
                 x, k_end = x.ravel(), k_end.ravel()
                 signals[lo * m : hi * m] = sig
+                peaks[lo:hi] = peak
                 if states is not None:
                     states[lo * m : hi * m] = rest[0]
-        return signals, states
+        return signals, states, peaks
 
     def _run_native(
         self,
@@ -313,6 +322,7 @@ class DenseStepper:
         p: np.ndarray,
         reference: np.ndarray,
         signals: np.ndarray,
+        peaks: np.ndarray,
         states: np.ndarray | None,
     ) -> None:
         """The chunks called on buffer addresses: no copies, outputs written in place."""
@@ -324,7 +334,7 @@ class DenseStepper:
         carried[0, 0] = x0
         u, h, f, s = (a.ctypes.data for a in arrays)
         strides = [a.strides[0] * CHUNK for a in arrays]
-        out_sig, out_st = signals.ctypes.data, 0 if states is None else states.ctypes.data
+        out_sig, out_st, out_peak = signals.ctypes.data, 0 if states is None else states.ctypes.data, peaks.ctypes.data
         sig_stride, st_stride = 8 * 6 * m * CHUNK, 8 * nx * m * CHUNK
         here, pp, rr = carried.ctypes.data, p.ctypes.data, reference.ctypes.data
         row = 8 * nx
@@ -332,7 +342,7 @@ class DenseStepper:
             src, dst = here + (k % 2) * 2 * row, here + ((k + 1) % 2) * 2 * row
             at = [base + k * stride for base, stride in zip((u, h, f, s), strides, strict=True)]
             ins = [src, src + row, *at, pp, rr]
-            outs = [dst, dst + row, out_sig + k * sig_stride]
+            outs = [dst, dst + row, out_sig + k * sig_stride, out_peak + k * 8 * 6 * CHUNK]
             if states is not None:
                 outs.append(out_st + k * st_stride)
             self.chunk.call_addresses(ins, outs)
@@ -347,19 +357,22 @@ def _contiguous(a: np.ndarray) -> np.ndarray:
 
 
 def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:
-    """``(x0, K, h, s, reference) -> (signals, [states])`` at step fractions ``s`` (scalar code)."""
+    """``(x0, K, h, s, reference) -> (signals, peak, [states])`` at step fractions ``s`` (scalar code);
+    ``peak`` is max |signal| over the used slots (``s >= 0``), 0 if none."""
     tab = dop853_tableau()
     x0, slopes, h = ca.SX.sym("x0", nx), ca.SX.sym("K", nx, STAGES), ca.SX.sym("h")
     fraction, reference = ca.SX.sym("s", 1, per_step), ca.SX.sym("r", nx)
     coef = h * (slopes @ ca.DM(tab.dense))
     degree = tab.dense.shape[1]
-    columns = []
+    columns, peak = [], ca.SX.zeros(6, 1)
     for m in range(per_step):
+        s = ca.fmax(fraction[m], 0.0)
         acc = coef[:, degree - 1]
         for j in range(degree - 2, -1, -1):
-            acc = coef[:, j] + fraction[m] * acc
-        columns.append(x0 + fraction[m] * acc)
-    outputs = [ca.horzcat(*[signals(c, reference) for c in columns])]
+            acc = coef[:, j] + s * acc
+        columns.append(x0 + s * acc)
+        peak = ca.fmax(peak, ca.fabs(signals(columns[-1], reference)) * (fraction[m] >= 0))
+    outputs = [ca.horzcat(*[signals(c, reference) for c in columns]), peak]
     if with_states:
         outputs.append(ca.horzcat(*columns))
     return ca.Function("dop853_samples", [x0, slopes, h, fraction, reference], outputs)

@@ -535,17 +535,16 @@ class Simulator:
                     metrics = self._run(params[i], start, end, method).settling
                 else:
                     stepper = _dense_stepper(self.model, method.plan.per_step, False)
-                    raw, _ = stepper.run_slots(
+                    raw, _, step_peaks = stepper.run_slots(
                         start.state, method.plan, plan_inputs[method.plan_key], params[i], start.state
                     )
-                    rows = np.ascontiguousarray(raw.T)  # (6, slots): row reductions are fast
-                    peaks = signal_peaks(rows)  # NaN propagates
+                    peaks = np.max(step_peaks, axis=0)  # NaN propagates
                     if not np.all(np.isfinite(peaks)):
                         sig = raw[method.plan.sample_slots]
                         bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                         raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
-                    # only the samples from the stop on matter beyond the peaks
-                    tail = rows[:, method.plan.sample_slots[tail_from - 1 :]]
+                    # beyond the peaks, only the samples from the stop on matter
+                    tail = np.ascontiguousarray(raw[method.plan.sample_slots[tail_from - 1 :]].T)
                     metrics = self._metrics(tail, None if finals is None else finals[i], end, peaks, tail_from)
             except SimulationError as exc:
                 what = f"run {i} (stiffness x{stiffness[i]:g}, damping x{damping[i]:g})"
