@@ -1,0 +1,197 @@
+"""The DOP853 integration with dense output, the staged right-hand side, batched equilibria and batches.
+
+Independent checks: the tableau against the exact solution of a harmonic
+oscillator (numpy only, no casadi), the compiled DOP853 path against RK4 with
+eight substeps on the same grid, batches against single runs, and the
+vectorised helpers against their one-at-a-time forms.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from scipy.linalg import expm
+
+from conftest import asymmetric_3d_dict, base_dict
+from isolator import Simulator, UnstableTableError, load_scenario, scenario_from_dict
+from isolator.dop853 import CHUNK, STAGES, dop853_tableau, step_plan
+from isolator.equilibrium import static_equilibria, static_equilibrium
+from isolator.native import MappedFunction
+from isolator.settling import settling_time, settling_times
+from isolator.simulation import _stepper, relative_rotation_vector, table_signals
+from studies.paper import relative_rms
+
+
+# -- the method ---------------------------------------------------------------------------------
+def _dop853_step(a: np.ndarray, y0: np.ndarray, h: float, fractions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """One DOP853 step of y' = a y in numpy from the tableau: the new state and the dense output."""
+    tab = dop853_tableau()
+    k = np.zeros((STAGES, y0.size))
+    for i in range(STAGES):
+        k[i] = a @ (y0 + h * tab.a[i, :i] @ k[:i])
+    y1 = y0 + h * tab.weights @ k[: tab.end]
+    powers = fractions[None, :] ** np.arange(1, tab.dense.shape[1] + 1)[:, None]
+    dense = y0[:, None] + h * k.T @ tab.dense @ powers
+    return y1, dense
+
+
+def test_the_tableau_is_eighth_order_with_a_seventh_order_dense_output():
+    omega = 2 * np.pi * 5.0
+    a = np.array([[0.0, 1.0], [-(omega**2), -0.02 * omega]])
+    y0 = np.array([1.0, 0.0])
+    s = np.linspace(0.05, 1.0, 20)
+    step_errors, dense_errors = [], []
+    for h in (0.02, 0.01):
+        y1, dense = _dop853_step(a, y0, h, s)
+        exact = np.stack([expm(a * h * f) @ y0 for f in s], axis=1)
+        step_errors.append(np.abs(y1 - expm(a * h) @ y0).max())
+        dense_errors.append(np.abs(dense - exact).max())
+    # local errors: h^9 for the step, h^8 for the interpolant
+    assert step_errors[0] / step_errors[1] > 2**8.5
+    assert dense_errors[0] / dense_errors[1] > 2**7.5
+    # the interpolant ends on the step
+    _, end = _dop853_step(a, y0, 0.02, np.array([1.0]))
+    assert np.allclose(end[:, 0], _dop853_step(a, y0, 0.02, s)[0], rtol=1e-12, atol=1e-12)
+
+
+def test_the_step_plan_keeps_breakpoints_on_step_edges_and_reads_every_sample_once():
+    samples = np.arange(0, 2001) / 1000.0
+    breakpoints = np.array([0.2, 0.2505, 1.0, 1.7])
+    plan = step_plan(samples, breakpoints, 0.03)
+    real = slice(0, plan.steps)
+    ends = plan.start[real] + plan.length[real]
+    assert plan.start.size % CHUNK == 0
+    assert np.all(plan.length[real] <= 0.03 + 1e-12)
+    assert np.all(plan.length[plan.steps:] == 0.0)
+    for b in breakpoints:  # never strictly inside a step
+        assert not np.any((plan.start[real] < b - 1e-12) & (ends > b + 1e-12))
+    flat = plan.fraction.ravel()
+    assert np.unique(plan.sample_slots).size == samples.size - 1
+    owner = plan.sample_slots // plan.per_step
+    times = plan.start[owner] + flat[plan.sample_slots] * plan.length[owner]
+    assert np.allclose(times, samples[1:], atol=1e-12)
+    assert np.all(flat[plan.sample_slots] > 0)
+    unused = np.setdiff1d(np.arange(flat.size), plan.sample_slots)
+    assert np.all(flat[unused] == -1.0)
+    assert plan.first[0] == 1.0
+    assert np.count_nonzero(plan.first[: plan.steps]) == breakpoints.size + 1
+
+
+# -- the compiled path against RK4 ---------------------------------------------------------------
+def _tight(sim: Simulator, p: np.ndarray) -> np.ndarray:
+    """RK4 with eight substeps per sample interval: the reference signals."""
+    start, _ = sim.equilibria(p)
+    states = _stepper(sim.model, 8).run(start.state, sim._model_inputs(8), np.diff(sim.grid.nodes), p)
+    return table_signals(np.vstack([start.state, states])[sim.grid.is_sample], start.state)
+
+
+@pytest.mark.parametrize("case", ["paper-table-3-2", "asymmetric-3d"])
+def test_dop853_runs_match_fine_rk4(case):
+    sc = load_scenario(case) if case.startswith("paper") else scenario_from_dict(asymmetric_3d_dict())
+    sim = Simulator(sc)
+    for stiffness, damping in ((1.0, 1.0), (2.0, 0.5)):
+        p = sim.scaled_parameters(stiffness, damping)
+        start, end = sim.equilibria(p)
+        method = sim.method_for(max(start.max_frequency, end.max_frequency))
+        assert method.plan is not None  # smooth profiles: long DOP853 steps
+        response = sim.run(p=p)
+        assert relative_rms(response.signals, _tight(sim, p)).max() < 2e-7
+        assert response.states.shape == (sim.grid.samples.size, 13)
+
+
+def test_dense_breakpoints_choose_rk4_on_the_sample_grid():
+    data = base_dict()
+    t = np.linspace(0.2, 1.2, 1500)  # a sampled move: a breakpoint every 0.67 ms
+    data["carriages"][0]["profile"] = {"type": "samples", "t": t.tolist(),
+                                       "q": (0.1 * np.sin(np.pi * (t - 0.2))).tolist()}
+    data["simulation"] = {"duration": 2.0, "sample_rate": 1000.0}
+    sim = Simulator(scenario_from_dict(data))
+    start, _ = sim.equilibria(sim.parameters)
+    assert sim.method_for(start.max_frequency).plan is None
+    smooth = Simulator(scenario_from_dict(base_dict()))
+    assert smooth.method_for(start.max_frequency).plan is not None
+
+
+def test_the_staged_right_hand_side_is_the_right_hand_side():
+    rng = np.random.default_rng(3)
+    data = asymmetric_3d_dict()
+    data["actuators"] = [{"name": "z1", "position": [0.5, 0.2, -0.1], "direction": [0, 0, 1], "max_force": 100.0}]
+    data["ground"] = {"z": {"type": "sine", "amplitude": 1e-6, "omega": 20.0}}
+    for sc in (load_scenario("paper-table-3-2"), scenario_from_dict(data)):
+        sim = Simulator(sc)
+        model, p = sim.model, sim.parameters
+        for _ in range(5):
+            x = rng.normal(size=13) * 1e-2
+            x[3:7] = [1.0, 0.02, -0.01, 0.03]
+            u = rng.normal(size=model.layout.input_size) * 0.2
+            direct = np.asarray(model.rhs(x, u, p)).ravel()
+            staged = np.asarray(model.staged_rhs(x, model.staged_inputs(u, p), p)).ravel()
+            assert np.allclose(staged, direct, rtol=1e-12, atol=1e-12 * np.abs(direct).max())
+
+
+# -- equilibria and batches --------------------------------------------------------------------
+def test_batched_equilibria_match_one_at_a_time_and_name_the_failing_run():
+    sc = load_scenario("paper-table-3-2")
+    sim = Simulator(sc)
+    params = np.array([sim.scaled_parameters(k, c) for k, c in ((0.5, 1.0), (1.0, 2.0), (2.0, 4.0))])
+    many = static_equilibria(sim.model, params, sc.initial_positions())
+    for p, eq in zip(params, many, strict=True):
+        one = static_equilibrium(sim.model, p, sc.initial_positions())
+        assert np.allclose(eq.pose, one.pose, rtol=0, atol=1e-14)
+        assert np.allclose(np.sort_complex(eq.eigenvalues), np.sort_complex(one.eigenvalues), rtol=1e-9, atol=1e-9)
+    soft = params.copy()
+    soft[1] = sim.scaled_parameters(1e-4, 1.0)  # far too soft: the table tips
+    with pytest.raises(UnstableTableError, match=r"^run 1: "):
+        static_equilibria(sim.model, soft, sc.initial_positions())
+
+
+def test_a_batch_gives_the_single_runs_metrics():
+    sim = Simulator(load_scenario("paper-table-3-2"))
+    stiffness, damping = [0.6, 1.0, 1.9], [3.5, 1.0, 0.6]
+    batch = sim.run_batch(stiffness, damping, workers=2)
+    for i, (k, c) in enumerate(zip(stiffness, damping, strict=True)):
+        single = sim.run(p=sim.scaled_parameters(k, c))
+        assert batch.settling_time_max[i] == pytest.approx(single.settling_time_max, abs=1e-12)
+        assert np.allclose(batch.settling_time[i], list(single.settling_time.values()), rtol=0, atol=1e-12)
+        assert np.allclose(batch.peak[i], list(single.peak.values()), rtol=1e-12, atol=0)
+
+
+def test_an_empty_batch_and_mismatched_scales():
+    sim = Simulator(load_scenario("paper-table-3-2"))
+    assert sim.run_batch([], []).peak.shape == (0, 6)
+    with pytest.raises(Exception, match="damping: needs one scale per stiffness scale"):
+        sim.run_batch([1.0], [])
+
+
+# -- vectorised helpers ----------------------------------------------------------------------------
+def test_settling_of_many_signals_is_settling_of_each():
+    t = np.arange(0, 5001) / 1000.0
+    rng = np.random.default_rng(0)
+    signals = np.exp(-t / rng.uniform(0.2, 1.5, (4, 1))) * np.sin(2 * np.pi * rng.uniform(1, 5, (4, 1)) * t)
+    final = rng.normal(size=4) * 1e-3
+    band = np.array([0.05, 0.01, 0.2, 1e-6])
+    many = settling_times(t, signals, final, 1.0, band, hold=0.3)
+    assert many == [settling_time(t, s, f, 1.0, b, hold=0.3) for s, f, b in zip(signals, final, band, strict=True)]
+
+
+def test_rotation_vectors_against_one_reference_per_row():
+    rng = np.random.default_rng(1)
+    q = rng.normal(size=(6, 4))
+    refs = rng.normal(size=(6, 4))
+    rows = relative_rotation_vector(q, refs)
+    one_by_one = np.vstack([relative_rotation_vector(q[i : i + 1], refs[i]) for i in range(6)])
+    assert np.allclose(rows, one_by_one, rtol=1e-14, atol=1e-14)
+
+
+def test_a_mapped_function_over_a_part_block():
+    import casadi as ca
+
+    x, y = ca.SX.sym("x", 2), ca.SX.sym("y", 3)
+    fn = ca.Function("f", [x, y], [ca.vertcat(x[0] * y[2], ca.sin(x[1])), x @ y[:2].T])
+    mapped = MappedFunction(fn, "test_mapped_block", block=4)
+    xs, ys = np.random.default_rng(2).normal(size=(7, 2)), np.array([1.0, 2.0, 3.0])
+    column, matrix = mapped(xs, ys)
+    for i in range(7):
+        c, m = fn(xs[i], ys)
+        assert np.allclose(column[i], np.asarray(c).ravel())
+        assert np.allclose(matrix[i], np.asarray(m))
