@@ -1,8 +1,10 @@
 """Speed of the transient simulation on the paper's Table 3.2 case (12 s, 1 kHz).
 
 Prints each figure and its ratio to baselines measured in the same run:
-a plain numpy + scipy.solve_ivp implementation of the same equations, and
-the MuJoCo multibody check. Run:  python benchmarks/bench_simulate.py
+a plain numpy + scipy.solve_ivp implementation of the same equations, the
+MuJoCo multibody check, and this toolkit's own RK4 stepping on the sample
+grid (the method used before DOP853, still used for runs with actuator
+forces or feedback). Run:  python benchmarks/bench_simulate.py
 """
 
 from __future__ import annotations
@@ -20,30 +22,59 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from numpy_reference import NumpyTable
 from timing import timed
 
+import isolator.equilibrium as eqmod
+import isolator.simulation as simmod
 from isolator import Simulator, load_scenario
 from isolator.multibody import MujocoTable, mujoco_available
 from isolator.simulation import table_signals
 from studies.paper import relative_rms
 
 
+def _clear_caches() -> None:
+    for cache in (simmod._MODELS, simmod._STEPPERS, simmod._DENSE, eqmod._SOLVERS):
+        cache.clear()
+    simmod._staged_map.cache_clear()
+    simmod._staged_parameters.cache_clear()
+
+
+def _reference(sc, stiffness: float = 1.0, damping: float = 1.0, rtol: float = 1e-12) -> np.ndarray:
+    """The numpy + DOP853 solution with all isolators scaled, as table signals (6, samples)."""
+    ref = NumpyTable(sc)
+    ref.k = ref.k * stiffness  # uniform scaling leaves the preload shares unchanged
+    ref.c = ref.c * damping
+    _, states, y0 = ref.simulate(rtol=rtol, atol=1e-15)
+    return table_signals(states, y0)
+
+
+def _rate(
+    sim: Simulator, k: np.ndarray, c: np.ndarray, workers: int, repeat: int
+) -> tuple[float, float, object]:
+    """Median and best runs per second of a batch over ``repeat`` tries, and the last result."""
+    rates, out = [], None
+    for _ in range(repeat):
+        t0 = time.perf_counter()
+        out = sim.run_batch(k, c, workers=workers)
+        rates.append(len(k) / (time.perf_counter() - t0))
+    return float(np.median(rates)), max(rates), out
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--batch", type=int, default=1000, help="runs in the batch figure")
-    parser.add_argument("--repeat", type=int, default=20)
+    parser.add_argument("--repeat", type=int, default=30, help="repeats of the single-run timing")
+    parser.add_argument("--batch-repeat", type=int, default=3, help="repeats of the batch timing")
     args = parser.parse_args()
     sc = load_scenario("paper-table-3-2")
 
     with tempfile.TemporaryDirectory() as cache:
         os.environ["ISOLATOR_CACHE"] = cache
+        _clear_caches()
         t0 = time.perf_counter()
         sim = Simulator(sc)
         sim.run()
         cold = time.perf_counter() - t0
     os.environ.pop("ISOLATOR_CACHE")
-    import isolator.simulation as simmod
-
-    simmod._MODELS.clear()
-    simmod._STEPPERS.clear()
+    _clear_caches()
     t0 = time.perf_counter()
     sim = Simulator(sc)
     sim.run()
@@ -51,16 +82,34 @@ def main() -> None:
     print(f"model build + first run, cold (casadi codegen + C compile): {cold * 1e3:8.1f} ms")
     print(f"model build + first run, warm compiled-model cache:          {warm * 1e3:8.1f} ms")
 
-    t_sim, response = timed(sim.run, args.repeat)
-    print(f"simulation, exact model, 12 s at 1 kHz (median of {args.repeat}):  {t_sim * 1e3:8.2f} ms")
+    start, end = sim.equilibria(sim.parameters)
+    method = sim.method_for(max(start.max_frequency, end.max_frequency))
+    plan = method.plan
+    print(f"method: DOP853, {plan.steps} steps (longest {plan.length.max() * 1e3:.1f} ms), "
+          f"{plan.evaluations} right-hand sides, {plan.per_step} sample slots per step "
+          f"(RK4 on the sample grid: {4 * method.substeps * (sim.grid.nodes.size - 1)} right-hand sides)")
 
-    ref_model = NumpyTable(sc)
-    _t_ref, (_, states, y0) = timed(lambda: ref_model.simulate(rtol=1e-12, atol=1e-15), 1)
-    ref = table_signals(states, y0)
+    times = []
+    for _ in range(args.repeat):
+        t0 = time.perf_counter()
+        response = sim.run()
+        times.append(time.perf_counter() - t0)
+    t_sim = float(np.median(times))
+    print(f"simulation, exact model, 12 s at 1 kHz: median {t_sim * 1e3:6.2f} ms, best {min(times) * 1e3:6.2f} ms "
+          f"(of {args.repeat})")
+
+    rk4 = simmod.Method(method.substeps)
+    p = sim.parameters
+    t_rk4, _ = timed(lambda: sim._run(p, *sim.equilibria(p), rk4), max(3, args.repeat // 3))
+    print(f"baseline RK4 on the sample grid, same model, compiled:       {t_rk4 * 1e3:8.2f} ms   "
+          f"ratio {t_rk4 / t_sim:6.1f}x slower")
+
+    ref = _reference(sc)
     err = relative_rms(response.signals, ref)
     print(f"accuracy vs tight-tolerance reference (DOP853 rtol 1e-12): max rel. RMS {err.max():.2e} "
           f"(per signal {', '.join(f'{e:.1e}' for e in err)})")
 
+    ref_model = NumpyTable(sc)
     t_np, (_t, states, y0) = timed(lambda: ref_model.simulate(rtol=1e-8, atol=1e-12), 1)
     sig = table_signals(states, y0)
     print(f"baseline numpy + solve_ivp DOP853 rtol 1e-8 (max rel. RMS {relative_rms(sig, ref).max():.1e}): "
@@ -73,15 +122,30 @@ def main() -> None:
     rng = np.random.default_rng(1)
     k = rng.uniform(0.5, 2.0, args.batch)
     c = rng.uniform(0.5, 4.0, args.batch)
-    t0 = time.perf_counter()
-    sim.run_batch(k[:2], c[:2])  # warm-up: compiles the stepper the batch needs
-    t0 = time.perf_counter()
-    batch = sim.run_batch(k, c, workers=2)
-    t_batch = time.perf_counter() - t0
+    sim.run_batch(k, c)  # warm-up: compiles the steppers and step plans the batch needs
+    median2, best2, batch = _rate(sim, k, c, 2, args.batch_repeat)
+    median1, _, _ = _rate(sim, k, c, 1, 1)
     ok = np.isfinite(batch.settling_time_max).sum()
-    print(f"batch, {args.batch} runs, stiffness x0.5-2, damping x0.5-4, 2 threads: {t_batch:6.2f} s = "
-          f"{args.batch / t_batch:6.0f} runs/s  (single-run rate {1 / t_sim:5.0f} runs/s; "
+    print(f"batch, {args.batch} runs, stiffness x0.5-2, damping x0.5-4, 2 threads: median {median2:6.0f} runs/s, "
+          f"best {best2:6.0f} runs/s of {args.batch_repeat}  (1 thread {median1:5.0f} runs/s; "
           f"{ok} runs with a settling time)")
+    n_rk4 = max(20, args.batch // 10)
+    original = simmod.Simulator.method_for
+    simmod.Simulator.method_for = lambda self, omega: simmod.Method(self.substeps_for(omega))
+    try:
+        t0 = time.perf_counter()
+        sim.run_batch(k[:n_rk4], c[:n_rk4], workers=2)
+        rate_rk4 = n_rk4 / (time.perf_counter() - t0)
+    finally:
+        simmod.Simulator.method_for = original
+    print(f"baseline batch with RK4 on the sample grid, 2 threads ({n_rk4} runs): {rate_rk4:6.0f} runs/s   "
+          f"ratio {median2 / rate_rk4:6.1f}x fewer")
+    worst = []
+    for ks, cs in ((2.0, 0.5), (0.5, 4.0), (2.0, 4.0)):
+        run = sim.run(p=sim.scaled_parameters(ks, cs))
+        worst.append((ks, cs, relative_rms(run.signals, _reference(sc, ks, cs)).max()))
+    print("batch corners vs tight-tolerance reference: "
+          + ", ".join(f"k x{ks:g} c x{cs:g}: {e:.1e}" for ks, cs, e in worst))
 
 
 if __name__ == "__main__":

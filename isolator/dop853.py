@@ -195,7 +195,8 @@ class DenseStepper:
     signals : casadi.Function
         ``(x, reference) -> (6,)``: the table signals of a state (SX).
     with_states : bool
-        Also return the model's states at the samples (False: the signals only, cheaper).
+        Also return each step's dense-output polynomial, from which
+        :meth:`states` evaluates the model's states at the samples.
     compile : bool
         Compile to native code (False: casadi's evaluator).
     """
@@ -247,6 +248,25 @@ class DenseStepper:
             compile=compile,
         )
 
+    @staticmethod
+    def states(plan: StepPlan, polynomials: np.ndarray) -> np.ndarray:
+        """The model's states at the samples after the first, (samples - 1, n_states).
+
+        Parameters
+        ----------
+        plan : StepPlan
+        polynomials : ndarray (steps, degree + 1, n_states)
+            Per step: the state at its start, then the dense output's
+            coefficients of s, s^2, ... (from :meth:`run_slots`).
+        """
+        slots = plan.sample_slots
+        step = slots // plan.per_step
+        s = plan.fraction.ravel()[slots][:, None]
+        out = polynomials[step, -1]
+        for j in range(polynomials.shape[1] - 2, 0, -1):
+            out = polynomials[step, j] + s * out
+        return polynomials[step, 0] + s * out
+
     def run(
         self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray | None]:
@@ -272,9 +292,9 @@ class DenseStepper:
         states : ndarray (samples - 1, n_states) or None
             None unless built ``with_states``.
         """
-        signals, states, _ = self.run_slots(x0, plan, inputs, p, reference)
-        slots = plan.sample_slots
-        return signals[slots], None if states is None else states[slots]
+        signals, _, polynomials = self.run_slots(x0, plan, inputs, p, reference)
+        states = None if polynomials is None else self.states(plan, polynomials)
+        return signals[plan.sample_slots], states
 
     def run_slots(
         self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
@@ -285,16 +305,19 @@ class DenseStepper:
         -------
         signals : ndarray (steps x per_step, 6)
             At every step's slots (``plan.sample_slots`` picks the samples out).
-        states : ndarray (steps x per_step, n_states) or None
         peaks : ndarray (steps, 6)
             max |signal| over each step's samples (0 for a step without one).
+        polynomials : ndarray (steps, degree + 1, n_states) or None
+            Each step's start state and dense-output coefficients (see
+            :meth:`states`); None unless built ``with_states``.
         """
         n = plan.start.size  # a whole number of chunks
         m = self.per_step
         nx = self.model.n_states
         signals = np.empty((n * m, 6))
         peaks = np.empty((n, 6))
-        states = np.empty((n * m, nx)) if self.with_states else None
+        degree = dop853_tableau().dense.shape[1]
+        states = np.empty((n, degree + 1, nx)) if self.with_states else None
         if self.chunk.native and inputs.shape[-1]:
             self._run_native(x0, plan, inputs, p, reference, signals, peaks, states)
         else:
@@ -311,8 +334,8 @@ class DenseStepper:
                 signals[lo * m : hi * m] = sig
                 peaks[lo:hi] = peak
                 if states is not None:
-                    states[lo * m : hi * m] = rest[0]
-        return signals, states, peaks
+                    states[lo:hi] = rest[0].reshape(CHUNK, -1, nx)
+        return signals, peaks, states
 
     def _run_native(
         self,
@@ -335,7 +358,8 @@ class DenseStepper:
         u, h, f, s = (a.ctypes.data for a in arrays)
         strides = [a.strides[0] * CHUNK for a in arrays]
         out_sig, out_st, out_peak = signals.ctypes.data, 0 if states is None else states.ctypes.data, peaks.ctypes.data
-        sig_stride, st_stride = 8 * 6 * m * CHUNK, 8 * nx * m * CHUNK
+        sig_stride = 8 * 6 * m * CHUNK
+        st_stride = 0 if states is None else 8 * states[0].size * CHUNK
         here, pp, rr = carried.ctypes.data, p.ctypes.data, reference.ctypes.data
         row = 8 * nx
         for k in range(plan.start.size // CHUNK):
@@ -357,8 +381,9 @@ def _contiguous(a: np.ndarray) -> np.ndarray:
 
 
 def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:
-    """``(x0, K, h, s, reference) -> (signals, peak, [states])`` at step fractions ``s`` (scalar code);
-    ``peak`` is max |signal| over the used slots (``s >= 0``), 0 if none."""
+    """``(x0, K, h, s, reference) -> (signals, peak, [polynomial])`` at step fractions ``s`` (scalar code);
+    ``peak`` is max |signal| over the used slots (``s >= 0``), 0 if none; ``polynomial`` (n_states, degree + 1)
+    holds ``x0`` and the dense output's coefficients."""
     tab = dop853_tableau()
     x0, slopes, h = ca.SX.sym("x0", nx), ca.SX.sym("K", nx, STAGES), ca.SX.sym("h")
     fraction, reference = ca.SX.sym("s", 1, per_step), ca.SX.sym("r", nx)
@@ -374,5 +399,5 @@ def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) ->
         peak = ca.fmax(peak, ca.fabs(signals(columns[-1], reference)) * (fraction[m] >= 0))
     outputs = [ca.horzcat(*[signals(c, reference) for c in columns]), peak]
     if with_states:
-        outputs.append(ca.horzcat(*columns))
+        outputs.append(ca.horzcat(x0, coef))
     return ca.Function("dop853_samples", [x0, slopes, h, fraction, reference], outputs)

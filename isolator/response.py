@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -44,8 +45,9 @@ class Response:
         final positions (None when a carriage never stops).
     settling : dict of str to SettlingResult
         Per signal: settling time [s] (or None with a reason), peak, band.
-    states : ndarray (N, n_states)
-        The model's state at the samples (for checks).
+    state_history : ndarray (N, n_states) or callable
+        The model's state at the samples, or a function computing it (read
+        :attr:`states`).
     actuator_names : tuple of str
     actuator_forces : ndarray (n_actuators, N)
         Forces the actuators applied [N] (after saturation and lag).
@@ -60,9 +62,18 @@ class Response:
     stop_time: float
     final: np.ndarray | None
     settling: dict[str, SettlingResult]
-    states: np.ndarray = field(repr=False)
+    state_history: np.ndarray | Callable[[], np.ndarray] = field(repr=False)
     actuator_names: tuple[str, ...] = ()
     actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+
+    @property
+    def states(self) -> np.ndarray:
+        """The model's state at the samples (N, n_states), for checks; evaluated on first use."""
+        history = self.state_history
+        if callable(history):
+            history = np.asarray(history(), dtype=float)
+            object.__setattr__(self, "state_history", history)
+        return history
 
     @property
     def signal_names(self) -> tuple[str, ...]:

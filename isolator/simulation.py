@@ -347,10 +347,18 @@ class Simulator:
         grid = self.grid
         n = len(self.scenario.carriages)
         if forces is None and feedback is None and method.plan is not None:
-            stepper = _dense_stepper(self.model, method.plan.per_step, True)
-            signals, states = stepper.run(start.state, method.plan, self._plan_inputs(method, p), p, start.state)
-            states = np.vstack([start.state, states])
-            signals = _with_start(signals)
+            plan = method.plan
+            stepper = _dense_stepper(self.model, plan.per_step, True)
+            raw, _, polynomials = stepper.run_slots(start.state, plan, self._plan_inputs(method, p), p, start.state)
+            if not np.all(np.isfinite(polynomials)):
+                step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
+                raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
+            signals = _with_start(raw[plan.sample_slots])
+            x0 = start.state
+
+            def states() -> np.ndarray:
+                return np.vstack([x0, DenseStepper.states(plan, polynomials)])
+
             at_samples = self._at_samples()
         else:
             substeps = method.substeps
@@ -360,14 +368,12 @@ class Simulator:
             else:
                 states, inputs = self._run_feedback(p, start, substeps, forces, feedback)
             states = np.vstack([start.state, states])[grid.is_sample]
-            signals = None
             at_samples = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
-        t = grid.samples
-        bad = ~np.all(np.isfinite(states), axis=1)
-        if bad.any():
-            raise SimulationError(f"the run diverged: non-finite state at t = {t[np.argmax(bad)]:.4g} s")
-        if signals is None:
+            bad = ~np.all(np.isfinite(states), axis=1)
+            if bad.any():
+                raise SimulationError(f"the run diverged: non-finite state at t = {grid.samples[np.argmax(bad)]:.4g} s")
             signals = self.signals(states, start)
+        t = grid.samples
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
@@ -382,7 +388,7 @@ class Simulator:
             stop_time=self.stop_time,
             final=final,
             settling=metrics,
-            states=states,
+            state_history=states,
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
         )
@@ -535,7 +541,7 @@ class Simulator:
                     metrics = self._run(params[i], start, end, method).settling
                 else:
                     stepper = _dense_stepper(self.model, method.plan.per_step, False)
-                    raw, _, step_peaks = stepper.run_slots(
+                    raw, step_peaks, _ = stepper.run_slots(
                         start.state, method.plan, plan_inputs[method.plan_key], params[i], start.state
                     )
                     peaks = np.max(step_peaks, axis=0)  # NaN propagates
