@@ -34,6 +34,8 @@ __all__ = [
 ]
 
 CHUNK = 512
+#: terms of the atan series in :func:`sensed_motion` (t^0 ... t^14)
+ATAN_TERMS = 8
 
 
 @dataclass(frozen=True)
@@ -139,19 +141,29 @@ def sensed_motion(kind: str, x: ca.MX | ca.SX, reference: ca.MX | ca.SX) -> ca.M
     Displacement of the mass centre [m] and rotation vector of ``R R_ref^T``
     [rad] from the state ``reference``, then velocity [m/s] and angular
     velocity [rad/s], world axes. The paper model: its coordinates and rates.
+
+    The rotation vector of the relative quaternion ``(w, v)`` is
+    ``2 atan(|v|/|w|)/|v| sign(w) v``, written as ``2 v/w`` times the series
+    of ``atan(t)/t`` in ``t^2 = |v|^2/w^2`` to ``t^14``: exact to rounding
+    (relative error below 1e-15) for rotations up to 0.2 rad, the most a run
+    may turn before it is reported as diverged (see
+    :func:`isolator.simulation.relative_rotation_vector` for any angle). It is
+    a few times cheaper than ``atan2``, needs no normalisation (it does not
+    change when either quaternion is scaled) and is smooth at zero.
     """
     if kind != "exact":
         return ca.vertcat(x[:6] - reference[:6], x[6:12])
-    # the rotation vector below does not change when either quaternion is scaled: no normalisation
     q, r = x[3:7], reference[3:7]
     w0, v0 = r[0], -r[1:4]
     w, v = q[0], q[1:4]
     rel_w = w * w0 - ca.dot(v, v0)
     rel_v = w * v0 + w0 * v + ca.cross(v, v0)
-    sign = ca.sign(rel_w) + (rel_w == 0)
-    rel_w, rel_v = rel_w * sign, rel_v * sign
-    norm = ca.sqrt(ca.dot(rel_v, rel_v) + 1e-300)
-    angles = 2 * ca.atan2(norm, rel_w) / norm * rel_v
+    inverse = 1 / rel_w
+    t2 = ca.dot(rel_v, rel_v) * inverse * inverse
+    series = 0.0
+    for k in range(ATAN_TERMS - 1, -1, -1):  # atan(t)/t = 1 - t^2/3 + t^4/5 - ...
+        series = (-1) ** k / (2 * k + 1) + t2 * series
+    angles = 2 * inverse * series * rel_v
     omega_world = quaternion_to_matrix(x[3:7]) @ x[10:13]
     return ca.vertcat(x[0:3] - reference[0:3], angles, x[7:10], omega_world)
 

@@ -195,3 +195,25 @@ def test_a_mapped_function_over_a_part_block():
         c, m = fn(xs[i], ys)
         assert np.allclose(column[i], np.asarray(c).ravel())
         assert np.allclose(matrix[i], np.asarray(m))
+
+
+def test_the_series_rotation_vector_is_exact_up_to_the_divergence_limit():
+    from isolator.integrator import signal_function
+
+    signals = signal_function("exact", 13)
+    rng = np.random.default_rng(4)
+    for angle in (1e-6, 1e-3, 0.05, 0.2):
+        for _ in range(20):
+            axis = rng.normal(size=3)
+            axis /= np.linalg.norm(axis)
+            ref = rng.normal(size=4)
+            ref /= np.linalg.norm(ref)
+            turn = np.r_[np.cos(angle / 2), np.sin(angle / 2) * axis]
+            q = np.r_[turn[0] * ref[0] - turn[1:] @ ref[1:],
+                      turn[0] * ref[1:] + ref[0] * turn[1:] + np.cross(turn[1:], ref[1:])]
+            q *= rng.choice([-1.0, 1.0]) * rng.uniform(0.5, 2.0)  # either sign, any scale
+            x, r = np.zeros(13), np.zeros(13)
+            x[3:7], r[3:7] = q, ref
+            series = np.asarray(signals(x, r)).ravel()[3:]
+            assert np.allclose(series, angle * axis, rtol=0, atol=1e-15 + 2e-15 * angle)
+            assert np.allclose(series, relative_rotation_vector(q[None], ref)[0], rtol=0, atol=1e-15)
