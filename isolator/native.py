@@ -260,6 +260,9 @@ class NativeFunction:
 class MappedFunction:
     """A casadi function evaluated column by column for many argument sets, compiled in blocks.
 
+    Two compiled forms, each built on first use: one argument set per call
+    (for a few sets) and ``block`` sets per call (for many).
+
     Parameters
     ----------
     function : casadi.Function
@@ -267,19 +270,30 @@ class MappedFunction:
     name : str
         Name of the compiled block function.
     block : int
-        Argument sets per compiled call (the last call is padded).
+        Argument sets per compiled call of the block form (its last call is padded).
     optimisation : str
         Compiler optimisation flag.
     """
 
     def __init__(self, function: ca.Function, name: str, block: int = 32, optimisation: str = "-O3") -> None:
-        mapped = function.map(block)
-        args = mapped.mx_in()
+        self.function = function
+        self.name = name
         self.block = block
+        self.optimisation = optimisation
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
-        self.native = NativeFunction(
-            ca.Function(name, args, [ca.densify(o) for o in mapped.call(args)]), optimisation=optimisation
-        )
+        self._native: dict[int, NativeFunction] = {}
+        self._lock = threading.Lock()
+
+    def _compiled(self, block: int) -> NativeFunction:
+        with self._lock:
+            if block not in self._native:
+                mapped = self.function.map(block) if block > 1 else self.function
+                args = mapped.mx_in()
+                self._native[block] = NativeFunction(
+                    ca.Function(f"{self.name}_b{block}", args, [ca.densify(o) for o in mapped.call(args)]),
+                    optimisation=self.optimisation,
+                )
+            return self._native[block]
 
     def __call__(self, *inputs: np.ndarray) -> list[np.ndarray]:
         """Evaluate for ``N`` argument sets.
@@ -295,7 +309,8 @@ class MappedFunction:
             One per output, (N, rows) for column outputs and (N, rows, columns) otherwise.
         """
         n = max((x.shape[0] for x in inputs if np.ndim(x) == 2), default=1)
-        b = self.block
+        b = 1 if n <= 4 else self.block
+        native = self._compiled(b)
         outs = [np.empty((n, r, c)) for r, c in self.out_shapes]
         for lo in range(0, n, b):
             hi = min(lo + b, n)
@@ -303,13 +318,13 @@ class MappedFunction:
             for x in inputs:
                 x = np.asarray(x, dtype=float)
                 if x.ndim == 1:
-                    args.append(np.broadcast_to(x, (b, x.size)))
+                    args.append(np.broadcast_to(x, (b, x.size)) if b > 1 else x)
                     continue
                 part = x[lo:hi]
                 if hi - lo < b:
                     part = np.concatenate([part, np.repeat(part[-1:], b - (hi - lo), axis=0)])
                 args.append(part)
-            for out, value, (r, c) in zip(outs, self.native(*args), self.out_shapes, strict=True):
+            for out, value, (r, c) in zip(outs, native(*args), self.out_shapes, strict=True):
                 # casadi's column-major (r, c) blocks side by side: value is (b c, r)
                 out[lo:hi] = value.reshape(b, c, r)[: hi - lo].transpose(0, 2, 1)
         return [o[:, :, 0] if c == 1 else o for o, (r, c) in zip(outs, self.out_shapes, strict=True)]

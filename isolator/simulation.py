@@ -349,7 +349,10 @@ class Simulator:
         if forces is None and feedback is None and method.plan is not None:
             plan = method.plan
             stepper = _dense_stepper(self.model, plan.per_step, True)
-            raw, _, polynomials = stepper.run_slots(start.state, plan, self._plan_inputs(method, p), p, start.state)
+            raw, step_peaks, polynomials = stepper.run_slots(
+                start.state, plan, self._plan_inputs(method, p), p, start.state
+            )
+            peaks = np.max(step_peaks, axis=0)
             if not np.all(np.isfinite(polynomials)):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
@@ -373,11 +376,12 @@ class Simulator:
             if bad.any():
                 raise SimulationError(f"the run diverged: non-finite state at t = {grid.samples[np.argmax(bad)]:.4g} s")
             signals = self.signals(states, start)
+            peaks = None
         t = grid.samples
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
-        metrics = self._metrics(signals, final, end)
+        metrics = self._metrics(signals, final, end, peaks)
         return Response(
             name=self.scenario.name,
             model=self.model.kind,
