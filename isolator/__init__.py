@@ -13,6 +13,7 @@ and vibration-criteria class.
 
 from __future__ import annotations
 
+from .batch import BatchResult
 from .equilibrium import Equilibrium, RockingStiffness, static_equilibrium
 from .errors import (
     IsolatorError,
@@ -43,7 +44,7 @@ from .scenario import (
     Table,
 )
 from .settling import SettlingResult, settling_time
-from .simulation import BatchResult, Simulator, get_model, simulate, table_signals
+from .simulation import Simulator, get_model, simulate, table_signals
 from .stability import StabilityReport, stability
 from .transmissibility import FrequencyResponse, compliance, transmissibility
 from .vibration import VC_CLASSES, VibrationCriteria, vibration_criteria

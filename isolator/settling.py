@@ -9,7 +9,16 @@ import numpy as np
 
 from .scenario import SIGNALS, Settling
 
-__all__ = ["SettlingResult", "settling_metrics", "settling_time", "settling_times", "signal_peaks"]
+__all__ = [
+    "SettlingResult",
+    "last_outside",
+    "settling_metrics",
+    "settling_time",
+    "settling_times",
+    "signal_bands",
+    "signal_peaks",
+    "still_signals",
+]
 
 #: peaks below this are numerical noise: such a signal does not move [m or rad]
 MOTION_FLOOR = 1e-13
@@ -101,20 +110,73 @@ def settling_times(
         return [(None, "a carriage never stops (sine profile): no settling time")] * k
     if stop_time > t[-1]:
         return [(None, f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s")] * k
+    times, short = last_outside(t, signals, final, stop_time, band, hold)
+    return [
+        (None, f"still outside the band {short[i]:.3g} s before the run ends; lengthen simulation.duration")
+        if math.isnan(times[i]) else (float(times[i]), "")
+        for i in range(k)
+    ]
+
+
+def last_outside(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray,
+    stop_time: float,
+    band: np.ndarray,
+    hold: float | np.ndarray = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The settling rule on stacked signals: the core of :func:`settling_time`.
+
+    Parameters
+    ----------
+    t : ndarray (samples,)
+        [s]; the run must reach ``stop_time`` (finite).
+    signals : ndarray (..., samples)
+        [m or rad].
+    final, band : ndarray (...)
+        [m or rad].
+    stop_time : float
+        [s].
+    hold : float or ndarray (...)
+        [s].
+
+    Returns
+    -------
+    time : ndarray (...)
+        Settling time after the stop [s]; NaN where the signal is still outside
+        the band less than ``hold`` before the run ends.
+    short : ndarray (...)
+        How long before the run's end the signal was last outside [s].
+    """
     first = int(np.searchsorted(t, stop_time - 1e-12, side="left"))
-    outside = np.abs(signals[:, first:] - np.asarray(final, float)[:, None]) > np.asarray(band, float)[:, None]
-    any_outside = outside.any(axis=1)
-    last = t[first:][outside.shape[1] - 1 - np.argmax(outside[:, ::-1], axis=1)] if outside.shape[1] else t[:0]
-    out: list[tuple[float | None, str]] = []
-    for i in range(k):
-        if not any_outside[i]:
-            out.append((0.0, ""))
-        elif last[i] >= t[-1] or t[-1] - last[i] < hold:
-            out.append((None, f"still outside the band {t[-1] - last[i]:.3g} s before the run ends; "
-                              "lengthen simulation.duration"))
-        else:
-            out.append((float(last[i] - stop_time), ""))
-    return out
+    after = signals[..., first:]
+    outside = np.abs(after - np.asarray(final, float)[..., None]) > np.asarray(band, float)[..., None]
+    if not outside.shape[-1]:
+        zero = np.zeros(outside.shape[:-1])
+        return zero, zero
+    last = t[first:][outside.shape[-1] - 1 - np.argmax(outside[..., ::-1], axis=-1)]
+    never = ~outside.any(axis=-1)
+    short = t[-1] - last
+    times = np.where(never, 0.0, last - stop_time)
+    unsettled = ~never & ((last >= t[-1]) | (short < hold))
+    return np.where(unsettled, np.nan, times), np.where(never, 0.0, short)
+
+
+def signal_bands(settling: Settling, peaks: np.ndarray) -> np.ndarray:
+    """Band half-widths [m or rad] of the six signals (..., 6) with these peaks (``Settling.band``)."""
+    peaks = np.asarray(peaks, dtype=float)
+    if settling.tolerance is not None:
+        per_signal = np.array([settling.band(name, 0.0) for name in SIGNALS])
+        return np.broadcast_to(per_signal, peaks.shape).copy()
+    return float(settling.fraction) * peaks  # type: ignore[arg-type]
+
+
+def still_signals(settling: Settling, peaks: np.ndarray) -> np.ndarray:
+    """Which signals do not move (peak at numerical noise, band relative to the peak): settled at 0."""
+    if settling.tolerance is not None:
+        return np.zeros(np.shape(peaks), dtype=bool)
+    return np.asarray(peaks) <= MOTION_FLOOR
 
 
 def signal_peaks(signals: np.ndarray) -> np.ndarray:
@@ -139,10 +201,8 @@ def settling_metrics(
     """
     if peaks is None:
         peaks = signal_peaks(signals)
-    bands = np.array([settling.band(name, float(peak)) for name, peak in zip(SIGNALS, peaks, strict=True)])
-    still = np.zeros(len(SIGNALS), dtype=bool)
-    if final is not None and settling.tolerance is None:
-        still = peaks <= MOTION_FLOOR
+    bands = signal_bands(settling, peaks)
+    still = still_signals(settling, peaks) if final is not None else np.zeros(len(SIGNALS), dtype=bool)
     target = np.zeros(len(SIGNALS)) if final is None else np.asarray(final, dtype=float)
     moving = np.nonzero(~still)[0]
     times = settling_times(t, signals[moving], target[moving], stop_time, np.maximum(bands[moving], 1e-300), hold)

@@ -4,10 +4,9 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import casadi as ca
 import numpy as np
@@ -33,8 +32,10 @@ from .response import Response
 from .scenario import Scenario
 from .settling import SettlingResult, settling_metrics, signal_peaks
 
+if TYPE_CHECKING:
+    from .batch import BatchResult
+
 __all__ = [
-    "BatchResult",
     "FeedbackLaw",
     "Simulator",
     "get_model",
@@ -103,25 +104,6 @@ class Method:
     substeps: int
     plan: StepPlan | None = None
     plan_key: int = 0
-
-
-@dataclass(frozen=True)
-class BatchResult:
-    """Metrics of many runs of one scenario with varied parameters.
-
-    Attributes
-    ----------
-    settling_time : ndarray (runs, 6)
-        Per signal [s]; NaN where a run cannot show it.
-    settling_time_max : ndarray (runs,)
-        [s]; NaN where unavailable.
-    peak : ndarray (runs, 6)
-        [m or rad].
-    """
-
-    settling_time: np.ndarray
-    settling_time_max: np.ndarray
-    peak: np.ndarray
 
 
 class FeedbackLaw(Protocol):
@@ -201,14 +183,7 @@ class Simulator:
             raise ScenarioError(f"stiffness: scale must be a finite number > 0, got {stiffness}")
         if not (math.isfinite(damping) and damping >= 0):
             raise ScenarioError(f"damping: scale must be a finite number >= 0, got {damping}")
-        p = self.parameters.copy()
-        names = self.layout.names
-        for i, n in enumerate(names):
-            if ".stiffness." in n:
-                p[i] *= stiffness
-            elif ".damping." in n:
-                p[i] *= damping
-        return p
+        return self.scaled_parameter_sets([stiffness], [damping])[0]
 
     # -- pieces ----------------------------------------------------------------
     def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
@@ -485,12 +460,7 @@ class Simulator:
         workers: int = 2,
         progress: bool = False,
     ) -> BatchResult:
-        """Many runs with isolator stiffness and damping scaled per run.
-
-        The equilibria of all runs are solved side by side, the runs share one
-        step plan (set by the fastest eigenvalue of any run) and the compiled
-        stepping runs in ``workers`` threads, each returning only the six
-        signals that the metrics need.
+        """Many runs with isolator stiffness and damping scaled per run (see :func:`isolator.batch.run_batch`).
 
         Parameters
         ----------
@@ -500,77 +470,30 @@ class Simulator:
             Threads (the compiled stepping releases the GIL).
         progress : bool
             Print a progress line every 10 %.
-
-        Raises
-        ------
-        UnstableTableError
-            A run's table has no stable equilibrium (the message names the run).
-        SimulationError
-            A run diverged (the message names the run).
         """
-        if len(stiffness) != len(damping):
+        from .batch import run_batch
+
+        return run_batch(self, stiffness, damping, workers, progress)
+
+    def scaled_parameter_sets(self, stiffness: Sequence[float], damping: Sequence[float]) -> np.ndarray:
+        """Parameter vectors (runs, parameters) with all isolator stiffness and damping scaled per run."""
+        k = np.asarray(stiffness, dtype=float).reshape(-1)
+        c = np.asarray(damping, dtype=float).reshape(-1)
+        if k.size != c.size:
             raise ScenarioError("damping: needs one scale per stiffness scale")
-        n = len(stiffness)
-        nan = float("nan")
-        if n == 0:
-            return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)))
-        params = np.array([self.scaled_parameters(k, c) for k, c in zip(stiffness, damping, strict=True)])
-        starts, ends = self._equilibria(params)
-        methods = [
-            self.method_for(max(s.max_frequency, e.max_frequency if e else 0.0))
-            for s, e in zip(starts, ends, strict=True)
-        ]
-        # build before the threads start; scaling stiffness and damping leaves the staged inputs alone
-        plan_inputs = {}
-        for method in {m.plan_key: m for m in methods}.values():
-            if method.plan is not None:
-                plan_inputs[method.plan_key] = self._plan_inputs(method, params[0])
-                _dense_stepper(self.model, method.plan.per_step, False)
-            else:
-                self._model_inputs(method.substeps)
-                _stepper(self.model, method.substeps)
-        t = self.grid.samples
-        tail_from = max(1, min(int(np.searchsorted(t, self.stop_time - 1e-12)), t.size - 1))
-        finals = None
-        if ends[0] is not None:
-            finals = self.signals(np.array([e.state for e in ends]), np.array([s.state for s in starts])).T
-        settling = np.full((n, 6), nan)
-        peak = np.zeros((n, 6))
-        done = [0]
-
-        def one(i: int) -> None:
-            start, end, method = starts[i], ends[i], methods[i]
-            try:
-                if method.plan is None:
-                    metrics = self._run(params[i], start, end, method).settling
-                else:
-                    stepper = _dense_stepper(self.model, method.plan.per_step, False)
-                    raw, step_peaks, _ = stepper.run_slots(
-                        start.state, method.plan, plan_inputs[method.plan_key], params[i], start.state
-                    )
-                    peaks = np.max(step_peaks, axis=0)  # NaN propagates
-                    if not np.all(np.isfinite(peaks)):
-                        sig = raw[method.plan.sample_slots]
-                        bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
-                        raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
-                    # beyond the peaks, only the samples from the stop on matter
-                    tail = np.ascontiguousarray(raw[method.plan.sample_slots[tail_from - 1 :]].T)
-                    metrics = self._metrics(tail, None if finals is None else finals[i], end, peaks, tail_from)
-            except SimulationError as exc:
-                what = f"run {i} (stiffness x{stiffness[i]:g}, damping x{damping[i]:g})"
-                raise SimulationError(f"{what}: {exc}") from None
-            for j, result in enumerate(metrics.values()):
-                settling[i, j] = nan if result.time is None else result.time
-                peak[i, j] = result.peak
-            done[0] += 1
-            if progress and n >= 10 and done[0] % max(1, n // 10) == 0:
-                print(f"  batch: {done[0]}/{n} runs", flush=True)
-
-        with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-            list(pool.map(one, range(n)))
-        with np.errstate(all="ignore"):
-            worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), nan)
-        return BatchResult(settling, worst, peak)
+        bad_k = ~(np.isfinite(k) & (k > 0))
+        if bad_k.any():
+            i = int(np.argmax(bad_k))
+            raise ScenarioError(f"stiffness[{i}]: scale must be a finite number > 0, got {k[i]}")
+        bad_c = ~(np.isfinite(c) & (c >= 0))
+        if bad_c.any():
+            i = int(np.argmax(bad_c))
+            raise ScenarioError(f"damping[{i}]: scale must be a finite number >= 0, got {c[i]}")
+        names = self.layout.names
+        stiff = np.array([".stiffness." in n for n in names])
+        damp = np.array([".damping." in n for n in names])
+        scale = np.where(stiff, k[:, None], np.where(damp, c[:, None], 1.0))
+        return self.parameters[None, :] * scale
 
 
 def relative_rotation_vector(quats: np.ndarray, reference: np.ndarray) -> np.ndarray:

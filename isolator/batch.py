@@ -1,0 +1,181 @@
+"""Many runs of one scenario with the isolators' stiffness and damping scaled per run.
+
+The runs' static equilibria are solved side by side; each run gets its own
+DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
+with single runs); the compiled stepping runs in worker threads, in blocks
+of runs whose settling metrics are then computed together. Each run returns
+only what the metrics need: its peaks (taken in the compiled steps) and its
+signals from the carriages' stop on.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from .errors import SimulationError
+from .settling import last_outside, signal_bands, still_signals
+
+if TYPE_CHECKING:
+    from .simulation import Simulator
+
+__all__ = ["BLOCK", "BatchResult", "run_batch"]
+
+#: runs per task of a worker thread (their metrics are computed together)
+BLOCK = 16
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Metrics of many runs of one scenario with varied parameters.
+
+    Attributes
+    ----------
+    settling_time : ndarray (runs, 6)
+        Per signal [s]; NaN where a run cannot show it.
+    settling_time_max : ndarray (runs,)
+        [s]; NaN where unavailable.
+    peak : ndarray (runs, 6)
+        [m or rad].
+    """
+
+    settling_time: np.ndarray
+    settling_time_max: np.ndarray
+    peak: np.ndarray
+
+
+def run_batch(
+    sim: Simulator,
+    stiffness: Sequence[float],
+    damping: Sequence[float],
+    workers: int = 2,
+    progress: bool = False,
+) -> BatchResult:
+    """Runs of ``sim``'s scenario with every isolator's stiffness and damping scaled per run.
+
+    Parameters
+    ----------
+    sim : Simulator
+    stiffness, damping : sequence of float
+        Scale factors, one per run (stiffness > 0, damping >= 0).
+    workers : int
+        Threads (the compiled stepping releases the GIL).
+    progress : bool
+        Print a progress line every 10 %.
+
+    Returns
+    -------
+    BatchResult
+        The same metrics as :meth:`Simulator.run` gives for each run.
+
+    Raises
+    ------
+    ScenarioError
+        A scale is not a finite positive number (named by index).
+    UnstableTableError
+        A run's table has no stable equilibrium (the message names the run).
+    SimulationError
+        A run diverged (the message names the run).
+    """
+    from .simulation import Method, _dense_stepper, _slowest_period, _stepper
+
+    params = sim.scaled_parameter_sets(stiffness, damping)
+    n = params.shape[0]
+    if n == 0:
+        return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)))
+    starts, ends = sim._equilibria(params)
+    methods: list[Method] = [
+        sim.method_for(max(s.max_frequency, e.max_frequency if e else 0.0)) for s, e in zip(starts, ends, strict=True)
+    ]
+    # built before the threads start; scaling stiffness and damping leaves the staged inputs alone
+    plan_inputs = {}
+    for method in {m.plan_key: m for m in methods}.values():
+        if method.plan is not None:
+            plan_inputs[method.plan_key] = sim._plan_inputs(method, params[0])
+            _dense_stepper(sim.model, method.plan.per_step, False)
+        else:
+            sim._model_inputs(method.substeps)
+            _stepper(sim.model, method.substeps)
+    t = sim.grid.samples
+    stop = sim.stop_time
+    tail_from = max(1, min(int(np.searchsorted(t, stop - 1e-12)), t.size - 1))
+    finals = np.zeros((n, 6))
+    if ends[0] is not None:
+        finals = sim.signals(np.array([e.state for e in ends]), np.array([s.state for s in starts])).T
+    holds = np.array([_slowest_period(e.eigenvalues) if e is not None else 0.0 for e in ends])
+    settling = np.full((n, 6), np.nan)
+    peak = np.zeros((n, 6))
+    done = [0]
+
+    def block(lo: int) -> None:
+        hi = min(lo + BLOCK, n)
+        dense = []
+        tails = np.empty((hi - lo, 6, t.size - tail_from))
+        for i in range(lo, hi):
+            method = methods[i]
+            try:
+                if method.plan is None:
+                    metrics = sim._run(params[i], starts[i], ends[i], method).settling
+                    settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
+                    peak[i] = [r.peak for r in metrics.values()]
+                    continue
+                stepper = _dense_stepper(sim.model, method.plan.per_step, False)
+                raw, step_peaks, _ = stepper.run_slots(
+                    starts[i].state, method.plan, plan_inputs[method.plan_key], params[i], starts[i].state
+                )
+                peak[i] = np.max(step_peaks, axis=0)  # NaN propagates
+                if not np.all(np.isfinite(peak[i])):
+                    sig = raw[method.plan.sample_slots]
+                    bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
+                    raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
+                if np.max(peak[i, 3:]) > 0.2:
+                    raise SimulationError("the run diverged: the table turned by more than 0.2 rad")
+            except SimulationError as exc:
+                what = f"run {i} (stiffness x{_scale(stiffness, i):g}, damping x{_scale(damping, i):g})"
+                raise SimulationError(f"{what}: {exc}") from None
+            tails[len(dense)] = raw[method.plan.sample_slots[tail_from - 1 :]].T
+            dense.append(i)
+        if dense:
+            rows = np.array(dense)
+            settling[rows] = _settling(sim, t[tail_from:], tails[: rows.size], finals[rows], peak[rows], holds[rows],
+                                       ends[0] is not None)
+        done[0] += hi - lo
+        if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - (hi - lo)) * 10) // n:
+            print(f"  batch: {done[0]}/{n} runs", flush=True)
+
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        list(pool.map(block, range(0, n, BLOCK)))
+    with np.errstate(all="ignore"):
+        worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
+    return BatchResult(settling, worst, peak)
+
+
+def _scale(values: Sequence[float], i: int) -> float:
+    return float(np.asarray(values, dtype=float).reshape(-1)[i])
+
+
+def _settling(
+    sim: Simulator,
+    t: np.ndarray,
+    tails: np.ndarray,
+    finals: np.ndarray,
+    peaks: np.ndarray,
+    holds: np.ndarray,
+    stops: bool,
+) -> np.ndarray:
+    """Settling times (runs, 6) [s], NaN where unavailable, of runs' signals from the stop on
+    (``tails`` (runs, 6, samples) at times ``t``), as :func:`isolator.settling.settling_metrics` rules."""
+    stop = sim.stop_time
+    if math.isinf(stop) or stop > t[-1]:
+        return np.full(peaks.shape, np.nan)
+    settings = sim.scenario.settling
+    bands = np.maximum(signal_bands(settings, peaks), 1e-300)
+    times, _ = last_outside(t, tails, finals, stop, bands, holds[:, None])
+    if stops:
+        times[still_signals(settings, peaks)] = 0.0
+    return times
