@@ -29,8 +29,9 @@ __all__ = ["STAGES", "DenseStepper", "StepPlan", "Tableau", "dop853_tableau", "s
 
 #: right-hand-side evaluations per step (twelve, the end point, three for the dense output)
 STAGES = coefficients.N_STAGES_EXTENDED
-#: steps per compiled call
+#: steps per compiled call, and per call of the shorter form that finishes a run
 CHUNK = 128
+TAIL = 16
 
 
 @dataclass(frozen=True)
@@ -115,7 +116,7 @@ class StepPlan:
         Index into the flattened (steps x per_step) outputs of each sample after the first.
     steps : int
         Steps that advance time; the arrays are padded with empty steps (length 0)
-        to a whole number of compiled chunks.
+        to a whole number of ``TAIL`` steps (the shorter compiled call).
     """
 
     start: np.ndarray
@@ -172,7 +173,7 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
     per_step = 4 * math.ceil(per_step / 4)  # fewer compiled variants
     rank = np.arange(owner.size) - np.repeat(np.cumsum(counts_per) - counts_per, counts_per)
     steps = start.size
-    padded = CHUNK * math.ceil(steps / CHUNK)
+    padded = TAIL * math.ceil(steps / TAIL)
     fraction = np.full((padded, per_step), -1.0)
     fraction[owner, rank] = np.clip((samples[1:] - start[owner]) / length[owner], 0.0, 1.0)
     pad = padded - steps
@@ -228,13 +229,6 @@ class DenseStepper:
         step = ca.Function(
             "dop853_step", [x, carried, u, h, first, fraction, p, reference], [x_new, k[tab.end], *outputs]
         )
-        acc = step.mapaccum("acc", CHUNK, [0, 1], [0, 1])
-        x0, k0 = ca.MX.sym("x0", nx), ca.MX.sym("k0", nx)
-        uu = ca.MX.sym("U", nu, STAGES * CHUNK)
-        hh, ff = ca.MX.sym("H", 1, CHUNK), ca.MX.sym("F", 1, CHUNK)
-        ss = ca.MX.sym("S", 1, per_step * CHUNK)
-        pp, rr = ca.MX.sym("p", npar), ca.MX.sym("r", nx)
-        out = acc(x0, k0, uu, hh, ff, ss, ca.repmat(pp, 1, CHUNK), ca.repmat(rr, 1, CHUNK))
         lay = model.layout
         self.name = (
             f"isolator_dop853_{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
@@ -243,10 +237,9 @@ class DenseStepper:
         self.model = model
         self.per_step = per_step
         self.with_states = with_states
-        self.chunk = NativeFunction(
-            ca.Function(self.name, [x0, k0, uu, hh, ff, ss, pp, rr], [out[0][:, -1], out[1][:, -1], *out[2:]]),
-            compile=compile,
-        )
+        tail = _chunk(step, TAIL, f"{self.name}_tail")
+        self.chunk = NativeFunction(_chunk(step, CHUNK, self.name), compile=compile, companions=(tail,))
+        self.tail = self.chunk.companion(tail)
 
     @staticmethod
     def states(plan: StepPlan, polynomials: np.ndarray) -> np.ndarray:
@@ -311,7 +304,7 @@ class DenseStepper:
             Each step's start state and dense-output coefficients (see
             :meth:`states`); None unless built ``with_states``.
         """
-        n = plan.start.size  # a whole number of chunks
+        n = plan.start.size  # a whole number of TAIL steps
         m = self.per_step
         nx = self.model.n_states
         signals = np.empty((n * m, 6))
@@ -324,18 +317,25 @@ class DenseStepper:
             x = np.asarray(x0, dtype=float)
             k_end = np.zeros(nx)
             flags = plan.first
-            for lo in range(0, n, CHUNK):
-                hi = lo + CHUNK
-                u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((CHUNK * STAGES, 0))
-                x, k_end, sig, peak, *rest = self.chunk(
+            for lo, size, fn in self._calls(n):
+                hi = lo + size
+                u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((size * STAGES, 0))
+                x, k_end, sig, peak, *rest = fn(
                     x, k_end, u, plan.length[lo:hi], flags[lo:hi], plan.fraction[lo:hi], p, reference
                 )
                 x, k_end = x.ravel(), k_end.ravel()
                 signals[lo * m : hi * m] = sig
                 peaks[lo:hi] = peak
                 if states is not None:
-                    states[lo:hi] = rest[0].reshape(CHUNK, -1, nx)
+                    states[lo:hi] = rest[0].reshape(size, -1, nx)
         return signals, peaks, states
+
+    def _calls(self, steps: int) -> list[tuple[int, int, NativeFunction]]:
+        """(first step, steps, compiled function) of each call that runs ``steps`` steps."""
+        full = steps // CHUNK * CHUNK
+        return [(lo, CHUNK, self.chunk) for lo in range(0, full, CHUNK)] + [
+            (lo, TAIL, self.tail) for lo in range(full, steps, TAIL)
+        ]
 
     def _run_native(
         self,
@@ -355,22 +355,30 @@ class DenseStepper:
         p, reference = _contiguous(p), _contiguous(reference)
         carried = np.zeros((2, 2, nx))  # (x, k_end) ping-pong between calls
         carried[0, 0] = x0
-        u, h, f, s = (a.ctypes.data for a in arrays)
-        strides = [a.strides[0] * CHUNK for a in arrays]
-        out_sig, out_st, out_peak = signals.ctypes.data, 0 if states is None else states.ctypes.data, peaks.ctypes.data
-        sig_stride = 8 * 6 * m * CHUNK
-        st_stride = 0 if states is None else 8 * states[0].size * CHUNK
+        bases = [a.ctypes.data for a in arrays]
+        strides = [a.strides[0] for a in arrays]  # per step
+        out_sig, out_peak = signals.ctypes.data, peaks.ctypes.data
+        out_st = 0 if states is None else states.ctypes.data
+        st_step = 0 if states is None else 8 * states[0].size
         here, pp, rr = carried.ctypes.data, p.ctypes.data, reference.ctypes.data
         row = 8 * nx
-        for k in range(plan.start.size // CHUNK):
+        for k, (lo, _, fn) in enumerate(self._calls(plan.start.size)):
             src, dst = here + (k % 2) * 2 * row, here + ((k + 1) % 2) * 2 * row
-            at = [base + k * stride for base, stride in zip((u, h, f, s), strides, strict=True)]
-            ins = [src, src + row, *at, pp, rr]
-            outs = [dst, dst + row, out_sig + k * sig_stride, out_peak + k * 8 * 6 * CHUNK]
+            at = [base + lo * stride for base, stride in zip(bases, strides, strict=True)]
+            outs = [dst, dst + row, out_sig + lo * 8 * 6 * m, out_peak + lo * 8 * 6]
             if states is not None:
-                outs.append(out_st + k * st_stride)
-            self.chunk.call_addresses(ins, outs)
+                outs.append(out_st + lo * st_step)
+            fn.call_addresses([src, src + row, *at, pp, rr], outs)
         del arrays
+
+
+def _chunk(step: ca.Function, steps: int, name: str) -> ca.Function:
+    """``steps`` DOP853 steps in a row: the carried state and end slope out, every step's outputs."""
+    acc = step.mapaccum("acc", steps, [0, 1], [0, 1])
+    x0, k0, u, h, first, s, p, r = step.mx_in()
+    args = [ca.MX.sym(a.name(), a.shape[0], a.shape[1] * steps) for a in (u, h, first, s)]
+    out = acc(x0, k0, *args, ca.repmat(p, 1, steps), ca.repmat(r, 1, steps))
+    return ca.Function(name, [x0, k0, *args, p, r], [out[0][:, -1], out[1][:, -1], *out[2:]])
 
 
 def _contiguous(a: np.ndarray) -> np.ndarray:

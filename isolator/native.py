@@ -105,6 +105,17 @@ class NativeFunction:
         if self.library is not None:
             self._load(self.library)
 
+    def companion(self, function: ca.Function) -> NativeFunction:
+        """One of this function's ``companions``, called from the same library (or evaluated by
+        casadi when nothing was compiled)."""
+        if all(function.name() != c.name() for c in self.companions):
+            raise ValueError(f"{function.name()}: not a companion of {self.name}")
+        other = NativeFunction(function, compile=False, optimisation=self.flags[0])
+        other.library = self.library
+        if self.library is not None:
+            other._load(self.library)
+        return other
+
     @property
     def native(self) -> bool:
         """True when calls run compiled code."""

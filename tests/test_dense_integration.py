@@ -14,7 +14,7 @@ from scipy.linalg import expm
 
 from conftest import asymmetric_3d_dict, base_dict
 from isolator import Simulator, UnstableTableError, load_scenario, scenario_from_dict
-from isolator.dop853 import CHUNK, STAGES, dop853_tableau, step_plan
+from isolator.dop853 import STAGES, TAIL, dop853_tableau, step_plan
 from isolator.equilibrium import static_equilibria, static_equilibrium
 from isolator.native import MappedFunction
 from isolator.settling import settling_time, settling_times
@@ -60,7 +60,7 @@ def test_the_step_plan_keeps_breakpoints_on_step_edges_and_reads_every_sample_on
     plan = step_plan(samples, breakpoints, 0.03)
     real = slice(0, plan.steps)
     ends = plan.start[real] + plan.length[real]
-    assert plan.start.size % CHUNK == 0
+    assert plan.start.size % TAIL == 0
     assert np.all(plan.length[real] <= 0.03 + 1e-12)
     assert np.all(plan.length[plan.steps:] == 0.0)
     for b in breakpoints:  # never strictly inside a step
@@ -217,3 +217,26 @@ def test_the_series_rotation_vector_is_exact_up_to_the_divergence_limit():
             series = np.asarray(signals(x, r)).ravel()[3:]
             assert np.allclose(series, angle * axis, rtol=0, atol=1e-15 + 2e-15 * angle)
             assert np.allclose(series, relative_rotation_vector(q[None], ref)[0], rtol=0, atol=1e-15)
+
+
+def test_the_stepper_without_a_compiler_gives_the_same_run():
+    from isolator.dop853 import DenseStepper
+    from isolator.integrator import signal_function
+
+    data = base_dict()
+    data["simulation"] = {"duration": 1.2, "sample_rate": 500.0}
+    sim = Simulator(scenario_from_dict(data))
+    p = sim.parameters
+    start, end = sim.equilibria(p)
+    method = sim.method_for(max(start.max_frequency, end.max_frequency))
+    inputs = sim._plan_inputs(method, p)
+    signals = signal_function("exact", 13)
+    compiled = DenseStepper(sim.model, method.plan.per_step, signals, True)
+    evaluated = DenseStepper(sim.model, method.plan.per_step, signals, True, compile=False)
+    assert compiled.chunk.native
+    assert not evaluated.chunk.native
+    a = compiled.run(start.state, method.plan, inputs, p, start.state)
+    b = evaluated.run(start.state, method.plan, inputs, p, start.state)
+    # the same numbers up to rounding (the compiled code is built with -ffast-math)
+    assert np.allclose(a[0], b[0], rtol=0, atol=1e-10 * np.abs(a[0]).max())
+    assert np.allclose(a[1], b[1], rtol=0, atol=1e-10 * np.abs(a[1]).max())
