@@ -156,6 +156,7 @@ class Simulator:
         self.grid: TimeGrid = time_grid(settings, scenario.breakpoints)
         self._breakpoints = grid_breakpoints(settings, scenario.breakpoints)
         self._samples = self.grid.samples
+        self._longest_interval = float(np.max(np.diff(self.grid.nodes))) if self.grid.nodes.size > 1 else 0.0
         self._positions = (scenario.initial_positions(), scenario.final_positions())
         self._inputs: dict[int, np.ndarray] = {}
         self._plans: dict[int, StepPlan] = {}
@@ -200,9 +201,8 @@ class Simulator:
 
     def substeps_for(self, omega_max: float) -> int:
         """RK4 steps per grid interval for a fastest eigenvalue ``omega_max`` [rad/s]."""
-        dt = float(np.max(np.diff(self.grid.nodes))) if self.grid.nodes.size > 1 else 0.0
         omega = max(omega_max, self._forcing)
-        return max(1, math.ceil(omega * dt / STEP_ANGLE))
+        return max(1, math.ceil(omega * self._longest_interval / STEP_ANGLE))
 
     def method_for(self, omega_max: float) -> Method:
         """The cheaper integration for a fastest eigenvalue ``omega_max`` [rad/s].
