@@ -397,15 +397,15 @@ def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) ->
     fraction, reference = ca.SX.sym("s", 1, per_step), ca.SX.sym("r", nx)
     coef = h * (slopes @ ca.DM(tab.dense))
     degree = tab.dense.shape[1]
-    columns, peak = [], ca.SX.zeros(6, 1)
+    values, peak = [], ca.SX.zeros(6, 1)
     for m in range(per_step):
         s = ca.fmax(fraction[m], 0.0)
         acc = coef[:, degree - 1]
         for j in range(degree - 2, -1, -1):
             acc = coef[:, j] + s * acc
-        columns.append(x0 + s * acc)
-        peak = ca.fmax(peak, ca.fabs(signals(columns[-1], reference)) * (fraction[m] >= 0))
-    outputs = [ca.horzcat(*[signals(c, reference) for c in columns]), peak]
+        values.append(signals(x0 + s * acc, reference))
+        peak = ca.fmax(peak, ca.fabs(values[-1]) * (fraction[m] >= 0))
+    outputs = [ca.horzcat(*values), peak]
     if with_states:
         outputs.append(ca.horzcat(x0, coef))
     return ca.Function("dop853_samples", [x0, slopes, h, fraction, reference], outputs)
