@@ -512,8 +512,7 @@ class _Problem:
         k2 = self.model.rhs(x + h / 2 * k1, c1, p)
         k3 = self.model.rhs(x + h / 2 * k2, c1, p)
         k4 = self.model.rhs(x + h * k3, c2, p)
-        lay = self.layout
-        name = f"profile_rk4_{self.model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
+        name = f"profile_rk4_{self.model.tag}"
         step = ca.Function(name, [x, tau, h, coef, p], [x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)]).expand()
         return _compiled(step)
 

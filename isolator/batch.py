@@ -10,7 +10,6 @@ signals from the carriages' stop on.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -19,7 +18,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from .errors import SimulationError
-from .settling import last_outside, signal_bands, still_signals
+from .settling import signal_settling
 
 if TYPE_CHECKING:
     from .simulation import Simulator
@@ -82,7 +81,7 @@ def run_batch(
     SimulationError
         A run diverged (the message names the run).
     """
-    from .simulation import Method, _dense_stepper, _slowest_period, _stepper
+    from .simulation import Method, _check_turn, _dense_stepper, _hold, _stepper
 
     params = sim.scaled_parameter_sets(stiffness, damping)
     n = params.shape[0]
@@ -105,9 +104,10 @@ def run_batch(
     stop = sim.stop_time
     tail_from = max(1, min(int(np.searchsorted(t, stop - 1e-12)), t.size - 1))
     finals = np.zeros((n, 6))
-    if ends[0] is not None:
+    stops = ends[0] is not None
+    if stops:
         finals = sim.signals(np.array([e.state for e in ends]), np.array([s.state for s in starts])).T
-    holds = np.array([_slowest_period(e.eigenvalues) if e is not None else 0.0 for e in ends])
+    holds = np.array([_hold(e) for e in ends])
     settling = np.full((n, 6), np.nan)
     peak = np.zeros((n, 6))
     done = [0]
@@ -133,8 +133,7 @@ def run_batch(
                     sig = raw[method.plan.sample_slots]
                     bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
-                if np.max(peak[i, 3:]) > 0.2:
-                    raise SimulationError("the run diverged: the table turned by more than 0.2 rad")
+                _check_turn(peak[i])
             except SimulationError as exc:
                 what = f"run {i} (stiffness x{_scale(stiffness, i):g}, damping x{_scale(damping, i):g})"
                 raise SimulationError(f"{what}: {exc}") from None
@@ -142,8 +141,10 @@ def run_batch(
             dense.append(i)
         if dense:
             rows = np.array(dense)
-            settling[rows] = _settling(sim, t[tail_from:], tails[: rows.size], finals[rows], peak[rows], holds[rows],
-                                       ends[0] is not None)
+            settling[rows] = signal_settling(
+                t[tail_from:], tails[: rows.size], finals[rows] if stops else None, sim.stop_time,
+                sim.scenario.settling, holds[rows], peak[rows],
+            )[0]
         done[0] += hi - lo
         if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - (hi - lo)) * 10) // n:
             print(f"  batch: {done[0]}/{n} runs", flush=True)
@@ -157,25 +158,3 @@ def run_batch(
 
 def _scale(values: Sequence[float], i: int) -> float:
     return float(np.asarray(values, dtype=float).reshape(-1)[i])
-
-
-def _settling(
-    sim: Simulator,
-    t: np.ndarray,
-    tails: np.ndarray,
-    finals: np.ndarray,
-    peaks: np.ndarray,
-    holds: np.ndarray,
-    stops: bool,
-) -> np.ndarray:
-    """Settling times (runs, 6) [s], NaN where unavailable, of runs' signals from the stop on
-    (``tails`` (runs, 6, samples) at times ``t``), as :func:`isolator.settling.settling_metrics` rules."""
-    stop = sim.stop_time
-    if math.isinf(stop) or stop > t[-1]:
-        return np.full(peaks.shape, np.nan)
-    settings = sim.scenario.settling
-    bands = np.maximum(signal_bands(settings, peaks), 1e-300)
-    times, _ = last_outside(t, tails, finals, stop, bands, holds[:, None])
-    if stops:
-        times[still_signals(settings, peaks)] = 0.0
-    return times

@@ -229,11 +229,7 @@ class DenseStepper:
         step = ca.Function(
             "dop853_step", [x, carried, u, h, first, fraction, p, reference], [x_new, k[tab.end], *outputs]
         )
-        lay = model.layout
-        self.name = (
-            f"isolator_dop853_{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
-            f"_g{int(lay.ground)}_m{per_step}{'_x' if with_states else ''}"
-        )
+        self.name = f"isolator_dop853_{model.tag}_m{per_step}{'_x' if with_states else ''}"
         self.model = model
         self.per_step = per_step
         self.with_states = with_states

@@ -245,11 +245,11 @@ class _Solver:
     """A model's static residual and rest linearisation, compiled for blocks of runs."""
 
     def __init__(self, model: Model) -> None:
-        self.residual = MappedFunction(model.static_residual, f"isolator_static_{_tag(model)}")
+        self.residual = MappedFunction(model.static_residual, f"isolator_static_{model.tag}")
         z, c, p = ca.SX.sym("z", 6), ca.SX.sym("c", model.layout.input_size), ca.SX.sym("p", model.layout.size)
         x = model.pose_state(z)
         rest = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
-        self.linear = MappedFunction(rest, f"isolator_rest_{_tag(model)}", optimisation="-O1")
+        self.linear = MappedFunction(rest, f"isolator_rest_{model.tag}", optimisation="-O1")
 
 
 _SOLVERS: dict[tuple, _Solver] = {}
@@ -260,11 +260,6 @@ def _solver(model: Model) -> _Solver:
     if key not in _SOLVERS:
         _SOLVERS[key] = _Solver(model)
     return _SOLVERS[key]
-
-
-def _tag(model: Model) -> str:
-    lay = model.layout
-    return f"{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}_g{int(lay.ground)}"
 
 
 def _dominant_dof(model: Model, vector: np.ndarray) -> str:

@@ -210,11 +210,7 @@ class Stepper:
         hh = ca.MX.sym("H", 1, CHUNK)
         pp = ca.MX.sym("p", npar)
         xs = acc(x0, cc, hh, ca.repmat(pp, 1, CHUNK))
-        lay = model.layout
-        name = (
-            f"isolator_{model.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}"
-            f"_g{int(lay.ground)}_s{substeps}"
-        )
+        name = f"isolator_{model.tag}_s{substeps}"
         self.name = name
         self.chunk = NativeFunction(ca.Function(name, [x0, cc, hh, pp], [xs]), compile=compile)
 

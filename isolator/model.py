@@ -471,6 +471,12 @@ class Model:
     staged_inputs: ca.Function | None = None
     staged_rhs: ca.Function | None = None
 
+    @property
+    def tag(self) -> str:
+        """Kind and structure in a name, e.g. ``exact_c2_i4_a0_g0``, for compiled functions and their cache."""
+        lay = self.layout
+        return f"{self.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}_g{int(lay.ground)}"
+
 
 def build_model(layout: ParameterLayout, kind: str = "exact") -> Model:
     """Build the casadi functions of a model for a scenario structure.

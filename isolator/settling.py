@@ -17,6 +17,7 @@ __all__ = [
     "settling_times",
     "signal_bands",
     "signal_peaks",
+    "signal_settling",
     "still_signals",
 ]
 
@@ -106,16 +107,24 @@ def settling_times(
         [s], as in :func:`settling_time`.
     """
     k = signals.shape[0]
-    if math.isinf(stop_time):
-        return [(None, "a carriage never stops (sine profile): no settling time")] * k
-    if stop_time > t[-1]:
-        return [(None, f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s")] * k
+    why = _unavailable(t, stop_time)
+    if why:
+        return [(None, why)] * k
     times, short = last_outside(t, signals, final, stop_time, band, hold)
-    return [
-        (None, f"still outside the band {short[i]:.3g} s before the run ends; lengthen simulation.duration")
-        if math.isnan(times[i]) else (float(times[i]), "")
-        for i in range(k)
-    ]
+    return [(None, _outside(short[i])) if math.isnan(times[i]) else (float(times[i]), "") for i in range(k)]
+
+
+def _unavailable(t: np.ndarray, stop_time: float) -> str:
+    """Why a run over times ``t`` [s] shows no settling at all ("" when it can)."""
+    if math.isinf(stop_time):
+        return "a carriage never stops (sine profile): no settling time"
+    if stop_time > t[-1]:
+        return f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s"
+    return ""
+
+
+def _outside(short: float) -> str:
+    return f"still outside the band {short:.3g} s before the run ends; lengthen simulation.duration"
 
 
 def last_outside(
@@ -186,6 +195,53 @@ def signal_peaks(signals: np.ndarray) -> np.ndarray:
     return np.maximum(signals.max(axis=1), -signals.min(axis=1))
 
 
+def signal_settling(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray | None,
+    stop_time: float,
+    settling: Settling,
+    hold: float | np.ndarray,
+    peaks: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Settling times of the six table signals of one run or stacked runs, as numbers.
+
+    Parameters
+    ----------
+    t : ndarray (samples,)
+        [s]; from the stop on at least.
+    signals : ndarray (..., 6, samples)
+        [m or rad].
+    final : ndarray (..., 6) or None
+        Final equilibrium values (None: a carriage never stops; 0 is the target).
+    stop_time : float
+        [s].
+    settling : Settling
+        The scenario's band rule.
+    hold : float or ndarray (...)
+        [s], as in :func:`settling_time`.
+    peaks : ndarray (..., 6)
+        max |signal| over the whole run [m or rad].
+
+    Returns
+    -------
+    time : ndarray (..., 6)
+        [s]; NaN where the run cannot show it; 0 for a signal that does not move.
+    short : ndarray (..., 6)
+        How long before the run's end each signal was last outside its band [s].
+    """
+    peaks = np.asarray(peaks, dtype=float)
+    if _unavailable(t, stop_time):
+        times, short = np.full(peaks.shape, np.nan), np.zeros(peaks.shape)
+    else:
+        target = np.zeros(peaks.shape) if final is None else np.asarray(final, dtype=float)
+        bands = np.maximum(signal_bands(settling, peaks), 1e-300)
+        times, short = last_outside(t, signals, target, stop_time, bands, np.asarray(hold, dtype=float)[..., None])
+    if final is not None:
+        times = np.where(still_signals(settling, peaks), 0.0, times)
+    return times, short
+
+
 def settling_metrics(
     t: np.ndarray,
     signals: np.ndarray,
@@ -201,14 +257,17 @@ def settling_metrics(
     """
     if peaks is None:
         peaks = signal_peaks(signals)
-    bands = signal_bands(settling, peaks)
+    times, short = signal_settling(t, signals, final, stop_time, settling, hold, peaks)
     still = still_signals(settling, peaks) if final is not None else np.zeros(len(SIGNALS), dtype=bool)
-    target = np.zeros(len(SIGNALS)) if final is None else np.asarray(final, dtype=float)
-    moving = np.nonzero(~still)[0]
-    times = settling_times(t, signals[moving], target[moving], stop_time, np.maximum(bands[moving], 1e-300), hold)
-    results = dict(zip(moving.tolist(), times, strict=True))
+    why = _unavailable(t, stop_time)
+    bands = signal_bands(settling, peaks)
     out: dict[str, SettlingResult] = {}
     for i, name in enumerate(SIGNALS):
-        time, reason = results.get(i, (0.0, "does not move"))
+        if still[i]:
+            time, reason = 0.0, "does not move"
+        elif math.isnan(times[i]):
+            time, reason = None, why or _outside(short[i])
+        else:
+            time, reason = float(times[i]), ""
         out[name] = SettlingResult(time, float(peaks[i]), float(bands[i]), reason)
     return out
