@@ -180,11 +180,7 @@ class Simulator:
 
     def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
         """Parameter vector with all isolator stiffness and damping scaled."""
-        if not (math.isfinite(stiffness) and stiffness > 0):
-            raise ScenarioError(f"stiffness: scale must be a finite number > 0, got {stiffness}")
-        if not (math.isfinite(damping) and damping >= 0):
-            raise ScenarioError(f"damping: scale must be a finite number >= 0, got {damping}")
-        return self.scaled_parameter_sets([stiffness], [damping])[0]
+        return self.scaled_parameter_sets(stiffness, damping)[0]
 
     # -- pieces ----------------------------------------------------------------
     def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
@@ -471,20 +467,17 @@ class Simulator:
 
         return run_batch(self, stiffness, damping, workers, progress)
 
-    def scaled_parameter_sets(self, stiffness: Sequence[float], damping: Sequence[float]) -> np.ndarray:
-        """Parameter vectors (runs, parameters) with all isolator stiffness and damping scaled per run."""
-        k = np.asarray(stiffness, dtype=float).reshape(-1)
-        c = np.asarray(damping, dtype=float).reshape(-1)
+    def scaled_parameter_sets(
+        self, stiffness: float | Sequence[float], damping: float | Sequence[float]
+    ) -> np.ndarray:
+        """Parameter vectors (runs, parameters) with all isolator stiffness and damping scaled per run.
+
+        A bad scale is named by its index (``stiffness[3]: ...``) when the scales are sequences.
+        """
+        k = _scales(stiffness, "stiffness", positive=True)
+        c = _scales(damping, "damping", positive=False)
         if k.size != c.size:
             raise ScenarioError("damping: needs one scale per stiffness scale")
-        bad_k = ~(np.isfinite(k) & (k > 0))
-        if bad_k.any():
-            i = int(np.argmax(bad_k))
-            raise ScenarioError(f"stiffness[{i}]: scale must be a finite number > 0, got {k[i]}")
-        bad_c = ~(np.isfinite(c) & (c >= 0))
-        if bad_c.any():
-            i = int(np.argmax(bad_c))
-            raise ScenarioError(f"damping[{i}]: scale must be a finite number >= 0, got {c[i]}")
         names = self.layout.names
         stiff = np.array([".stiffness." in n for n in names])
         damp = np.array([".damping." in n for n in names])
@@ -521,6 +514,18 @@ def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
     reference = np.asarray(reference, dtype=float)
     angles = relative_rotation_vector(states[:, 3:7], reference[..., 3:7])
     return np.ascontiguousarray(np.vstack([(states[:, 0:3] - reference[..., 0:3]).T, angles.T]))
+
+
+def _scales(values: float | Sequence[float], key: str, positive: bool) -> np.ndarray:
+    """Scale factors as an array, each finite and > 0 (``positive``) or >= 0; one clear error naming ``key``."""
+    array = np.asarray(values, dtype=float)
+    flat = array.reshape(-1)
+    bad = ~(np.isfinite(flat) & ((flat > 0) if positive else (flat >= 0)))
+    if bad.any():
+        i = int(np.argmax(bad))
+        where = key if array.ndim == 0 else f"{key}[{i}]"
+        raise ScenarioError(f"{where}: scale must be a finite number {'>' if positive else '>='} 0, got {flat[i]}")
+    return flat
 
 
 def _check_turn(peaks: np.ndarray, t: np.ndarray | None = None, signals: np.ndarray | None = None) -> None:
