@@ -12,7 +12,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 
 import casadi as ca
 import numpy as np
@@ -53,8 +53,9 @@ class TimeGrid:
     nodes: np.ndarray
     is_sample: np.ndarray
 
-    @property
+    @cached_property
     def samples(self) -> np.ndarray:
+        """The output sample times [s] (computed once)."""
         return self.nodes[self.is_sample]
 
 

@@ -155,7 +155,6 @@ class Simulator:
         settings = scenario.simulation
         self.grid: TimeGrid = time_grid(settings, scenario.breakpoints)
         self._breakpoints = grid_breakpoints(settings, scenario.breakpoints)
-        self._samples = self.grid.samples
         self._longest_interval = float(np.max(np.diff(self.grid.nodes))) if self.grid.nodes.size > 1 else 0.0
         self._positions = (scenario.initial_positions(), scenario.final_positions())
         self._inputs: dict[int, np.ndarray] = {}
@@ -378,7 +377,7 @@ class Simulator:
     ) -> dict[str, SettlingResult]:
         """Settling of the six signals (6, samples from sample ``first`` on) of a run without NaN;
         ``peaks`` over the whole run when the samples are not all there."""
-        t = self._samples[first:]
+        t = self.grid.samples[first:]
         peaks = signal_peaks(signals) if peaks is None else peaks
         _check_turn(peaks, t, signals)
         return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, _hold(end), peaks)
