@@ -7,13 +7,17 @@ breakpoints gets a whole number of equal steps, and each output sample is read
 from its step's seventh-order continuous extension (Hairer, Norsett and
 Wanner, *Solving Ordinary Differential Equations I*, II.6; the coefficients
 are scipy's DOP853 ones, with the dense output rewritten in powers of the step
-fraction). One compiled call runs a chunk of steps, the samples they contain
-and the six table signals at those samples.
+fraction). The compiled loop (:mod:`isolator.dop853_driver`) runs all the steps,
+the samples they contain and the six table signals at those samples, for one
+run or several side by side; the same steps as a casadi graph serve when
+nothing can be compiled.
 """
 
 from __future__ import annotations
 
 import math
+import subprocess
+import warnings
 from dataclasses import dataclass
 from functools import lru_cache
 
@@ -184,58 +188,45 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
 
 
 class DenseStepper:
-    """Compiled DOP853 steps of one model, with ``per_step`` interpolated samples per step.
+    """DOP853 steps of one model, ``lanes`` runs at a time: the compiled loop of
+    :class:`~isolator.dop853_driver.Dop853Driver`, or casadi's evaluator of the same steps
+    when nothing can be compiled.
 
     Parameters
     ----------
     model : Model
         Stepped through its staged right-hand side when it has one
         (:attr:`Model.staged_rhs`), else through ``rhs``.
-    per_step : int
-        Sample slots per step.
     signals : casadi.Function
         ``(x, reference) -> (6,)``: the table signals of a state (SX).
-    with_states : bool
-        Also return each step's dense-output polynomial, from which
-        :meth:`states` evaluates the model's states at the samples.
+    lanes : int
+        Runs per compiled call (1, or 4 for batches: AVX's four doubles).
     compile : bool
         Compile to native code (False: casadi's evaluator).
     """
 
-    def __init__(
-        self, model: Model, per_step: int, signals: ca.Function, with_states: bool = True, compile: bool = True
-    ) -> None:
-        tab = dop853_tableau()
-        rhs = model.staged_rhs if model.staged_rhs is not None else model.rhs
-        nx, nu, npar = model.n_states, rhs.size1_in(1), model.layout.size
-        x = ca.MX.sym("x", nx)
-        carried = ca.MX.sym("k_end", nx)
-        u = ca.MX.sym("u", nu, STAGES)
-        h = ca.MX.sym("h")
-        first = ca.MX.sym("first")
-        fraction = ca.MX.sym("s", 1, per_step)
-        p = ca.MX.sym("p", npar)
-        reference = ca.MX.sym("x_ref", nx)
-        k = [ca.if_else(first, rhs(x, u[:, 0], p), carried, True)]
-        for i in range(1, STAGES):
-            row = tab.a[i, :i]
-            increment = sum((float(w) * k[j] for j, w in enumerate(row) if w != 0.0), ca.MX.zeros(nx))
-            xi = x + h * increment
-            if i == tab.end:
-                x_new = xi
-            k.append(rhs(xi, u[:, i], p))
-        samples = _sampler(nx, per_step, signals, with_states)
-        outputs = samples.call([x, ca.horzcat(*k), h, fraction, reference])
-        step = ca.Function(
-            "dop853_step", [x, carried, u, h, first, fraction, p, reference], [x_new, k[tab.end], *outputs]
-        )
-        self.name = f"isolator_dop853_{model.tag}_m{per_step}{'_x' if with_states else ''}"
+    def __init__(self, model: Model, signals: ca.Function, lanes: int = 1, compile: bool = True) -> None:
+        from .dop853_driver import Dop853Driver
+
         self.model = model
-        self.per_step = per_step
-        self.with_states = with_states
-        tail = _chunk(step, TAIL, f"{self.name}_tail")
-        self.chunk = NativeFunction(_chunk(step, CHUNK, self.name), compile=compile, companions=(tail,))
-        self.tail = self.chunk.companion(tail)
+        self.signals = signals
+        self.lanes = lanes
+        self.driver: Dop853Driver | None = None
+        self._graphs: dict[tuple[int, bool], tuple[NativeFunction, NativeFunction]] = {}
+        if compile:
+            try:
+                self.driver = Dop853Driver(model, signals, lanes)
+            except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
+                warnings.warn(
+                    f"could not compile the DOP853 loop ({exc}); using casadi's evaluator (slower)",
+                    RuntimeWarning,
+                    stacklevel=2,
+                )
+
+    @property
+    def native(self) -> bool:
+        """True when steps run compiled code."""
+        return self.driver is not None
 
     @staticmethod
     def states(plan: StepPlan, polynomials: np.ndarray) -> np.ndarray:
@@ -258,15 +249,14 @@ class DenseStepper:
 
     def run(
         self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray | None]:
-        """Table signals (and states) at the samples after the first.
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """Table signals and states of one run at the samples after the first.
 
         Parameters
         ----------
         x0 : ndarray (n_states,)
             State at t = 0.
         plan : StepPlan
-            With ``plan.per_step == self.per_step``.
         inputs : ndarray (steps, stages, input size)
             The model's inputs at every stage time: ``model.staged_inputs``
             of them when the model has a staged form.
@@ -278,94 +268,116 @@ class DenseStepper:
         Returns
         -------
         signals : ndarray (samples - 1, 6)
-        states : ndarray (samples - 1, n_states) or None
-            None unless built ``with_states``.
+        states : ndarray (samples - 1, n_states)
         """
-        signals, _, polynomials = self.run_slots(x0, plan, inputs, p, reference)
-        states = None if polynomials is None else self.states(plan, polynomials)
-        return signals[plan.sample_slots], states
+        signals, _, polynomials = self.run_slots(x0, plan, inputs, p, reference, with_states=True)
+        return signals[plan.sample_slots], self.states(plan, polynomials)
 
     def run_slots(
-        self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
-    ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray]:
-        """:meth:`run` before the samples are picked out.
-
-        Returns
-        -------
-        signals : ndarray (steps x per_step, 6)
-            At every step's slots (``plan.sample_slots`` picks the samples out).
-        peaks : ndarray (steps, 6)
-            max |signal| over each step's samples (0 for a step without one).
-        polynomials : ndarray (steps, degree + 1, n_states) or None
-            Each step's start state and dense-output coefficients (see
-            :meth:`states`); None unless built ``with_states``.
-        """
-        n = plan.start.size  # a whole number of TAIL steps
-        m = self.per_step
-        nx = self.model.n_states
-        signals = np.empty((n * m, 6))
-        peaks = np.empty((n, 6))
-        degree = dop853_tableau().dense.shape[1]
-        states = np.empty((n, degree + 1, nx)) if self.with_states else None
-        if self.chunk.native and inputs.shape[-1]:
-            self._run_native(x0, plan, inputs, p, reference, signals, peaks, states)
-        else:
-            x = np.asarray(x0, dtype=float)
-            k_end = np.zeros(nx)
-            flags = plan.first
-            for lo, size, fn in self._calls(n):
-                hi = lo + size
-                u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((size * STAGES, 0))
-                x, k_end, sig, peak, *rest = fn(
-                    x, k_end, u, plan.length[lo:hi], flags[lo:hi], plan.fraction[lo:hi], p, reference
-                )
-                x, k_end = x.ravel(), k_end.ravel()
-                signals[lo * m : hi * m] = sig
-                peaks[lo:hi] = peak
-                if states is not None:
-                    states[lo:hi] = rest[0].reshape(size, -1, nx)
-        return signals, peaks, states
-
-    def _calls(self, steps: int) -> list[tuple[int, int, NativeFunction]]:
-        """(first step, steps, compiled function) of each call that runs ``steps`` steps."""
-        full = steps // CHUNK * CHUNK
-        return [(lo, CHUNK, self.chunk) for lo in range(0, full, CHUNK)] + [
-            (lo, TAIL, self.tail) for lo in range(full, steps, TAIL)
-        ]
-
-    def _run_native(
         self,
         x0: np.ndarray,
         plan: StepPlan,
         inputs: np.ndarray,
         p: np.ndarray,
         reference: np.ndarray,
-        signals: np.ndarray,
-        peaks: np.ndarray,
-        states: np.ndarray | None,
-    ) -> None:
-        """The chunks called on buffer addresses: no copies, outputs written in place."""
-        nx = self.model.n_states
-        m = self.per_step
-        arrays = [_contiguous(a) for a in (inputs, plan.length, plan.first, plan.fraction)]
-        p, reference = _contiguous(p), _contiguous(reference)
-        carried = np.zeros((2, 2, nx))  # (x, k_end) ping-pong between calls
-        carried[0, 0] = x0
-        bases = [a.ctypes.data for a in arrays]
-        strides = [a.strides[0] for a in arrays]  # per step
-        out_sig, out_peak = signals.ctypes.data, peaks.ctypes.data
-        out_st = 0 if states is None else states.ctypes.data
-        st_step = 0 if states is None else 8 * states[0].size
-        here, pp, rr = carried.ctypes.data, p.ctypes.data, reference.ctypes.data
-        row = 8 * nx
-        for k, (lo, _, fn) in enumerate(self._calls(plan.start.size)):
-            src, dst = here + (k % 2) * 2 * row, here + ((k + 1) % 2) * 2 * row
-            at = [base + lo * stride for base, stride in zip(bases, strides, strict=True)]
-            outs = [dst, dst + row, out_sig + lo * 8 * 6 * m, out_peak + lo * 8 * 6]
+        with_states: bool = False,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """One run, or ``lanes`` runs sharing ``plan`` and ``inputs``, before the samples are picked out.
+
+        Parameters
+        ----------
+        x0, p, reference : ndarray
+            As for :meth:`run`; stacked ``(lanes, size)`` for ``lanes`` runs at once, when the
+            outputs get a last axis of lanes.
+        plan, inputs
+            As for :meth:`run`.
+        with_states : bool
+            Also return each step's dense-output polynomial.
+
+        Returns
+        -------
+        signals : ndarray (plan.steps x per_step, 6)
+            At every step's used sample slots (``plan.sample_slots`` picks the samples out;
+            the unused slots hold no values).
+        peaks : ndarray (plan.steps, 6)
+            max |signal| over each step's samples (0 for a step without one; NaN propagates).
+        polynomials : ndarray (plan.steps, degree + 1, n_states) or None
+            Each step's start state and dense-output coefficients (see :meth:`states`);
+            None unless ``with_states``.
+        """
+        stacked = np.ndim(x0) == 2
+        x0, p, reference = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (x0, p, reference))
+        if x0.shape[0] != self.lanes:
+            raise ValueError(f"{x0.shape[0]} runs given to a stepper of {self.lanes} lanes")
+        if self.driver is not None:
+            out = self.driver.run(x0, plan, inputs, p, reference, with_states)
+        else:
+            runs = [self._evaluate(x0[i], plan, inputs, p[i], reference[i], with_states) for i in range(self.lanes)]
+            out = tuple(None if r[0] is None else np.stack(r, axis=-1) for r in zip(*runs, strict=True))
+        return out if stacked else tuple(None if a is None else a[..., 0] for a in out)
+
+    def _graph(self, per_step: int, with_states: bool) -> tuple[NativeFunction, NativeFunction]:
+        """The steps as a casadi graph (chunks of ``CHUNK`` and ``TAIL`` steps), evaluated by casadi."""
+        key = (per_step, with_states)
+        if key not in self._graphs:
+            step = _step_function(self.model, per_step, self.signals, with_states)
+            self._graphs[key] = tuple(  # type: ignore[assignment]
+                NativeFunction(_chunk(step, size, f"dop853_{size}"), compile=False) for size in (CHUNK, TAIL)
+            )
+        return self._graphs[key]
+
+    def _evaluate(
+        self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray,
+        with_states: bool,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """One run through casadi's evaluator (:meth:`run_slots` without a compiler)."""
+        chunk, tail = self._graph(plan.per_step, with_states)
+        n, m, nx = plan.start.size, plan.per_step, self.model.n_states  # n: a whole number of TAIL steps
+        signals, peaks = np.empty((n * m, 6)), np.empty((n, 6))
+        states = np.empty((n, dop853_tableau().dense.shape[1] + 1, nx)) if with_states else None
+        x, k_end = x0, np.zeros(nx)
+        full = n // CHUNK * CHUNK
+        calls = [(lo, CHUNK, chunk) for lo in range(0, full, CHUNK)] + [(lo, TAIL, tail) for lo in range(full, n, TAIL)]
+        for lo, size, fn in calls:
+            hi = lo + size
+            u = inputs[lo:hi] if inputs.shape[-1] else np.zeros((size * STAGES, 0))
+            x, k_end, sig, peak, *rest = fn(
+                x, k_end, u, plan.length[lo:hi], plan.first[lo:hi], plan.fraction[lo:hi], p, reference
+            )
+            x, k_end = x.ravel(), k_end.ravel()
+            signals[lo * m : hi * m] = sig
+            peaks[lo:hi] = peak
             if states is not None:
-                outs.append(out_st + lo * st_step)
-            fn.call_addresses([src, src + row, *at, pp, rr], outs)
-        del arrays
+                states[lo:hi] = rest[0].reshape(size, -1, nx)
+        steps = plan.steps
+        return signals[: steps * m], peaks[:steps], None if states is None else states[:steps]
+
+
+def _step_function(model: Model, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:
+    """One DOP853 step and its samples as a casadi function:
+    ``(x, k_end, u, h, first, fraction, p, reference) -> (x_new, k_new, signals, peak, [polynomial])``."""
+    tab = dop853_tableau()
+    rhs = model.staged_rhs if model.staged_rhs is not None else model.rhs
+    nx, nu, npar = model.n_states, rhs.size1_in(1), model.layout.size
+    x = ca.MX.sym("x", nx)
+    carried = ca.MX.sym("k_end", nx)
+    u = ca.MX.sym("u", nu, STAGES)
+    h = ca.MX.sym("h")
+    first = ca.MX.sym("first")
+    fraction = ca.MX.sym("s", 1, per_step)
+    p = ca.MX.sym("p", npar)
+    reference = ca.MX.sym("x_ref", nx)
+    k = [ca.if_else(first, rhs(x, u[:, 0], p), carried, True)]
+    for i in range(1, STAGES):
+        row = tab.a[i, :i]
+        increment = sum((float(w) * k[j] for j, w in enumerate(row) if w != 0.0), ca.MX.zeros(nx))
+        xi = x + h * increment
+        if i == tab.end:
+            x_new = xi
+        k.append(rhs(xi, u[:, i], p))
+    samples = _sampler(nx, per_step, signals, with_states)
+    outputs = samples.call([x, ca.horzcat(*k), h, fraction, reference])
+    return ca.Function("dop853_step", [x, carried, u, h, first, fraction, p, reference], [x_new, k[tab.end], *outputs])
 
 
 def _chunk(step: ca.Function, steps: int, name: str) -> ca.Function:
@@ -375,13 +387,6 @@ def _chunk(step: ca.Function, steps: int, name: str) -> ca.Function:
     args = [ca.MX.sym(a.name(), a.shape[0], a.shape[1] * steps) for a in (u, h, first, s)]
     out = acc(x0, k0, *args, ca.repmat(p, 1, steps), ca.repmat(r, 1, steps))
     return ca.Function(name, [x0, k0, *args, p, r], [out[0][:, -1], out[1][:, -1], *out[2:]])
-
-
-def _contiguous(a: np.ndarray) -> np.ndarray:
-    """``a`` itself when it is already a C-ordered float array."""
-    if isinstance(a, np.ndarray) and a.dtype == np.float64 and a.flags.c_contiguous:
-        return a
-    return np.ascontiguousarray(a, dtype=float)
 
 
 def _sampler(nx: int, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:

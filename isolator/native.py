@@ -24,12 +24,12 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
-__all__ = ["MappedFunction", "NativeFunction", "cache_dir"]
+__all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library"]
 
-# fast-math without the finite-math assumption: NaN and infinity still propagate,
-# so a diverging run is still detected; -march=native is safe because the cache
-# key includes the CPU's identity.
-_FLAGS = ["-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared"]
+#: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
+#: infinity still propagate, so a diverging run is still detected); -march=native is safe because
+#: the cache key includes the CPU's identity
+FLAGS = ["-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared"]
 
 
 def _cpu_identity() -> str:
@@ -53,11 +53,64 @@ def cache_dir() -> Path:
     return base
 
 
-def _compiler() -> str | None:
-    for name in (os.environ.get("CC"), "cc", "gcc", "clang"):
+def _compiler(language: str = "c") -> str | None:
+    names = ("CC", "cc", "gcc", "clang") if language == "c" else ("CXX", "c++", "g++", "clang++")
+    for name in (os.environ.get(names[0]), *names[1:]):
         if name and shutil.which(name):
             return name
     return None
+
+
+def compiled_library(name: str, source: str, flags: Sequence[str] = tuple(FLAGS), language: str = "c") -> Path:
+    """A shared library built from ``source``, cached in :func:`cache_dir` under a hash of the
+    source, the flags, the compiler, casadi's version and the CPU.
+
+    Parameters
+    ----------
+    name : str
+        Prefix of the library's file name.
+    source : str
+        C or C++ source.
+    flags : sequence of str
+        Compiler flags (``-shared`` and ``-fPIC`` among them).
+    language : {"c", "c++"}
+
+    Returns
+    -------
+    Path
+        The library.
+
+    Raises
+    ------
+    RuntimeError
+        No compiler for the language.
+    subprocess.CalledProcessError
+        The compiler failed.
+    """
+    compiler = _compiler(language)
+    if compiler is None:
+        raise RuntimeError(f"no {language.upper()} compiler found (set {'CC' if language == 'c' else 'CXX'})")
+    digest = hashlib.sha256(
+        (source + " ".join(flags) + ca.__version__ + compiler + _cpu_identity()).encode()
+    ).hexdigest()[:20]
+    folder = cache_dir()
+    folder.mkdir(parents=True, exist_ok=True)
+    target = folder / f"{name}-{digest}.so"
+    with _LOCK:
+        if not target.exists():
+            suffix = ".c" if language == "c" else ".cpp"
+            src = folder / f"{name}-{digest}{suffix}"
+            src.write_text(source)
+            fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
+            os.close(fd)
+            try:
+                subprocess.run([compiler, *flags, "-o", tmp_so, str(src), "-lm"], check=True, capture_output=True)
+                os.replace(tmp_so, target)
+            finally:
+                if os.path.exists(tmp_so):
+                    os.unlink(tmp_so)
+                src.unlink(missing_ok=True)
+    return target
 
 
 class NativeFunction:
@@ -86,7 +139,7 @@ class NativeFunction:
     ) -> None:
         self.function = function
         self.companions = companions
-        self.flags = [optimisation, *_FLAGS[1:]]
+        self.flags = [optimisation, *FLAGS[1:]]
         self.name = function.name()
         self.in_shapes = [function.size_in(i) for i in range(function.n_in())]
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
@@ -105,26 +158,12 @@ class NativeFunction:
         if self.library is not None:
             self._load(self.library)
 
-    def companion(self, function: ca.Function) -> NativeFunction:
-        """One of this function's ``companions``, called from the same library (or evaluated by
-        casadi when nothing was compiled)."""
-        if all(function.name() != c.name() for c in self.companions):
-            raise ValueError(f"{function.name()}: not a companion of {self.name}")
-        other = NativeFunction(function, compile=False, optimisation=self.flags[0])
-        other.library = self.library
-        if self.library is not None:
-            other._load(self.library)
-        return other
-
     @property
     def native(self) -> bool:
         """True when calls run compiled code."""
         return self._lib is not None
 
     def _build(self) -> Path:
-        compiler = _compiler()
-        if compiler is None:
-            raise RuntimeError("no C compiler found (set CC)")
         with tempfile.TemporaryDirectory() as tmp:
             generator = ca.CodeGenerator(f"{self.name}.c", {"with_header": False})
             generator.add(self.function)
@@ -132,33 +171,7 @@ class NativeFunction:
                 generator.add(extra)
             generator.generate(tmp + os.sep)
             source = Path(tmp, f"{self.name}.c").read_text()
-        digest = hashlib.sha256(
-            (source + " ".join(self.flags) + ca.__version__ + compiler + _cpu_identity()).encode()
-        ).hexdigest()[:20]
-        folder = cache_dir()
-        folder.mkdir(parents=True, exist_ok=True)
-        target = folder / f"{self.name}-{digest}.so"
-        with _LOCK:
-            if not target.exists():
-                self._compile(compiler, source, folder, target, digest)
-        return target
-
-    def _compile(self, compiler: str, source: str, folder: Path, target: Path, digest: str) -> None:
-        src = folder / f"{self.name}-{digest}.c"
-        src.write_text(source)
-        fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
-        os.close(fd)
-        try:
-            subprocess.run(
-                [compiler, *self.flags, "-o", tmp_so, str(src), "-lm"],
-                check=True,
-                capture_output=True,
-            )
-            os.replace(tmp_so, target)
-        finally:
-            if os.path.exists(tmp_so):
-                os.unlink(tmp_so)
-            src.unlink(missing_ok=True)
+        return compiled_library(self.name, source, self.flags)
 
     def _load(self, path: Path) -> None:
         lib = ctypes.CDLL(str(path))
@@ -193,25 +206,6 @@ class NativeFunction:
         if status != 0:
             raise RuntimeError(f"{self.name}: native evaluation failed ({status})")
         return outs
-
-    def call_addresses(self, inputs: Sequence[int], outputs: Sequence[int]) -> None:
-        """Evaluate on raw buffer addresses (no checks, no copies; compiled functions only).
-
-        Parameters
-        ----------
-        inputs, outputs : sequence of int
-            Addresses of float64 buffers holding each input and receiving each
-            output, in casadi's column-major layout; the caller keeps the
-            buffers alive and of the right sizes.
-        """
-        if self._lib is None:
-            raise RuntimeError(f"{self.name}: not compiled")
-        sz_arg, sz_res, _, _ = self._sz
-        arg = (ctypes.c_void_p * max(sz_arg, len(inputs)))(*inputs)
-        res = (ctypes.c_void_p * max(sz_res, len(outputs)))(*outputs)
-        iw, w = self._work()
-        if self._fn(arg, res, iw.ctypes.data, w.ctypes.data, 0) != 0:
-            raise RuntimeError(f"{self.name}: native evaluation failed")
 
     def _work(self) -> tuple[np.ndarray, np.ndarray]:
         """This thread's work arrays (reused: big fresh ones cost page faults on every call)."""

@@ -55,7 +55,7 @@ MAX_DENSE_STEP = 0.05
 
 _MODELS: dict[tuple[ParameterLayout, str], Model] = {}
 _STEPPERS: dict[tuple[ParameterLayout, str, int], Stepper] = {}
-_DENSE: dict[tuple[ParameterLayout, str, int, bool], DenseStepper] = {}
+_DENSE: dict[tuple[ParameterLayout, str, int], DenseStepper] = {}
 
 
 def get_model(layout: ParameterLayout, kind: str = "exact") -> Model:
@@ -75,10 +75,10 @@ def _stepper(model: Model, substeps: int) -> Stepper:
     return _STEPPERS[key]
 
 
-def _dense_stepper(model: Model, per_step: int, with_states: bool) -> DenseStepper:
-    key = (model.layout, model.kind, per_step, with_states)
+def _dense_stepper(model: Model, lanes: int = 1) -> DenseStepper:
+    key = (model.layout, model.kind, lanes)
     if key not in _DENSE:
-        _DENSE[key] = DenseStepper(model, per_step, signal_function(model.kind, model.n_states), with_states)
+        _DENSE[key] = DenseStepper(model, signal_function(model.kind, model.n_states), lanes)
     return _DENSE[key]
 
 
@@ -318,9 +318,8 @@ class Simulator:
         n = len(self.scenario.carriages)
         if forces is None and feedback is None and method.plan is not None:
             plan = method.plan
-            stepper = _dense_stepper(self.model, plan.per_step, True)
-            raw, step_peaks, polynomials = stepper.run_slots(
-                start.state, plan, self._plan_inputs(method, p), p, start.state
+            raw, step_peaks, polynomials = _dense_stepper(self.model).run_slots(
+                start.state, plan, self._plan_inputs(method, p), p, start.state, with_states=True
             )
             peaks = np.max(step_peaks, axis=0)
             if not np.all(np.isfinite(polynomials)):

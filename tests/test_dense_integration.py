@@ -153,7 +153,8 @@ def test_a_batch_gives_the_single_runs_metrics():
         single = sim.run(p=sim.scaled_parameters(k, c))
         assert batch.settling_time_max[i] == pytest.approx(single.settling_time_max, abs=1e-12)
         assert np.allclose(batch.settling_time[i], list(single.settling_time.values()), rtol=0, atol=1e-12)
-        assert np.allclose(batch.peak[i], list(single.peak.values()), rtol=1e-12, atol=0)
+        # four runs per SIMD call round differently from one (fast-math): ~1e-16 m on a 2e-6 m peak
+        assert np.allclose(batch.peak[i], list(single.peak.values()), rtol=1e-9, atol=0)
 
 
 def test_an_empty_batch_and_mismatched_scales():
@@ -231,10 +232,10 @@ def test_the_stepper_without_a_compiler_gives_the_same_run():
     method = sim.method_for(max(start.max_frequency, end.max_frequency))
     inputs = sim._plan_inputs(method, p)
     signals = signal_function("exact", 13)
-    compiled = DenseStepper(sim.model, method.plan.per_step, signals, True)
-    evaluated = DenseStepper(sim.model, method.plan.per_step, signals, True, compile=False)
-    assert compiled.chunk.native
-    assert not evaluated.chunk.native
+    compiled = DenseStepper(sim.model, signals)
+    evaluated = DenseStepper(sim.model, signals, compile=False)
+    assert compiled.native
+    assert not evaluated.native
     a = compiled.run(start.state, method.plan, inputs, p, start.state)
     b = evaluated.run(start.state, method.plan, inputs, p, start.state)
     # the same numbers up to rounding (the compiled code is built with -ffast-math)
