@@ -2,8 +2,10 @@
 
 Independent checks: the tableau against the exact solution of a harmonic
 oscillator (numpy only, no casadi), the compiled DOP853 path against RK4 with
-eight substeps on the same grid, batches against single runs, and the
-vectorised helpers against their one-at-a-time forms.
+eight substeps on the same grid, the compiled C++ loop (one run, or four in
+SIMD lanes) against casadi's evaluator of the same steps written as a casadi
+graph, batches against single runs, and the vectorised helpers against their
+one-at-a-time forms.
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import pytest
 from scipy.linalg import expm
 
 from conftest import asymmetric_3d_dict, base_dict
-from isolator import Simulator, UnstableTableError, load_scenario, scenario_from_dict
+from isolator import Simulator, SimulationError, UnstableTableError, load_scenario, scenario_from_dict
 from isolator.dop853 import STAGES, TAIL, dop853_tableau, step_plan
 from isolator.equilibrium import static_equilibria, static_equilibrium
 from isolator.native import MappedFunction
@@ -241,3 +243,48 @@ def test_the_stepper_without_a_compiler_gives_the_same_run():
     # the same numbers up to rounding (the compiled code is built with -ffast-math)
     assert np.allclose(a[0], b[0], rtol=0, atol=1e-10 * np.abs(a[0]).max())
     assert np.allclose(a[1], b[1], rtol=0, atol=1e-10 * np.abs(a[1]).max())
+
+
+@pytest.mark.parametrize("kind", ["exact", "paper"])
+def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
+    from isolator.dop853 import DenseStepper
+    from isolator.integrator import signal_function
+
+    data = asymmetric_3d_dict()
+    data["simulation"] = {"duration": 1.6, "sample_rate": 500.0}
+    sim = Simulator(scenario_from_dict(data), model=kind)
+    params = np.array([sim.scaled_parameters(k, c) for k, c in ((0.6, 3.0), (1.0, 1.0), (1.4, 0.5), (2.0, 2.0))])
+    starts = [sim.equilibria(p)[0] for p in params]
+    method = sim.method_for(max(s.max_frequency for s in starts))  # one plan for all four
+    plan, inputs = method.plan, sim._plan_inputs(method, params[0])
+    x0 = np.array([s.state for s in starts])
+    signals = signal_function(kind, sim.model.n_states)
+    lanes = DenseStepper(sim.model, signals, lanes=4)
+    assert lanes.native
+    sig, peaks, polys = lanes.run_slots(x0, plan, inputs, params, x0, with_states=True)
+    assert sig.shape[-1] == peaks.shape[-1] == polys.shape[-1] == 4
+    evaluated = DenseStepper(sim.model, signals, compile=False)
+    for lane in range(4):
+        ref_sig, ref_peaks, ref_polys = evaluated.run_slots(
+            x0[lane], plan, inputs, params[lane], x0[lane], with_states=True
+        )
+        scale = np.abs(ref_sig[plan.sample_slots]).max()
+        assert scale > 1e-6  # the runs move
+        assert np.allclose(sig[plan.sample_slots, :, lane], ref_sig[plan.sample_slots], rtol=0, atol=1e-10 * scale)
+        assert np.allclose(peaks[..., lane], ref_peaks, rtol=0, atol=1e-10 * scale)
+        # the states at the samples (the dense output's high coefficients are sums that cancel)
+        ours, theirs = (DenseStepper.states(plan, q) for q in (polys[..., lane], ref_polys))
+        assert np.allclose(ours, theirs, rtol=0, atol=1e-9 * np.abs(theirs).max(axis=0))
+    # the lanes are the runs: different parameters, different answers
+    assert np.abs(sig[plan.sample_slots, :, 0] - sig[plan.sample_slots, :, 3]).max() > 1e-3 * scale
+    with pytest.raises(ValueError, match="lanes"):
+        lanes.run_slots(x0[0], plan, inputs, params[0], x0[0])
+
+
+def test_a_batch_names_the_run_that_turns_too_far():
+    data = base_dict()
+    data["simulation"]["duration"] = 4.0
+    data["carriages"][0]["mass"] *= 4  # rocks the soft table past 0.2 rad at stiffness x0.03
+    sim = Simulator(scenario_from_dict(data))
+    with pytest.raises(SimulationError, match=r"^run 2 \(stiffness x0\.03, damping x0\.05\): .*0\.2 rad"):
+        sim.run_batch([1.0, 1.2, 0.03, 0.9, 1.1], [1.0, 1.0, 0.05, 1.0, 1.0])
