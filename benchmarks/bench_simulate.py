@@ -22,6 +22,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from numpy_reference import NumpyTable
 from timing import timed
 
+import isolator.batch as batchmod
 import isolator.equilibrium as eqmod
 import isolator.simulation as simmod
 from isolator import Simulator, load_scenario
@@ -129,6 +130,15 @@ def main() -> None:
     print(f"batch, {args.batch} runs, stiffness x0.5-2, damping x0.5-4, 2 threads: median {median2:6.0f} runs/s, "
           f"best {best2:6.0f} runs/s of {args.batch_repeat}  (1 thread {median1:5.0f} runs/s; "
           f"{ok} runs with a settling time)")
+    lanes = batchmod.LANES
+    batchmod.LANES = 1
+    try:
+        sim.run_batch(k[:50], c[:50])  # compiles the one-lane loop
+        median_one, _, _ = _rate(sim, k, c, 2, 1)
+    finally:
+        batchmod.LANES = lanes
+    print(f"baseline batch with one run per compiled call (no SIMD lanes), 2 threads: {median_one:6.0f} runs/s   "
+          f"ratio {median2 / median_one:6.1f}x fewer")
     n_rk4 = max(20, args.batch // 10)
     original = simmod.Simulator.method_for
     simmod.Simulator.method_for = lambda self, omega: simmod.Method(self.substeps_for(omega))

@@ -33,7 +33,7 @@ __all__ = ["STAGES", "DenseStepper", "StepPlan", "Tableau", "dop853_tableau", "s
 
 #: right-hand-side evaluations per step (twelve, the end point, three for the dense output)
 STAGES = coefficients.N_STAGES_EXTENDED
-#: steps per compiled call, and per call of the shorter form that finishes a run
+#: steps per call of the casadi-graph form (without a C++ compiler), and of its shorter form that finishes a run
 CHUNK = 128
 TAIL = 16
 
@@ -120,7 +120,7 @@ class StepPlan:
         Index into the flattened (steps x per_step) outputs of each sample after the first.
     steps : int
         Steps that advance time; the arrays are padded with empty steps (length 0)
-        to a whole number of ``TAIL`` steps (the shorter compiled call).
+        to a whole number of ``TAIL`` steps (for the casadi-graph form of the steps).
     """
 
     start: np.ndarray
@@ -174,7 +174,7 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
     owner = np.clip(np.searchsorted(stop, samples[1:] - 1e-12 * max(1.0, end), side="left"), 0, start.size - 1)
     counts_per = np.bincount(owner, minlength=start.size)
     per_step = max(1, int(counts_per.max(initial=1)))
-    per_step = 4 * math.ceil(per_step / 4)  # fewer compiled variants
+    per_step = 4 * math.ceil(per_step / 4)  # fewer variants of the casadi-graph form
     rank = np.arange(owner.size) - np.repeat(np.cumsum(counts_per) - counts_per, counts_per)
     steps = start.size
     padded = TAIL * math.ceil(steps / TAIL)
@@ -189,8 +189,8 @@ def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> 
 
 class DenseStepper:
     """DOP853 steps of one model, ``lanes`` runs at a time: the compiled loop of
-    :class:`~isolator.dop853_driver.Dop853Driver`, or casadi's evaluator of the same steps
-    when nothing can be compiled.
+    :class:`~isolator.dop853_driver.Dop853Driver` (C++), else the same steps as a casadi
+    graph, compiled as C when there is a C compiler and evaluated by casadi when there is none.
 
     Parameters
     ----------
@@ -211,6 +211,7 @@ class DenseStepper:
         self.model = model
         self.signals = signals
         self.lanes = lanes
+        self.compile = compile
         self.driver: Dop853Driver | None = None
         self._graphs: dict[tuple[int, bool], tuple[NativeFunction, NativeFunction]] = {}
         if compile:
@@ -218,14 +219,14 @@ class DenseStepper:
                 self.driver = Dop853Driver(model, signals, lanes)
             except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
                 warnings.warn(
-                    f"could not compile the DOP853 loop ({exc}); using casadi's evaluator (slower)",
+                    f"could not compile the DOP853 loop ({exc}); stepping a casadi graph instead (slower)",
                     RuntimeWarning,
                     stacklevel=2,
                 )
 
     @property
     def native(self) -> bool:
-        """True when steps run compiled code."""
+        """True when the compiled C++ loop runs the steps."""
         return self.driver is not None
 
     @staticmethod
@@ -317,12 +318,13 @@ class DenseStepper:
         return out if stacked else tuple(None if a is None else a[..., 0] for a in out)
 
     def _graph(self, per_step: int, with_states: bool) -> tuple[NativeFunction, NativeFunction]:
-        """The steps as a casadi graph (chunks of ``CHUNK`` and ``TAIL`` steps), evaluated by casadi."""
+        """The steps as a casadi graph (chunks of ``CHUNK`` and ``TAIL`` steps), compiled as C when allowed."""
         key = (per_step, with_states)
         if key not in self._graphs:
             step = _step_function(self.model, per_step, self.signals, with_states)
+            name = f"isolator_dop853_graph_{self.model.tag}_m{per_step}{'_x' if with_states else ''}"
             self._graphs[key] = tuple(  # type: ignore[assignment]
-                NativeFunction(_chunk(step, size, f"dop853_{size}"), compile=False) for size in (CHUNK, TAIL)
+                NativeFunction(_chunk(step, size, f"{name}_{size}"), compile=self.compile) for size in (CHUNK, TAIL)
             )
         return self._graphs[key]
 
@@ -330,7 +332,7 @@ class DenseStepper:
         self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray,
         with_states: bool,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """One run through casadi's evaluator (:meth:`run_slots` without a compiler)."""
+        """One run through the casadi graph (:meth:`run_slots` without a C++ compiler)."""
         chunk, tail = self._graph(plan.per_step, with_states)
         n, m, nx = plan.start.size, plan.per_step, self.model.n_states  # n: a whole number of TAIL steps
         signals, peaks = np.empty((n * m, 6)), np.empty((n, 6))

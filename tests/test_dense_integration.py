@@ -15,7 +15,7 @@ import pytest
 from scipy.linalg import expm
 
 from conftest import asymmetric_3d_dict, base_dict
-from isolator import Simulator, SimulationError, UnstableTableError, load_scenario, scenario_from_dict
+from isolator import SimulationError, Simulator, UnstableTableError, load_scenario, scenario_from_dict
 from isolator.dop853 import STAGES, TAIL, dop853_tableau, step_plan
 from isolator.equilibrium import static_equilibria, static_equilibrium
 from isolator.native import MappedFunction
