@@ -222,7 +222,8 @@ def test_the_series_rotation_vector_is_exact_up_to_the_divergence_limit():
             assert np.allclose(series, relative_rotation_vector(q[None], ref)[0], rtol=0, atol=1e-15)
 
 
-def test_the_stepper_without_a_compiler_gives_the_same_run():
+def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
+    import isolator.native as native
     from isolator.dop853 import DenseStepper
     from isolator.integrator import signal_function
 
@@ -243,6 +244,15 @@ def test_the_stepper_without_a_compiler_gives_the_same_run():
     # the same numbers up to rounding (the compiled code is built with -ffast-math)
     assert np.allclose(a[0], b[0], rtol=0, atol=1e-10 * np.abs(a[0]).max())
     assert np.allclose(a[1], b[1], rtol=0, atol=1e-10 * np.abs(a[1]).max())
+    # a C compiler but no C++ one: the casadi graph is compiled as C, with a warning
+    any_compiler = native._compiler
+    monkeypatch.setattr(native, "_compiler", lambda language="c": any_compiler(language) if language == "c" else None)
+    with pytest.warns(RuntimeWarning, match=r"no C\+\+ compiler found \(set CXX\)"):
+        graph = DenseStepper(sim.model, signals)
+    assert not graph.native
+    c = graph.run(start.state, method.plan, inputs, p, start.state)
+    assert graph._graph(method.plan.per_step, True)[0].native
+    assert np.allclose(c[0], b[0], rtol=0, atol=1e-10 * np.abs(a[0]).max())
 
 
 @pytest.mark.parametrize("kind", ["exact", "paper"])
