@@ -80,7 +80,7 @@ def main() -> None:
     sim = Simulator(sc)
     sim.run()
     warm = time.perf_counter() - t0
-    print(f"model build + first run, cold (casadi codegen + C compile): {cold * 1e3:8.1f} ms")
+    print(f"model build + first run, cold (casadi codegen + C/C++ compile): {cold * 1e3:8.1f} ms")
     print(f"model build + first run, warm compiled-model cache:          {warm * 1e3:8.1f} ms")
 
     start, end = sim.equilibria(sim.parameters)
