@@ -5,9 +5,8 @@ DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
 with single runs). Runs that share a plan are stepped ``LANES`` at a time, one
 per SIMD lane of the compiled loop (:mod:`isolator.dop853_driver`), in worker
 threads, in blocks of runs whose settling metrics are then computed together.
-Each run returns
-only what the metrics need: its peaks (taken in the compiled steps) and its
-signals from the carriages' stop on.
+Each run returns only what the metrics need: its peaks (taken in the compiled
+steps) and its signals from the carriages' stop on.
 """
 
 from __future__ import annotations

@@ -16,7 +16,6 @@ nothing can be compiled.
 from __future__ import annotations
 
 import math
-import subprocess
 import warnings
 from dataclasses import dataclass
 from functools import lru_cache
@@ -217,7 +216,7 @@ class DenseStepper:
         if compile:
             try:
                 self.driver = Dop853Driver(model, signals, lanes)
-            except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
+            except (OSError, RuntimeError) as exc:
                 warnings.warn(
                     f"could not compile the DOP853 loop ({exc}); stepping a casadi graph instead (slower)",
                     RuntimeWarning,

@@ -225,8 +225,10 @@ class Dop853Driver:
 
     Raises
     ------
-    RuntimeError, OSError, subprocess.CalledProcessError
+    RuntimeError
         No C++ compiler, or it failed.
+    OSError
+        The library does not load.
     """
 
     def __init__(self, model: Model, signals: ca.Function, lanes: int = 1) -> None:

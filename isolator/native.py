@@ -29,7 +29,7 @@ __all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_l
 #: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
 #: infinity still propagate, so a diverging run is still detected); -march=native is safe because
 #: the cache key includes the CPU's identity
-FLAGS = ["-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared"]
+FLAGS = ("-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared")
 
 
 def _cpu_identity() -> str:
@@ -61,7 +61,7 @@ def _compiler(language: str = "c") -> str | None:
     return None
 
 
-def compiled_library(name: str, source: str, flags: Sequence[str] = tuple(FLAGS), language: str = "c") -> Path:
+def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, language: str = "c") -> Path:
     """A shared library built from ``source``, cached in :func:`cache_dir` under a hash of the
     source, the flags, the compiler, casadi's version and the CPU.
 
@@ -83,9 +83,7 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = tuple(FLAGS)
     Raises
     ------
     RuntimeError
-        No compiler for the language.
-    subprocess.CalledProcessError
-        The compiler failed.
+        No compiler for the language, or it failed (its first error line is in the message).
     """
     compiler = _compiler(language)
     if compiler is None:
@@ -104,7 +102,11 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = tuple(FLAGS)
             fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
             os.close(fd)
             try:
-                subprocess.run([compiler, *flags, "-o", tmp_so, str(src), "-lm"], check=True, capture_output=True)
+                done = subprocess.run([compiler, *flags, "-o", tmp_so, str(src), "-lm"], capture_output=True, text=True)
+                if done.returncode != 0:
+                    lines = done.stderr.splitlines()
+                    errors = [ln for ln in lines if "error" in ln] or lines or [""]
+                    raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
                 os.replace(tmp_so, target)
             finally:
                 if os.path.exists(tmp_so):
@@ -149,7 +151,7 @@ class NativeFunction:
         if compile:
             try:
                 self.library = self._build()
-            except (OSError, subprocess.CalledProcessError, RuntimeError) as exc:
+            except (OSError, RuntimeError) as exc:
                 warnings.warn(
                     f"could not compile the model ({exc}); using casadi's evaluator (slower)",
                     RuntimeWarning,

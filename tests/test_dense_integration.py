@@ -298,3 +298,13 @@ def test_a_batch_names_the_run_that_turns_too_far():
     sim = Simulator(scenario_from_dict(data))
     with pytest.raises(SimulationError, match=r"^run 2 \(stiffness x0\.03, damping x0\.05\): .*0\.2 rad"):
         sim.run_batch([1.0, 1.2, 0.03, 0.9, 1.1], [1.0, 1.0, 0.05, 1.0, 1.0])
+
+
+def test_a_compiler_error_is_one_line_naming_the_library(tmp_path, monkeypatch):
+    from isolator.native import compiled_library
+
+    monkeypatch.setenv("ISOLATOR_CACHE", str(tmp_path))
+    with pytest.raises(RuntimeError, match=r"failed on broken: .*error"):
+        compiled_library("broken", "int f( {", language="c++")
+    assert not list(tmp_path.glob("*.so"))  # nothing half-built is left
+    assert not list(tmp_path.glob("*.cpp"))
