@@ -11,14 +11,14 @@ steps) and its signals from the carriages' stop on.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
-from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 
-from .errors import SimulationError
+from .errors import ScenarioError, SimulationError
 from .settling import signal_settling
 
 if TYPE_CHECKING:
@@ -43,12 +43,15 @@ class BatchResult:
     settling_time_max : ndarray (runs,)
         [s]; NaN where unavailable.
     peak : ndarray (runs, 6)
-        [m or rad].
+        [m or rad]; NaN for a run that diverged.
+    failures : mapping of int to str
+        Why each diverged run failed, by run index (with ``diverged="record"``).
     """
 
     settling_time: np.ndarray
     settling_time_max: np.ndarray
     peak: np.ndarray
+    failures: Mapping[int, str] = field(default_factory=dict)
 
 
 def run_batch(
@@ -57,6 +60,7 @@ def run_batch(
     damping: Sequence[float],
     workers: int = 2,
     progress: bool = False,
+    diverged: Literal["raise", "record"] = "raise",
 ) -> BatchResult:
     """Runs of ``sim``'s scenario with every isolator's stiffness and damping scaled per run.
 
@@ -69,6 +73,10 @@ def run_batch(
         Threads (the compiled stepping releases the GIL).
     progress : bool
         Print a progress line every 10 %.
+    diverged : {"raise", "record"}
+        A run that diverges (or turns the table past 0.2 rad) stops the batch with
+        :class:`SimulationError` ("raise"), or gets NaN metrics and its reason in
+        ``BatchResult.failures`` ("record", for sweeps into soft designs).
 
     Returns
     -------
@@ -78,14 +86,16 @@ def run_batch(
     Raises
     ------
     ScenarioError
-        A scale is not a finite positive number (named by index).
+        A scale is not a finite positive number (named by index), or ``diverged`` is unknown.
     UnstableTableError
         A run's table has no stable equilibrium (the message names the run).
     SimulationError
-        A run diverged (the message names the run).
+        A run diverged (the message names the run), with ``diverged="raise"``.
     """
     from .simulation import Method, _check_turn, _dense_stepper, _hold, _stepper
 
+    if diverged not in ("raise", "record"):
+        raise ScenarioError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
     params = sim.scaled_parameter_sets(stiffness, damping)
     n = params.shape[0]
     if n == 0:
@@ -113,19 +123,25 @@ def run_batch(
     holds = np.array([_hold(e) for e in ends])
     settling = np.full((n, 6), np.nan)
     peak = np.zeros((n, 6))
+    failures: dict[int, str] = {}
     done = [0]
 
-    def named(i: int, exc: SimulationError) -> SimulationError:
-        return SimulationError(f"run {i} (stiffness x{_scale(stiffness, i):g}, damping x{_scale(damping, i):g}): {exc}")
+    def failed(i: int, exc: SimulationError) -> None:
+        message = f"run {i} (stiffness x{_scale(stiffness, i):g}, damping x{_scale(damping, i):g}): {exc}"
+        if diverged == "raise":
+            raise SimulationError(message) from None
+        failures[i] = message
+        peak[i] = np.nan
 
-    def pack(runs: list[int], tails: np.ndarray) -> None:
-        """Step ``runs`` (one plan, at most LANES) side by side; their peaks, and their signals
-        from the stop on into ``tails`` (runs, 6, samples)."""
+    def pack(runs: list[int], tails: np.ndarray) -> list[int]:
+        """Step ``runs`` (one plan, at most LANES) side by side; their peaks, and the signals
+        from the stop on of those that did not diverge (returned) into ``tails`` (runs, 6, samples)."""
         method = methods[runs[0]]
         lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
         x0 = np.array([starts[i].state for i in lanes])
         raw, step_peaks, _ = stepper.run_slots(x0, method.plan, plan_inputs[method.plan_key], params[lanes], x0)
         tops = np.max(step_peaks, axis=0).T  # NaN propagates
+        good = []
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]
             try:
@@ -135,25 +151,29 @@ def run_batch(
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
                 _check_turn(peak[i])
             except SimulationError as exc:
-                raise named(i, exc) from None
-        tails[: len(runs)] = raw[method.plan.sample_slots[tail_from - 1 :]].transpose(2, 1, 0)[: len(runs)]
+                failed(i, exc)
+                continue
+            tails[len(good)] = raw[method.plan.sample_slots[tail_from - 1 :], :, lane].T
+            good.append(i)
+        return good
 
     def task(runs: list[int]) -> None:
         """A thread's share: RK4 runs one by one, DOP853 runs in packs of one plan; then the
         DOP853 runs' settling together."""
-        dense = [i for i in runs if methods[i].plan is not None]
         for i in runs:
             if methods[i].plan is None:
                 try:
                     metrics = sim._run(params[i], starts[i], ends[i], methods[i]).settling
                 except SimulationError as exc:
-                    raise named(i, exc) from None
+                    failed(i, exc)
+                    continue
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
-        tails = np.empty((len(dense) + LANES, 6, t.size - tail_from))
-        for lo in range(0, len(dense), LANES):
-            group = dense[lo : lo + LANES]
-            pack(group, tails[lo:])
+        stepped = [i for i in runs if methods[i].plan is not None]
+        tails = np.empty((len(stepped), 6, t.size - tail_from))
+        dense: list[int] = []
+        for lo in range(0, len(stepped), LANES):
+            dense += pack(stepped[lo : lo + LANES], tails[len(dense) :])
         if dense:
             rows = np.array(dense)
             settling[rows] = signal_settling(
@@ -174,7 +194,7 @@ def run_batch(
         list(pool.map(task, tasks))
     with np.errstate(all="ignore"):
         worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
-    return BatchResult(settling, worst, peak)
+    return BatchResult(settling, worst, peak, dict(sorted(failures.items())))
 
 
 def _scale(values: Sequence[float], i: int) -> float:

@@ -136,6 +136,9 @@ class LinearModel:
         and ``<point>:x, :y, :z`` [m] per point of interest. With a moving floor
         the velocity states are the table's velocity minus ``-M^-1 G1 g``, the
         part that the floor's velocity adds at once through the isolators' dampers.
+    parameter_values : ndarray or None
+        The model's parameter vector when it is not the scenario's own (see
+        :attr:`parameters`).
     """
 
     scenario: Scenario
@@ -148,6 +151,7 @@ class LinearModel:
     ground_damping: np.ndarray
     force_input: np.ndarray
     system: control.StateSpace
+    parameter_values: np.ndarray | None = None
 
     # -- names -------------------------------------------------------------------
     @property
@@ -197,6 +201,9 @@ class LinearModel:
 
     @property
     def parameters(self) -> np.ndarray:
+        """The model's parameter vector (``Simulator.layout`` names its entries)."""
+        if self.parameter_values is not None:
+            return self.parameter_values
         return ParameterLayout.of(self.scenario).pack(self.scenario)
 
     @property
@@ -265,6 +272,7 @@ def linearise(
     positions: Mapping[str, float] | Sequence[float] | np.ndarray | None = None,
     time: float | None = None,
     check: bool = True,
+    parameters: np.ndarray | None = None,
 ) -> LinearModel:
     """Linearise the exact model about a rest configuration.
 
@@ -278,6 +286,9 @@ def linearise(
     check : bool
         Raise :class:`~isolator.UnstableTableError` when the table cannot stand
         (False: linearise anyway, about the equilibrium or the upright pose).
+    parameters : ndarray, optional
+        The model's parameter vector instead of the scenario's, for example
+        ``Simulator(scenario).scaled_parameters(stiffness, damping)``.
 
     Returns
     -------
@@ -294,14 +305,17 @@ def linearise(
     q = rest_positions(scenario, positions, time)
     layout = ParameterLayout.of(scenario)
     model = get_model(layout, "exact")
-    p = layout.pack(scenario)
+    p = layout.pack(scenario) if parameters is None else np.asarray(parameters, dtype=float)
+    if p.shape != (layout.size,) or not np.all(np.isfinite(p)):
+        raise ScenarioError(f"parameters: must be {layout.size} finite numbers (Simulator.layout), got shape {p.shape}")
     eq = static_equilibrium(model, p, q, "in this rest configuration", check=check)
     c = np.concatenate([q, np.zeros(2 * q.size)])
     mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]
     mass, damping, stiffness, g0, g1, bw, ba = mats
     force_input = np.hstack([bw, ba.reshape(6, -1)])
     system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input)
-    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system)
+    own = None if parameters is None else p
+    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, own)
 
 
 def _state_space(

@@ -6,7 +6,7 @@ import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import TYPE_CHECKING, Protocol
+from typing import TYPE_CHECKING, Literal, Protocol
 
 import casadi as ca
 import numpy as np
@@ -449,6 +449,7 @@ class Simulator:
         damping: Sequence[float],
         workers: int = 2,
         progress: bool = False,
+        diverged: Literal["raise", "record"] = "raise",
     ) -> BatchResult:
         """Many runs with isolator stiffness and damping scaled per run (see :func:`isolator.batch.run_batch`).
 
@@ -460,10 +461,12 @@ class Simulator:
             Threads (the compiled stepping releases the GIL).
         progress : bool
             Print a progress line every 10 %.
+        diverged : {"raise", "record"}
+            Stop at a diverging run, or give it NaN metrics and its reason in ``failures``.
         """
         from .batch import run_batch
 
-        return run_batch(self, stiffness, damping, workers, progress)
+        return run_batch(self, stiffness, damping, workers, progress, diverged)
 
     def scaled_parameter_sets(
         self, stiffness: float | Sequence[float], damping: float | Sequence[float]

@@ -15,7 +15,14 @@ import pytest
 from scipy.linalg import expm
 
 from conftest import asymmetric_3d_dict, base_dict
-from isolator import SimulationError, Simulator, UnstableTableError, load_scenario, scenario_from_dict
+from isolator import (
+    ScenarioError,
+    SimulationError,
+    Simulator,
+    UnstableTableError,
+    load_scenario,
+    scenario_from_dict,
+)
 from isolator.dop853 import STAGES, TAIL, dop853_tableau, step_plan
 from isolator.equilibrium import static_equilibria, static_equilibrium
 from isolator.native import MappedFunction
@@ -291,13 +298,25 @@ def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
         lanes.run_slots(x0[0], plan, inputs, params[0], x0[0])
 
 
-def test_a_batch_names_the_run_that_turns_too_far():
+def test_a_batch_names_the_run_that_turns_too_far_or_records_it():
     data = base_dict()
     data["simulation"]["duration"] = 4.0
     data["carriages"][0]["mass"] *= 4  # rocks the soft table past 0.2 rad at stiffness x0.03
     sim = Simulator(scenario_from_dict(data))
     with pytest.raises(SimulationError, match=r"^run 2 \(stiffness x0\.03, damping x0\.05\): .*0\.2 rad"):
         sim.run_batch([1.0, 1.2, 0.03, 0.9, 1.1], [1.0, 1.0, 0.05, 1.0, 1.0])
+    # or, recorded, the others still give their metrics
+    batch = sim.run_batch([1.0, 1.2, 0.03, 0.9, 1.1], [1.0, 1.0, 0.05, 1.0, 1.0], diverged="record")
+    assert list(batch.failures) == [2]
+    assert "0.2 rad" in batch.failures[2]
+    assert np.isnan(batch.settling_time_max[2])
+    assert np.all(np.isnan(batch.peak[2]))
+    single = sim.run(p=sim.scaled_parameters(0.9, 1.0))
+    expected = [np.nan if v is None else v for v in single.settling_time.values()]
+    assert np.allclose(batch.settling_time[3], expected, rtol=0, atol=1e-12, equal_nan=True)
+    assert np.allclose(batch.peak[3], list(single.peak.values()), rtol=1e-9)
+    with pytest.raises(ScenarioError, match="diverged: must be"):
+        sim.run_batch([1.0], [1.0], diverged="ignore")
 
 
 def test_a_compiler_error_is_one_line_naming_the_library(tmp_path, monkeypatch):

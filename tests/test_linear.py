@@ -136,6 +136,24 @@ def test_single_axis_transmissibility_is_the_spring_damper_formula():
         assert mode.damping_ratios[j] == pytest.approx(zeta, rel=1e-9)
 
 
+def test_scaled_isolators_give_the_scaled_spring_damper():
+    scenario = make(_decoupled_dict())
+    sim = Simulator(scenario)
+    scaled = sim.scaled_parameters(2.5, 0.4)
+    lin = linearise(scenario, parameters=scaled)
+    assert np.array_equal(lin.parameters, scaled)
+    f = np.logspace(-1, 2, 200)
+    trans = transmissibility(lin, f)
+    m, s = scenario.total_mass, 2j * np.pi * f
+    for k in range(3):
+        kk = 2.5 * sum(iso.stiffness[k] for iso in scenario.isolators)
+        cc = 0.4 * sum(iso.damping[k] for iso in scenario.isolators)
+        np.testing.assert_allclose(trans.response[:, k, k], (cc * s + kk) / (m * s**2 + cc * s + kk), rtol=1e-9)
+    assert np.array_equal(linearise(scenario).parameters, sim.parameters)
+    with pytest.raises(ScenarioError, match="parameters: must be"):
+        linearise(scenario, parameters=scaled[:-1])
+
+
 # -- linear against the full simulation -----------------------------------------------
 def test_linear_response_matches_full_simulation_for_small_floor_motion():
     data = asymmetric_3d_dict(duration=2.0)
