@@ -47,18 +47,21 @@ def _parser() -> argparse.ArgumentParser:
                      help="actuator forces file (t and one column per actuator, N)")
 
     study = sub.add_parser("study", help="run a study that writes figures and a report")
-    study.add_argument("name", choices=["paper", "control", "profiles"],
+    study.add_argument("name", choices=["paper", "control", "profiles", "tradeoff"],
                        help="paper: reproduce Shin, Sun and Kim; control: passive, feedforward, feedback and both; "
-                       "profiles: paper profile, input shapers, time-optimal and optimised moves")
+                       "profiles: paper profile, input shapers, time-optimal and optimised moves; "
+                       "tradeoff: isolator stiffness and damping, settling time against transmissibility")
     study.add_argument("scenario", nargs="?", default=None,
                        help="control: scenario with [[actuators]] (default: paper-table-3-2-active); "
-                       f"profiles: (default: {DEFAULT_SCENARIO})")
+                       f"profiles and tradeoff: (default: {DEFAULT_SCENARIO})")
     study.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
     study.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
     study.add_argument("--controller", choices=["skyhook", "lead", "lqr", "hinf"], default="skyhook",
                        help="control: the feedback design in the time runs")
     study.add_argument("--feedforward", choices=["allocation", "optimal"], default="allocation",
                        help="control: the feedforward method")
+    study.add_argument("--frequency", type=float, default=10.0, metavar="HZ",
+                       help="tradeoff: frequency of the transmissibility figure (default 10 Hz)")
 
     modes = sub.add_parser(
         "modes", help="natural frequencies, damping ratios and mode shapes of the parked table",
@@ -348,6 +351,14 @@ def _study(args: argparse.Namespace) -> int:
         for run in ("passive", "feedforward", "feedback", "both"):
             value = study.settling_time_max(run)
             print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
+        print(f"report: {args.out / 'report.md'}")
+    elif args.name == "tradeoff":
+        from studies.tradeoff import run_tradeoff_study
+
+        grids = {"stiffness": [0.5, 1.0, 2.0], "damping": [0.5, 1.0, 2.0, 4.0]} if args.quick else {}
+        study = run_tradeoff_study(args.out, load_scenario(args.scenario), reference_hz=args.frequency, **grids)
+        front = study.pareto()
+        print(f"{len(front)} Pareto-optimal designs of {study.stiffness.size * study.damping.size}")
         print(f"report: {args.out / 'report.md'}")
     elif args.name == "profiles":
         from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant
