@@ -280,8 +280,8 @@ def _plot_maps(study: TradeoffStudy) -> None:
             ax.fill_between([ce[0], ce[-1]], ke[i], ke[i + 1], facecolor="0.85", hatch="//", edgecolor="0.5",
                             linewidth=0, label="table tips" if i == np.flatnonzero(~study.stable)[0] else None)
         if front:
-            ax.plot([study.damping[j] for _, j in front], [study.stiffness[i] for i, _ in front], "o", ms=4,
-                    mfc="none", mec="white", mew=1.2, label="Pareto-optimal")
+            ax.plot([study.damping[j] for _, j in front], [study.stiffness[i] for i, _ in front], "o", ms=5,
+                    mfc="white", mec="black", mew=0.8, label="Pareto-optimal")
         if nominal is not None:
             ax.plot(1.0, 1.0, "*", ms=14, mfc="tab:red", mec="white", label="scenario's design")
         ax.set_xscale("log")
@@ -291,7 +291,7 @@ def _plot_maps(study: TradeoffStudy) -> None:
         ax.set_xlabel("damping scale (x the scenario's) [-]")
         ax.set_ylabel("stiffness scale (x the scenario's) [-]")
         ax.set_title(label.split(" [")[0])
-        ax.legend(loc="lower right", fontsize=8, framealpha=0.85)
+        ax.legend(loc="upper left", fontsize=8, framealpha=0.85)
     fig.suptitle(f"{study.scenario.name}: isolator designs, every isolator's stiffness and damping scaled")
     fig.savefig(study.folder / "maps.png", dpi=110)
     plt.close(fig)
