@@ -231,7 +231,7 @@ class Simulator:
             plan = method.plan
             inputs = inputs_at(self.scenario, *plan.stage_times())
             if staged is not None:
-                flat = inputs.reshape(-1, inputs.shape[-1])
+                flat = inputs.reshape(inputs.shape[0] * inputs.shape[1], inputs.shape[2])
                 inputs = _staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
             if len(self._staged) >= 16:
                 self._staged.pop(next(iter(self._staged)))

@@ -327,3 +327,15 @@ def test_a_compiler_error_is_one_line_naming_the_library(tmp_path, monkeypatch):
         compiled_library("broken", "int f( {", language="c++")
     assert not list(tmp_path.glob("*.so"))  # nothing half-built is left
     assert not list(tmp_path.glob("*.cpp"))
+
+
+@pytest.mark.parametrize("kind", ["exact", "paper"])
+def test_a_table_without_carriages_stays_at_rest(kind):
+    data = base_dict()
+    data["carriages"] = []
+    sim = Simulator(scenario_from_dict(data), model=kind)
+    run = sim.run()
+    assert np.abs(run.signals).max() < 1e-12
+    assert run.settling_time_max == 0.0
+    batch = sim.run_batch([0.5, 2.0], [1.0, 3.0])
+    assert np.abs(batch.peak).max() < 1e-12
