@@ -117,6 +117,10 @@ def test_dense_breakpoints_choose_rk4_on_the_sample_grid():
     sim = Simulator(scenario_from_dict(data))
     start, _ = sim.equilibria(sim.parameters)
     assert sim.method_for(start.max_frequency).plan is None
+    batch = sim.run_batch([1.0, 1.5], [1.0, 0.5])  # such runs go one by one in a batch
+    for i, (k, c) in enumerate(((1.0, 1.0), (1.5, 0.5))):
+        single = sim.run(p=sim.scaled_parameters(k, c))
+        assert np.allclose(batch.peak[i], list(single.peak.values()), rtol=1e-12, atol=0)
     smooth = Simulator(scenario_from_dict(base_dict()))
     assert smooth.method_for(start.max_frequency).plan is not None
 
