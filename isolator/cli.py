@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -355,6 +356,8 @@ def _study(args: argparse.Namespace) -> int:
     elif args.name == "tradeoff":
         from studies.tradeoff import run_tradeoff_study
 
+        if not (math.isfinite(args.frequency) and args.frequency > 0):
+            raise ScenarioError(f"--frequency: must be a finite frequency > 0 Hz, got {args.frequency}")
         grids = {"stiffness": [0.5, 1.0, 2.0], "damping": [0.5, 1.0, 2.0, 4.0]} if args.quick else {}
         study = run_tradeoff_study(args.out, load_scenario(args.scenario), reference_hz=args.frequency, **grids)
         front = study.pareto()

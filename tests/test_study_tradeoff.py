@@ -119,3 +119,5 @@ def test_the_command_runs_the_quick_study(tmp_path, capsys):
     out = capsys.readouterr().out
     assert "Pareto-optimal designs of 12" in out
     assert "transmissibility at 8 Hz" in (tmp_path / "report.md").read_text()
+    assert main(["study", "tradeoff", "--out", str(tmp_path), "--frequency", "0"]) == 2
+    assert capsys.readouterr().err.strip() == "isolator: error: --frequency: must be a finite frequency > 0 Hz, got 0.0"
