@@ -35,6 +35,7 @@ from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.axis import Axis
 from matplotlib.colors import LogNorm
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
@@ -244,11 +245,11 @@ def _linear_figures(sim: Simulator, stiffness: float, damping: float, reference_
 _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
 
 
-def _plain_log(axis: object) -> None:
+def _plain_log(axis: Axis) -> None:
     """Log-axis ticks at 1, 2 and 5 per decade, written as plain numbers."""
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))  # type: ignore[attr-defined]
-    axis.set_major_formatter(_PLAIN)  # type: ignore[attr-defined]
-    axis.set_minor_formatter(NullFormatter())  # type: ignore[attr-defined]
+    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
+    axis.set_major_formatter(_PLAIN)
+    axis.set_minor_formatter(NullFormatter())
 
 
 def _mesh_edges(values: np.ndarray) -> np.ndarray:
