@@ -136,9 +136,9 @@ class LinearModel:
         and ``<point>:x, :y, :z`` [m] per point of interest. With a moving floor
         the velocity states are the table's velocity minus ``-M^-1 G1 g``, the
         part that the floor's velocity adds at once through the isolators' dampers.
-    parameter_values : ndarray or None
-        The model's parameter vector when it is not the scenario's own (see
-        :attr:`parameters`).
+    parameters : ndarray
+        The model's parameter vector it was linearised with (the scenario's own
+        unless another was given; ``Simulator.layout`` names its entries).
     """
 
     scenario: Scenario
@@ -151,7 +151,7 @@ class LinearModel:
     ground_damping: np.ndarray
     force_input: np.ndarray
     system: control.StateSpace
-    parameter_values: np.ndarray | None = None
+    parameters: np.ndarray
 
     # -- names -------------------------------------------------------------------
     @property
@@ -198,13 +198,6 @@ class LinearModel:
         """The static rocking stiffness and its margin at this rest configuration."""
         model = get_model(ParameterLayout.of(self.scenario), "exact")
         return rocking_stiffness(model, self.parameters, self.positions, self.equilibrium.pose)
-
-    @property
-    def parameters(self) -> np.ndarray:
-        """The model's parameter vector (``Simulator.layout`` names its entries)."""
-        if self.parameter_values is not None:
-            return self.parameter_values
-        return ParameterLayout.of(self.scenario).pack(self.scenario)
 
     @property
     def eigenvalues(self) -> np.ndarray:
@@ -314,8 +307,7 @@ def linearise(
     mass, damping, stiffness, g0, g1, bw, ba = mats
     force_input = np.hstack([bw, ba.reshape(6, -1)])
     system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input)
-    own = None if parameters is None else p
-    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, own)
+    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p)
 
 
 def _state_space(
