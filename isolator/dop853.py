@@ -28,7 +28,7 @@ from scipy.integrate._ivp import dop853_coefficients as coefficients
 from .model import Model
 from .native import NativeFunction
 
-__all__ = ["STAGES", "DenseStepper", "StepPlan", "Tableau", "dop853_tableau", "step_plan"]
+__all__ = ["STAGES", "DenseStepper", "StepPlan", "Tableau", "dop853_tableau", "step_plan", "stepped_rhs"]
 
 #: right-hand-side evaluations per step (twelve, the end point, three for the dense output)
 STAGES = coefficients.N_STAGES_EXTENDED
@@ -354,11 +354,17 @@ class DenseStepper:
         return signals[: steps * m], peaks[:steps], None if states is None else states[:steps]
 
 
+def stepped_rhs(model: Model) -> ca.Function:
+    """The right-hand side the DOP853 steps evaluate, ``(x, inputs, p) -> dx/dt``: the staged one
+    (:attr:`Model.staged_rhs`, its inputs from ``model.staged_inputs``) when the model has it."""
+    return model.staged_rhs if model.staged_rhs is not None else model.rhs
+
+
 def _step_function(model: Model, per_step: int, signals: ca.Function, with_states: bool) -> ca.Function:
     """One DOP853 step and its samples as a casadi function:
     ``(x, k_end, u, h, first, fraction, p, reference) -> (x_new, k_new, signals, peak, [polynomial])``."""
     tab = dop853_tableau()
-    rhs = model.staged_rhs if model.staged_rhs is not None else model.rhs
+    rhs = stepped_rhs(model)
     nx, nu, npar = model.n_states, rhs.size1_in(1), model.layout.size
     x = ca.MX.sym("x", nx)
     carried = ca.MX.sym("k_end", nx)

@@ -19,7 +19,7 @@ import ctypes
 import casadi as ca
 import numpy as np
 
-from .dop853 import STAGES, StepPlan, dop853_tableau
+from .dop853 import STAGES, StepPlan, dop853_tableau, stepped_rhs
 from .model import Model
 from .native import FLAGS, compiled_library
 
@@ -180,7 +180,7 @@ def driver_source(name: str, model: Model, signals: ca.Function, lanes: int) -> 
         Runs per call (1: plain doubles).
     """
     tab = dop853_tableau()
-    rhs = model.staged_rhs if model.staged_rhs is not None else model.rhs
+    rhs = stepped_rhs(model)
     nx = model.n_states
     functions = []
     for suffix, f in (("rhs", rhs), ("signals", signals)):
@@ -234,7 +234,7 @@ class Dop853Driver:
     def __init__(self, model: Model, signals: ca.Function, lanes: int = 1) -> None:
         self.model = model
         self.lanes = lanes
-        rhs = model.staged_rhs if model.staged_rhs is not None else model.rhs
+        rhs = stepped_rhs(model)
         self.n_inputs = rhs.size1_in(1)
         self.n_parameters = rhs.size1_in(2)
         self.name = f"isolator_dop853_{model.tag}_l{lanes}"
