@@ -23,7 +23,7 @@ from controllers import feedback as fb
 from controllers.feedforward import feedforward_allocation
 from controllers.optimal_feedforward import feedforward_optimal
 from isolator import Simulator, load_scenario
-from isolator.linear import linearise
+from isolator.analysis.linear import linearise
 
 
 def main() -> None:

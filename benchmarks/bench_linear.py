@@ -18,9 +18,9 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import timed
 
 from isolator import load_scenario
-from isolator.linear import GROUND_INPUTS, linearise
-from isolator.modes import modes
-from isolator.transmissibility import transmissibility
+from isolator.analysis.linear import GROUND_INPUTS, linearise
+from isolator.analysis.modes import modes
+from isolator.analysis.transmissibility import transmissibility
 
 
 def main() -> None:

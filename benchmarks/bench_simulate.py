@@ -22,17 +22,18 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from numpy_reference import NumpyTable
 from timing import timed
 
-import isolator.batch as batchmod
-import isolator.equilibrium as eqmod
-import isolator.simulation as simmod
+import isolator.model.cache as modelcache
+import isolator.model.equilibrium as eqmod
+import isolator.simulation.batch as batchmod
+import isolator.simulation.simulator as simmod
 from isolator import Simulator, load_scenario
-from isolator.multibody import MujocoTable, mujoco_available
-from isolator.simulation import table_signals
+from isolator.model.signals import table_signals
+from isolator.validation.multibody import MujocoTable, mujoco_available
 from studies.paper import relative_rms
 
 
 def _clear_caches() -> None:
-    for cache in (simmod._MODELS, simmod._STEPPERS, simmod._DENSE, eqmod._SOLVERS):
+    for cache in (modelcache._MODELS, simmod._STEPPERS, simmod._DENSE, eqmod._SOLVERS):
         cache.clear()
     simmod._staged_map.cache_clear()
     simmod._staged_parameters.cache_clear()

@@ -11,7 +11,7 @@ import numpy as np
 from scipy.optimize import fsolve
 
 from isolator import Scenario
-from isolator.multibody import solve_piecewise
+from isolator.validation.multibody import solve_piecewise
 
 
 def _rot(qt):

@@ -2,7 +2,7 @@
 
 Every controller here maps the table's measured motion to actuator commands:
 
-* measurements: the 12 states of :mod:`isolator.linear` (``x, y, z`` [m],
+* measurements: the 12 states of :mod:`isolator.analysis.linear` (``x, y, z`` [m],
   ``rx, ry, rz`` [rad], ``vx .. wz`` [m/s, rad/s]; world axes, from the
   reference the controller regulates to), as ideal inertial sensors give them;
 * outputs: one commanded force per actuator [N] (``actuator:<name>``).
@@ -40,8 +40,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from controllers.feedforward import QuasiStaticPath, allocation_matrix
-from isolator.errors import ScenarioError, UnstableClosedLoopError
-from isolator.linear import (
+from isolator.analysis.linear import (
     FORCE_INPUTS,
     GROUND_INPUTS,
     STATE_NAMES,
@@ -50,8 +49,9 @@ from isolator.linear import (
     linearise,
     state_space_response,
 )
-from isolator.model import pose_rotation
-from isolator.scenario import SIGNALS, Scenario
+from isolator.errors import ScenarioError, UnstableClosedLoopError
+from isolator.model.rotations import pose_rotation
+from isolator.scenario.definitions import SIGNALS, Scenario
 
 __all__ = [
     "MEASUREMENTS",

@@ -31,16 +31,19 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import lsq_linear
 from scipy.spatial.transform import Rotation
 
-from isolator.actuation import ForceHistory
-from isolator.equilibrium import static_equilibrium
+from isolator.analysis.linear import LinearModel, linearise
 from isolator.errors import ScenarioError
-from isolator.integrator import grid_breakpoints
-from isolator.linear import LinearModel, linearise
-from isolator.model import ParameterLayout, build_linearisation, pose_rotation
-from isolator.response import Response
-from isolator.scenario import SIGNALS, Scenario
-from isolator.settling import settling_time
-from isolator.simulation import Simulator, table_signals
+from isolator.model.equilibrium import static_equilibrium
+from isolator.model.linearisation import build_linearisation
+from isolator.model.parameters import ParameterLayout
+from isolator.model.rotations import pose_rotation
+from isolator.model.signals import table_signals
+from isolator.scenario.definitions import SIGNALS, Scenario
+from isolator.simulation.actuation import ForceHistory
+from isolator.simulation.response import Response
+from isolator.simulation.settling import settling_time
+from isolator.simulation.simulator import Simulator
+from isolator.simulation.time_grid import grid_breakpoints
 
 __all__ = [
     "Feedforward",

@@ -17,10 +17,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.analysis.linear import linearise
 from isolator.errors import ScenarioError
-from isolator.linear import linearise
-from isolator.profiles import PiecewisePolynomialProfile, shaped
-from isolator.scenario import Scenario
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.profile_shapes import shaped
+from isolator.scenario.profiles import PiecewisePolynomialProfile
 
 from .feedforward import carriage_inertia_wrench
 from .move_metrics import with_moves

@@ -19,8 +19,9 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ScenarioError
-from isolator.profiles import PiecewisePolynomialProfile, scurve, trapezoid
-from isolator.scenario import Carriage, Scenario
+from isolator.scenario.definitions import Carriage, Scenario
+from isolator.scenario.profile_shapes import scurve, trapezoid
+from isolator.scenario.profiles import PiecewisePolynomialProfile
 
 __all__ = [
     "DEFAULT_JERK_RAMP",

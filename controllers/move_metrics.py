@@ -14,9 +14,9 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from isolator.errors import ScenarioError
-from isolator.response import Response
-from isolator.scenario import Carriage, Scenario
-from isolator.simulation import Simulator
+from isolator.scenario.definitions import Carriage, Scenario
+from isolator.simulation.response import Response
+from isolator.simulation.simulator import Simulator
 
 from .move_design import MoveDesign, move_time
 

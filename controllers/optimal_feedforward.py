@@ -38,12 +38,12 @@ from controllers.feedforward import (
     path_deviation,
     quasi_static_path,
 )
-from isolator.actuation import ForceHistory
+from isolator.analysis.linear import LinearModel, linearise
 from isolator.errors import OptimisationError, ScenarioError
-from isolator.integrator import grid_breakpoints
-from isolator.linear import LinearModel, linearise
-from isolator.scenario import Scenario
-from isolator.simulation import Simulator
+from isolator.scenario.definitions import Scenario
+from isolator.simulation.actuation import ForceHistory
+from isolator.simulation.simulator import Simulator
+from isolator.simulation.time_grid import grid_breakpoints
 
 __all__ = ["OptimalSettings", "feedforward_optimal"]
 

@@ -43,13 +43,12 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import OptimisationError, ScenarioError
-from isolator.integrator import sensed_motion
-from isolator.loading import resolve_scenario_path
-from isolator.model import ParameterLayout
-from isolator.native import NativeFunction
-from isolator.profiles import segment_starts
-from isolator.scenario import SIGNALS, Scenario
-from isolator.simulation import Simulator, get_model
+from isolator.model.parameters import ParameterLayout
+from isolator.numerics.native import NativeFunction
+from isolator.scenario.definitions import SIGNALS, Scenario
+from isolator.scenario.profile_shapes import segment_starts
+from isolator.scenario.reader import resolve_scenario_path
+from isolator.simulation.simulator import Simulator, get_model
 
 from .input_shaping import ExcitedMode, dominant_modes
 from .move_design import MoveDesign, command_time, move_designs, move_time
@@ -519,7 +518,7 @@ class _Problem:
     def _sense_function(self) -> ca.Function:
         x = ca.MX.sym("x", self.model.n_states)
         ref = ca.MX.sym("ref", self.model.n_states)
-        sense = ca.Function(f"profile_sense_{self.model.kind}", [x, ref], [sensed_motion(self.model.kind, x, ref)])
+        sense = ca.Function(f"profile_sense_{self.model.kind}", [x, ref], [self.model.variant.sensed_motion(x, ref)])
         return _compiled(sense.expand())
 
 

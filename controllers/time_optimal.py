@@ -9,8 +9,9 @@ constant-jerk phases; they become an exact piecewise-cubic profile.
 from __future__ import annotations
 
 from isolator.errors import ScenarioError
-from isolator.profiles import PiecewisePolynomialProfile, segments
-from isolator.scenario import Scenario
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.profile_shapes import segments
+from isolator.scenario.profiles import PiecewisePolynomialProfile
 
 from .move_design import move_designs
 from .move_metrics import with_moves

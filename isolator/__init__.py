@@ -13,23 +13,26 @@ and vibration-criteria class.
 
 from __future__ import annotations
 
-from .batch import BatchResult
-from .equilibrium import Equilibrium, RockingStiffness, static_equilibrium
-from .errors import (
+from isolator.analysis.linear import LinearModel, linearise
+from isolator.analysis.modes import Modes, modes, modes_over_travel
+from isolator.analysis.stability import StabilityReport, stability
+from isolator.analysis.transmissibility import FrequencyResponse, compliance, transmissibility
+from isolator.analysis.vibration import VC_CLASSES, VibrationCriteria, vibration_criteria
+from isolator.errors import (
     IsolatorError,
     OptimisationError,
+    ParameterError,
     ScenarioError,
     SimulationError,
     UnstableClosedLoopError,
     UnstableTableError,
 )
-from .linear import LinearModel, linearise
-from .loading import bundled_scenarios, load_scenario, load_spectrum, scenario_from_dict
-from .model import MODEL_KINDS, Model, ParameterLayout, build_model
-from .modes import Modes, modes, modes_over_travel
-from .profiles import PiecewisePolynomialProfile, Profile, SineProfile, samples, scurve, segments, shaped, trapezoid
-from .response import Response
-from .scenario import (
+from isolator.model.cache import get_model
+from isolator.model.equilibrium import Equilibrium, RockingStiffness, static_equilibrium
+from isolator.model.parameters import ParameterLayout
+from isolator.model.signals import table_signals
+from isolator.model.variants import EXACT, MODEL_KINDS, PAPER, Model, ModelVariant, build_model
+from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
     Carriage,
@@ -43,14 +46,19 @@ from .scenario import (
     SimulationSettings,
     Table,
 )
-from .settling import SettlingResult, settling_time
-from .simulation import Simulator, get_model, simulate, table_signals
-from .stability import StabilityReport, stability
-from .transmissibility import FrequencyResponse, compliance, transmissibility
-from .vibration import VC_CLASSES, VibrationCriteria, vibration_criteria
+from isolator.scenario.profile_shapes import samples, scurve, segments, shaped, trapezoid
+from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
+from isolator.scenario.reader import bundled_scenarios, load_scenario, scenario_from_dict
+from isolator.scenario.tables import load_spectrum
+from isolator.simulation.batch import BatchResult
+from isolator.simulation.response import Response
+from isolator.simulation.settling import SettlingResult, settling_time
+from isolator.simulation.simulator import Simulator, simulate
 
 __all__ = [
+    "EXACT",
     "MODEL_KINDS",
+    "PAPER",
     "SIGNALS",
     "VC_CLASSES",
     "Actuator",
@@ -64,9 +72,11 @@ __all__ = [
     "IsolatorError",
     "LinearModel",
     "Model",
+    "ModelVariant",
     "Modes",
     "MotionLimits",
     "OptimisationError",
+    "ParameterError",
     "ParameterLayout",
     "PiecewisePolynomialProfile",
     "Point",

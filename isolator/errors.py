@@ -5,6 +5,7 @@ from __future__ import annotations
 __all__ = [
     "IsolatorError",
     "OptimisationError",
+    "ParameterError",
     "ScenarioError",
     "SimulationError",
     "UnstableClosedLoopError",
@@ -17,7 +18,11 @@ class IsolatorError(Exception):
 
 
 class ScenarioError(IsolatorError, ValueError):
-    """A scenario file or argument is invalid; the message names the key path."""
+    """A scenario's content is invalid; the message names the key path (``carriages[1].mass: ...``)."""
+
+
+class ParameterError(IsolatorError, ValueError):
+    """An argument of a public function or a command-line option is invalid; the message names it."""
 
 
 class UnstableTableError(IsolatorError):

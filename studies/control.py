@@ -28,8 +28,8 @@ import numpy as np
 from controllers import feedback as fb
 from controllers.feedforward import Feedforward, feedforward_allocation, path_deviation, settling_in_band
 from isolator import SIGNALS, Response, Scenario, ScenarioError, Simulator
-from isolator.linear import LinearModel, linearise
-from isolator.transmissibility import transmissibility
+from isolator.analysis.linear import LinearModel, linearise
+from isolator.analysis.transmissibility import transmissibility
 
 __all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
 

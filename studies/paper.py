@@ -14,7 +14,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from isolator import SIGNALS, Response, Scenario, load_scenario, simulate
-from isolator.multibody import MujocoTable, MultibodyRun, mujoco_available
+from isolator.validation.multibody import MujocoTable, MultibodyRun, mujoco_available
 
 __all__ = ["relative_rms", "run_paper_study"]
 

@@ -40,8 +40,8 @@ from matplotlib.colors import LogNorm
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from isolator import Scenario, ScenarioError, Simulator, UnstableTableError
-from isolator.linear import linearise
-from isolator.transmissibility import transmissibility
+from isolator.analysis.linear import linearise
+from isolator.analysis.transmissibility import transmissibility
 
 __all__ = ["TradeoffStudy", "pareto_front", "run_tradeoff_study"]
 

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from isolator.cli import main
+from isolator.cli.app import main
 
 
 def test_simulate_default_prints_table_and_writes_figure(tmp_path, monkeypatch, capsys):

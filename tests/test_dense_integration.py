@@ -23,11 +23,13 @@ from isolator import (
     load_scenario,
     scenario_from_dict,
 )
-from isolator.dop853 import STAGES, TAIL, dop853_tableau, step_plan
-from isolator.equilibrium import static_equilibria, static_equilibrium
-from isolator.native import MappedFunction
-from isolator.settling import settling_time, settling_times
-from isolator.simulation import _stepper, relative_rotation_vector, table_signals
+from isolator.model.equilibrium import static_equilibria, static_equilibrium
+from isolator.model.signals import relative_rotation_vector, table_signals
+from isolator.model.variants import EXACT
+from isolator.numerics.dop853 import STAGES, TAIL, dop853_tableau, step_plan
+from isolator.numerics.native import MappedFunction
+from isolator.simulation.settling import settling_time, settling_times
+from isolator.simulation.simulator import _stepper
 from studies.paper import relative_rms
 
 
@@ -212,9 +214,9 @@ def test_a_mapped_function_over_a_part_block():
 
 
 def test_the_series_rotation_vector_is_exact_up_to_the_divergence_limit():
-    from isolator.integrator import signal_function
+    from isolator.model.signals import signal_function
 
-    signals = signal_function("exact", 13)
+    signals = signal_function(EXACT, 13)
     rng = np.random.default_rng(4)
     for angle in (1e-6, 1e-3, 0.05, 0.2):
         for _ in range(20):
@@ -234,9 +236,9 @@ def test_the_series_rotation_vector_is_exact_up_to_the_divergence_limit():
 
 
 def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
-    import isolator.native as native
-    from isolator.dop853 import DenseStepper
-    from isolator.integrator import signal_function
+    import isolator.numerics.native as native
+    from isolator.model.signals import signal_function
+    from isolator.numerics.dop853 import DenseStepper
 
     data = base_dict()
     data["simulation"] = {"duration": 1.2, "sample_rate": 500.0}
@@ -245,7 +247,7 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
     start, end = sim.equilibria(p)
     method = sim.method_for(max(start.max_frequency, end.max_frequency))
     inputs = sim._plan_inputs(method, p)
-    signals = signal_function("exact", 13)
+    signals = signal_function(EXACT, 13)
     compiled = DenseStepper(sim.model, signals)
     evaluated = DenseStepper(sim.model, signals, compile=False)
     assert compiled.native
@@ -268,8 +270,8 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
 
 @pytest.mark.parametrize("kind", ["exact", "paper"])
 def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
-    from isolator.dop853 import DenseStepper
-    from isolator.integrator import signal_function
+    from isolator.model.signals import signal_function
+    from isolator.numerics.dop853 import DenseStepper
 
     data = asymmetric_3d_dict()
     data["simulation"] = {"duration": 1.6, "sample_rate": 500.0}
@@ -279,7 +281,7 @@ def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
     method = sim.method_for(max(s.max_frequency for s in starts))  # one plan for all four
     plan, inputs = method.plan, sim._plan_inputs(method, params[0])
     x0 = np.array([s.state for s in starts])
-    signals = signal_function(kind, sim.model.n_states)
+    signals = signal_function(sim.model.variant, sim.model.n_states)
     lanes = DenseStepper(sim.model, signals, lanes=4)
     assert lanes.native
     sig, peaks, polys = lanes.run_slots(x0, plan, inputs, params, x0, with_states=True)
@@ -324,7 +326,7 @@ def test_a_batch_names_the_run_that_turns_too_far_or_records_it():
 
 
 def test_a_compiler_error_is_one_line_naming_the_library(tmp_path, monkeypatch):
-    from isolator.native import compiled_library
+    from isolator.numerics.native import compiled_library
 
     monkeypatch.setenv("ISOLATOR_CACHE", str(tmp_path))
     with pytest.raises(RuntimeError, match=r"failed on broken: .*error"):

@@ -13,9 +13,9 @@ from scipy.linalg import solve_continuous_are
 from conftest import make
 from controllers import feedback as fb
 from isolator import SimulationError, Simulator, UnstableClosedLoopError
-from isolator.linear import FORCE_INPUTS, GROUND_INPUTS, linearise
-from isolator.scenario import SIGNALS
-from isolator.transmissibility import transmissibility
+from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, linearise
+from isolator.analysis.transmissibility import transmissibility
+from isolator.scenario.definitions import SIGNALS
 from test_feedforward import _active_dict
 
 
@@ -196,7 +196,7 @@ def test_closed_loop_final_value_follows_the_controllers_dc_stiffness(active, li
 
 
 def test_control_study_writes_figures_and_report(tmp_path, capsys):
-    from isolator.cli import main
+    from isolator.cli.app import main
 
     assert main(["study", "control", "--out", str(tmp_path)]) == 0
     out = capsys.readouterr().out
@@ -214,7 +214,7 @@ def test_control_study_writes_figures_and_report(tmp_path, capsys):
 
 
 def test_control_study_needs_actuators(tmp_path, capsys):
-    from isolator.cli import main
+    from isolator.cli.app import main
 
     assert main(["study", "control", "paper-table-3-2", "--out", str(tmp_path)]) == 2
     assert "needs a scenario with [[actuators]]" in capsys.readouterr().err

@@ -12,10 +12,10 @@ import pytest
 from conftest import base_dict, make
 from controllers.feedforward import compare_feedforward, feedforward_allocation
 from isolator import ScenarioError, Simulator, load_scenario
-from isolator.actuation import ForceHistory, applied_forces, load_forces
-from isolator.cli import main
-from isolator.multibody import MujocoTable, mujoco_available
-from isolator.scenario import SIGNALS
+from isolator.cli.app import main
+from isolator.scenario.definitions import SIGNALS
+from isolator.simulation.actuation import ForceHistory, applied_forces, load_forces
+from isolator.validation.multibody import MujocoTable, mujoco_available
 
 
 def _active_dict(max_force: float = 500.0, bandwidth: float | None = None) -> dict:

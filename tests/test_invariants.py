@@ -9,7 +9,7 @@ import pytest
 
 from conftest import asymmetric_3d_dict, base_dict, make
 from isolator import ParameterLayout, Simulator, UnstableTableError, get_model, simulate
-from isolator.equilibrium import static_equilibrium
+from isolator.model.equilibrium import static_equilibrium
 
 
 def _rotations(states: np.ndarray) -> np.ndarray:

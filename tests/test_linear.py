@@ -19,11 +19,11 @@ from scipy.spatial.transform import Rotation
 
 from conftest import asymmetric_3d_dict, base_dict, make
 from isolator import ScenarioError, Simulator, UnstableTableError
-from isolator.linear import linearise
-from isolator.modes import modes, modes_over_travel
-from isolator.multibody import MujocoTable, mujoco_available
-from isolator.stability import stability
-from isolator.transmissibility import compliance, transmissibility
+from isolator.analysis.linear import linearise
+from isolator.analysis.modes import modes, modes_over_travel
+from isolator.analysis.stability import stability
+from isolator.analysis.transmissibility import compliance, transmissibility
+from isolator.validation.multibody import MujocoTable, mujoco_available
 
 
 # -- MuJoCo, finite differences -----------------------------------------------------

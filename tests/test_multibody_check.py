@@ -10,7 +10,7 @@ from isolator import load_scenario, simulate
 from studies.paper import relative_rms
 
 mujoco = pytest.importorskip("mujoco")
-from isolator.multibody import MujocoTable  # noqa: E402
+from isolator.validation.multibody import MujocoTable  # noqa: E402
 
 
 @pytest.fixture(scope="module")

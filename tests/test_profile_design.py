@@ -13,7 +13,7 @@ from controllers.input_shaping import dominant_modes, residual_vibration, shaper
 from controllers.move_design import move_designs
 from controllers.time_optimal import time_optimal_profile
 from isolator import ScenarioError, linearise, load_scenario, scenario_from_dict, scurve, shaped, trapezoid
-from isolator.modes import modes
+from isolator.analysis.modes import modes
 
 
 @pytest.mark.parametrize(("stroke", "dec", "jerk_down"), [(1.4, 0.3, 1.0), (-0.6, 0.2, 0.5), (0.02, 0.4, 2.0)])

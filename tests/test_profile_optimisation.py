@@ -13,7 +13,7 @@ from controllers.input_shaping import shaped_scenario
 from controllers.move_design import move_designs
 from controllers.move_metrics import ModelVariant, evaluate_move, with_moves
 from isolator import OptimisationError, ScenarioError, Simulator, load_scenario
-from isolator.cli import main
+from isolator.cli.app import main
 
 NOMINAL = (ModelVariant(),)
 

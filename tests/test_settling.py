@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from isolator import Settling, settling_time
-from isolator.settling import settling_metrics
+from isolator.simulation.settling import settling_metrics
 
 
 def test_damped_cosine_settles_when_its_last_excursion_leaves_the_band():

@@ -6,7 +6,7 @@ import re
 
 import pytest
 
-from isolator.cli import main
+from isolator.cli.app import main
 
 
 @pytest.mark.slow

@@ -11,8 +11,8 @@ import pytest
 
 from conftest import base_dict, make
 from isolator import ScenarioError, Simulator, load_scenario
-from isolator.cli import main
-from isolator.linear import linearise
+from isolator.analysis.linear import linearise
+from isolator.cli.app import main
 from studies.tradeoff import pareto_front, run_tradeoff_study
 
 

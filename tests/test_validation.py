@@ -10,7 +10,7 @@ import pytest
 
 from conftest import base_dict, make
 from isolator import ScenarioError, load_scenario
-from isolator.cli import main
+from isolator.cli.app import main
 
 
 def _with(path: str, value):

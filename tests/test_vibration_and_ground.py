@@ -12,11 +12,11 @@ from scipy.integrate import quad
 
 from conftest import base_dict, make
 from isolator import ScenarioError
-from isolator.cli import main
-from isolator.linear import linearise
-from isolator.loading import load_spectrum
-from isolator.scenario import FloorSpectrum
-from isolator.vibration import VC_CLASSES, third_octave_bands, vibration_criteria
+from isolator.analysis.linear import linearise
+from isolator.analysis.vibration import VC_CLASSES, third_octave_bands, vibration_criteria
+from isolator.cli.app import main
+from isolator.scenario.definitions import FloorSpectrum
+from isolator.scenario.tables import load_spectrum
 
 
 def _decoupled() -> dict:

@@ -1,0 +1,124 @@
+"""The controllers' subcommands: feedforward and optimise-profile (registered with the ``isolator`` command)."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from isolator.cli.helpers import report, scenario_argument, use_agg
+from isolator.errors import OptimisationError
+from isolator.scenario.reader import load_scenario
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``feedforward`` and ``optimise-profile`` to the ``isolator`` command's subparsers."""
+    ff = sub.add_parser(
+        "feedforward", help="actuator forces that cancel the carriages' reaction, and what they buy",
+        description="Compute feedforward actuator forces from the planned carriage motion and compare "
+        "the passive and controlled runs (settling band: 5 %% of the passive peak per signal).",
+    )
+    ff.add_argument("scenario", nargs="?", default=None,
+                    help="scenario file or bundled name with [[actuators]] (default: paper-table-3-2-active)")
+    ff.add_argument("--method", choices=["allocation", "optimal"], default="allocation",
+                    help="allocation: least squares of the reaction wrench over the actuators, within limits; "
+                    "optimal: command histories optimised through the time-varying model, within force and "
+                    "rate limits, accounting for the actuators' lag")
+    ff.add_argument("--out", type=Path, metavar="FORCES.csv", help="write the forces file")
+    ff.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    opt = sub.add_parser(
+        "optimise-profile", help="optimise the carriages' motion profiles to cut the settling or cycle time",
+        description="Optimise each carriage's S-curve (or trapezoid) through the time-varying model with casadi "
+        "and IPOPT, over model variants (isolator stiffness, damping and payload mass 15 %% off), and compare "
+        "with the scenario's own profiles by simulation.",
+    )
+    scenario_argument(opt)
+    opt.add_argument("--objective", choices=["settling", "cycle"], default="settling",
+                     help="settling: least residual vibration within the move-time limit; cycle: shortest move "
+                     "that still settles at once")
+    opt.add_argument("--max-move-time-increase", type=float, default=0.05, metavar="FRACTION",
+                     help="longest move as a fraction over the scenario's (default 0.05)")
+    opt.add_argument("--shape", choices=["scurve", "trapezoid"], default="scurve",
+                     help="profile shape to design (default scurve)")
+    opt.add_argument("--transcription", choices=["single", "multiple"], default="single",
+                     help="single or multiple shooting (default single)")
+    opt.add_argument("--nominal", action="store_true", help="optimise for the nominal model only")
+    opt.add_argument("--out", type=Path, metavar="OPTIMISED.toml", help="write the scenario with the optimised "
+                     "profiles")
+    opt.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    ff.set_defaults(handler=_feedforward)
+    opt.set_defaults(handler=_optimise_profile)
+
+
+def _feedforward(args: argparse.Namespace) -> int:
+    use_agg()
+    from controllers.feedforward import compare_feedforward
+
+    scenario = load_scenario(args.scenario or "paper-table-3-2-active")
+    feedforward = None
+    if args.method == "optimal":
+        from controllers.optimal_feedforward import feedforward_optimal
+
+        feedforward = feedforward_optimal(scenario, progress=not args.json)
+    result = compare_feedforward(scenario, feedforward)
+    if args.out:
+        result.feedforward.forces.to_csv(args.out)
+    return report(args.json, result.to_dict(), result.summary(), [("forces file", args.out)])
+
+
+def _optimise_profile(args: argparse.Namespace) -> int:
+    use_agg()
+    from controllers.move_design import command_time
+    from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, over_variants
+    from controllers.profile_optimisation import ProfileSettings, optimise_profiles, write_scenario
+
+    scenario = load_scenario(args.scenario)
+    settings = ProfileSettings(
+        objective=args.objective, transcription=args.transcription, shape=args.shape,
+        max_move_time_increase=args.max_move_time_increase,
+        variants=(ModelVariant(),) if args.nominal else ROBUSTNESS_VARIANTS,
+    )
+    warning = None
+    try:
+        result = optimise_profiles(scenario, settings, progress=not args.json)
+    except OptimisationError as exc:
+        if getattr(exc, "result", None) is None:
+            raise
+        result, warning = exc.result, str(exc)  # type: ignore[attr-defined]
+    start = command_time(scenario)
+    spread = {
+        "variants": [v.label for v in ROBUSTNESS_VARIANTS],
+        "baseline": [m.settling_time_max for m in over_variants(scenario, "baseline", start)],
+        "optimised": [m.settling_time_max for m in over_variants(result.scenario, "optimised", start)],
+    }
+    if args.out:
+        write_scenario(args.scenario, result.designs, args.out)
+    data = {**result.to_dict(), "robustness": spread}
+    if warning:
+        data["warning"] = warning
+        print(f"isolator: warning: {warning}", file=sys.stderr)
+    return report(args.json, data, _profile_summary(result, spread), [("optimised scenario", args.out)])
+
+
+def _profile_summary(result, spread: dict) -> str:
+    def num(value: float | None) -> str:
+        return "n/a" if value is None else f"{value:.3f}"
+
+    lines = [f"{'':>10} {'move [s]':>9} {'settling [s]':>13} {'cycle [s]':>10}"]
+    for m in (result.baseline, result.optimised):
+        lines.append(f"{m.label:>10} {m.move_time:>9.3f} {num(m.settling_time_max):>13} {num(m.cycle_time):>10}")
+    for d in result.designs:
+        values = ", ".join(f"{n} {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
+        lines.append(f"{d.name} ({d.shape}): {values}")
+    for run in ("baseline", "optimised"):
+        values = [v for v in spread[run] if v is not None]
+        if values:
+            lines.append(f"settling over model variants ({run}): {min(values):.3f} .. {max(values):.3f} s")
+    lines.append(f"IPOPT {result.status}, {result.iterations} iterations, {result.build_time:.2f} s building, "
+                 f"{result.solve_time:.2f} s solving")
+    return "\n".join(lines)

@@ -1,0 +1,1 @@
+"""Linear analyses about rest configurations: linearisation, modes, transmissibility, stability, vibration criteria."""

@@ -1,0 +1,344 @@
+"""The exact model linearised about a rest configuration, as a python-control system.
+
+:func:`linearise` parks the carriages (at their start, at their positions at a
+given time of their profiles, or at positions given by name), solves the static
+equilibrium, and expands the one symbolic model
+(:func:`isolator.model.linearisation.build_linearisation`) to first order there:
+
+``M d'' + C d' + K d = -(G0 g + G1 g' + Bw w + Ba f)``
+
+with ``d`` the table's displacement and small rotation (world axes, from the
+equilibrium), ``g`` the floor's translations and rotations (about the world
+origin), ``w`` a force and moment at the table's mass centre and ``f`` the
+actuator forces. The state-space form absorbs the floor-velocity term ``G1 g'``
+into the velocity states (see :class:`LinearModel`), so the floor's displacement
+is an ordinary input.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import casadi as ca
+import control
+import numpy as np
+
+from isolator.errors import ScenarioError
+from isolator.model.cache import get_model
+from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
+from isolator.model.linearisation import build_linearisation
+from isolator.model.parameters import ParameterLayout
+from isolator.model.rotations import pose_rotation, skew
+from isolator.scenario.definitions import Scenario
+
+__all__ = [
+    "FORCE_INPUTS",
+    "GROUND_INPUTS",
+    "STATE_NAMES",
+    "LinearModel",
+    "is_stable",
+    "linearise",
+    "rest_positions",
+    "state_space_response",
+]
+
+GROUND_INPUTS = tuple(f"ground:{a}" for a in DOF_NAMES)
+FORCE_INPUTS = ("force:x", "force:y", "force:z", "torque:x", "torque:y", "torque:z")
+STATE_NAMES = (*DOF_NAMES, "vx", "vy", "vz", "wx", "wy", "wz")
+
+
+def rest_positions(
+    scenario: Scenario,
+    positions: Mapping[str, float] | Sequence[float] | np.ndarray | None = None,
+    time: float | None = None,
+) -> np.ndarray:
+    """Carriage coordinates [m] of a rest configuration.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    positions : mapping or sequence, optional
+        By carriage name (the others at their start), or one value per carriage.
+    time : float, optional
+        Park the carriages where their profiles put them at this time [s].
+
+    Raises
+    ------
+    ScenarioError
+        Both ``positions`` and ``time``; an unknown name; a wrong count; a
+        non-finite value; a carriage whose mass would leave the table's footprint.
+    """
+    if positions is not None and time is not None:
+        raise ScenarioError("positions: give carriage positions or a time, not both")
+    q = scenario.initial_positions()
+    names = [c.name for c in scenario.carriages]
+    if time is not None:
+        if not math.isfinite(time) or time < 0:
+            raise ScenarioError(f"time: must be a finite time >= 0 s, got {time}")
+        q = np.array([c.profile.position(time) for c in scenario.carriages], dtype=float)
+    elif isinstance(positions, Mapping):
+        for name, value in positions.items():
+            if name not in names:
+                raise ScenarioError(f"positions.{name}: no such carriage (carriages: {', '.join(names) or 'none'})")
+            q[names.index(name)] = _finite(value, f"positions.{name}")
+    elif positions is not None:
+        values = np.asarray(positions, dtype=float).ravel()
+        if values.size != len(names):
+            raise ScenarioError(f"positions: needs {len(names)} values (one per carriage), got {values.size}")
+        q = np.array([_finite(v, f"positions[{i}]") for i, v in enumerate(values)])
+    _check_footprint(scenario, q)
+    return q
+
+
+def _finite(value: object, key: str) -> float:
+    try:
+        x = float(value)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        raise ScenarioError(f"{key}: must be a number, got {value!r}") from None
+    if not math.isfinite(x):
+        raise ScenarioError(f"{key}: must be finite, got {x}")
+    return x
+
+
+def _check_footprint(scenario: Scenario, q: np.ndarray) -> None:
+    excess = scenario.outside_footprint(q)
+    if excess is not None:
+        i, axis, _, coordinate = excess
+        half = scenario.table.size[axis] / 2.0  # type: ignore[index]
+        raise ScenarioError(
+            f"positions.{scenario.carriages[i].name}: puts the carriage's mass at {'xy'[axis]} = {coordinate:.4g} m, "
+            f"beyond the table's footprint (+-{half:.4g} m, table.size)"
+        )
+
+
+@dataclass(frozen=True)
+class LinearModel:
+    """A scenario linearised about a rest configuration.
+
+    Attributes
+    ----------
+    scenario : Scenario
+    positions : ndarray
+        Carriage coordinates of the rest configuration [m].
+    equilibrium : Equilibrium
+        The static equilibrium it is linearised about.
+    mass, damping, stiffness : ndarray (6, 6)
+        ``M, C, K`` for the coordinates ``d`` (m, rad) and the equations' force and
+        moment rows (N, N m), world axes about the mass centre.
+    ground_stiffness, ground_damping : ndarray (6, 6)
+        ``G0, G1``: the floor's displacement and velocity terms.
+    force_input : ndarray (6, 6 + n_a)
+        ``[Bw, Ba]``: a wrench at the mass centre and the actuator forces.
+    system : control.StateSpace
+        States ``x, y, z, rx, ry, rz, vx, vy, vz, wx, wy, wz``; inputs
+        ``ground:x .. ground:rz`` [m, rad], ``force:x .. torque:z`` [N, N m] and
+        ``actuator:<name>`` [N]; outputs the six table signals ``x .. rz`` [m, rad]
+        and ``<point>:x, :y, :z`` [m] per point of interest. With a moving floor
+        the velocity states are the table's velocity minus ``-M^-1 G1 g``, the
+        part that the floor's velocity adds at once through the isolators' dampers.
+    parameters : ndarray
+        The model's parameter vector it was linearised with (the scenario's own
+        unless another was given; ``Simulator.layout`` names its entries).
+    """
+
+    scenario: Scenario
+    positions: np.ndarray
+    equilibrium: Equilibrium
+    mass: np.ndarray
+    damping: np.ndarray
+    stiffness: np.ndarray
+    ground_stiffness: np.ndarray
+    ground_damping: np.ndarray
+    force_input: np.ndarray
+    system: control.StateSpace
+    parameters: np.ndarray
+
+    # -- names -------------------------------------------------------------------
+    @property
+    def input_names(self) -> list[str]:
+        return list(self.system.input_labels)
+
+    @property
+    def output_names(self) -> list[str]:
+        return list(self.system.output_labels)
+
+    # -- analyses ----------------------------------------------------------------
+    def frequency_response(
+        self,
+        frequency_hz: np.ndarray,
+        inputs: Sequence[str] | None = None,
+        outputs: Sequence[str] | None = None,
+    ) -> np.ndarray:
+        """Complex frequency response ``H(j 2 pi f)``.
+
+        Parameters
+        ----------
+        frequency_hz : ndarray (nf,)
+            [Hz], >= 0.
+        inputs, outputs : sequence of str, optional
+            Names (default: all).
+
+        Returns
+        -------
+        ndarray (nf, n_outputs, n_inputs)
+            In output units per input unit.
+        """
+        return state_space_response(self.system, frequency_hz, inputs, outputs)
+
+    @property
+    def feedthrough(self) -> np.ndarray:
+        """``B1`` (12, inputs): the true state is ``system``'s state plus ``B1 u``.
+
+        Non-zero only in the velocity rows of the floor inputs: what the floor's
+        velocity adds through the isolators' dampers at once (``-M^-1 G1``).
+        """
+        return _feedthrough(self.mass, self.ground_damping, len(self.input_names))
+
+    def rocking_stiffness(self) -> RockingStiffness:
+        """The static rocking stiffness and its margin at this rest configuration."""
+        model = get_model(ParameterLayout.of(self.scenario), "exact")
+        return rocking_stiffness(model, self.parameters, self.positions, self.equilibrium.pose)
+
+    @property
+    def eigenvalues(self) -> np.ndarray:
+        """Of the 12-state system [1/s]."""
+        return np.linalg.eigvals(np.asarray(self.system.A))
+
+    @property
+    def stable(self) -> bool:
+        """All eigenvalues in the open left half-plane (up to round-off)."""
+        return is_stable(self.eigenvalues)
+
+
+def is_stable(eigenvalues: np.ndarray) -> bool:
+    """All continuous-time eigenvalues [1/s] in the open left half-plane (up to round-off)."""
+    eig = np.asarray(eigenvalues)
+    return bool(np.all(eig.real < 1e-9 * max(1.0, float(np.abs(eig).max(initial=0.0)))))
+
+
+def _feedthrough(mass: np.ndarray, ground_damping: np.ndarray, n_inputs: int) -> np.ndarray:
+    """``B1`` (12, n_inputs): the velocity the floor's velocity adds at once through the dampers."""
+    out = np.zeros((12, n_inputs))
+    out[6:, :6] = -np.linalg.solve(mass, ground_damping)
+    return out
+
+
+def _index(names: Sequence[str] | None, labels: list[str], what: str) -> list[int]:
+    if names is None:
+        return list(range(len(labels)))
+    out = []
+    for name in names:
+        if name not in labels:
+            raise ScenarioError(f"{what}: no {what[:-1]} named '{name}' (have: {', '.join(labels)})")
+        out.append(labels.index(name))
+    return out
+
+
+def state_space_response(
+    system: control.StateSpace,
+    frequency_hz: np.ndarray,
+    inputs: Sequence[str] | None = None,
+    outputs: Sequence[str] | None = None,
+) -> np.ndarray:
+    """Complex ``H(j 2 pi f)`` of a named state-space system, one batched solve.
+
+    Returns
+    -------
+    ndarray (nf, n_outputs, n_inputs)
+    """
+    f = np.asarray(frequency_hz, dtype=float).ravel()
+    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
+        raise ScenarioError("frequency_hz: must be finite frequencies >= 0 Hz")
+    iu = _index(inputs, list(system.input_labels), "inputs")
+    iy = _index(outputs, list(system.output_labels), "outputs")
+    a, b = np.asarray(system.A), np.asarray(system.B)[:, iu]
+    c, d = np.asarray(system.C)[iy], np.asarray(system.D)[np.ix_(iy, iu)]
+    s = 2j * np.pi * f
+    n = a.shape[0]
+    resolvent = s[:, None, None] * np.eye(n) - a[None]
+    x = np.linalg.solve(resolvent, np.broadcast_to(b.astype(complex), (f.size, *b.shape)))
+    return c[None] @ x + d[None]
+
+
+def linearise(
+    scenario: Scenario,
+    positions: Mapping[str, float] | Sequence[float] | np.ndarray | None = None,
+    time: float | None = None,
+    check: bool = True,
+    parameters: np.ndarray | None = None,
+) -> LinearModel:
+    """Linearise the exact model about a rest configuration.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    positions : mapping or sequence, optional
+        Carriage positions [m] by name or one per carriage (default: their start).
+    time : float, optional
+        Park the carriages where their profiles are at this time [s] instead.
+    check : bool
+        Raise :class:`~isolator.UnstableTableError` when the table cannot stand
+        (False: linearise anyway, about the equilibrium or the upright pose).
+    parameters : ndarray, optional
+        The model's parameter vector instead of the scenario's, for example
+        ``Simulator(scenario).scaled_parameters(stiffness, damping)``.
+
+    Returns
+    -------
+    LinearModel
+
+    Examples
+    --------
+    >>> from isolator import load_scenario
+    >>> from isolator.analysis.linear import linearise
+    >>> lin = linearise(load_scenario(), positions={"x-stage": 0.2})
+    >>> lin.system.nstates
+    12
+    """
+    q = rest_positions(scenario, positions, time)
+    layout = ParameterLayout.of(scenario)
+    model = get_model(layout, "exact")
+    p = layout.pack(scenario) if parameters is None else np.asarray(parameters, dtype=float)
+    if p.shape != (layout.size,) or not np.all(np.isfinite(p)):
+        raise ScenarioError(f"parameters: must be {layout.size} finite numbers (Simulator.layout), got shape {p.shape}")
+    eq = static_equilibrium(model, p, q, "in this rest configuration", check=check)
+    c = np.concatenate([q, np.zeros(2 * q.size)])
+    mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]
+    mass, damping, stiffness, g0, g1, bw, ba = mats
+    force_input = np.hstack([bw, ba.reshape(6, -1)])
+    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input)
+    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p)
+
+
+def _state_space(
+    scenario: Scenario,
+    eq: Equilibrium,
+    mass: np.ndarray,
+    damping: np.ndarray,
+    stiffness: np.ndarray,
+    g0: np.ndarray,
+    g1: np.ndarray,
+    force_input: np.ndarray,
+) -> control.StateSpace:
+    inv_m = np.linalg.inv(mass)
+    zero, eye = np.zeros((6, 6)), np.eye(6)
+    a = np.block([[zero, eye], [-inv_m @ stiffness, -inv_m @ damping]])
+    n_in = 6 + force_input.shape[1]
+    b0 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g0, force_input])])
+    b1 = _feedthrough(mass, g1, n_in)
+    # x' = A x + B0 u + B1 u'  ->  xi = x - B1 u:  xi' = A xi + (A B1 + B0) u
+    rot0 = pose_rotation(eq.pose[3:])
+    rows = [np.hstack([eye, zero])]
+    out_names = list(DOF_NAMES)
+    for point in scenario.points:
+        arm = rot0 @ np.asarray(point.position, dtype=float)
+        rows.append(np.hstack([np.eye(3), -np.asarray(skew(ca.DM(arm)), dtype=float), np.zeros((3, 6))]))
+        out_names += [f"{point.name}:{a}" for a in "xyz"]
+    c = np.vstack(rows)
+    inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators)]
+    return control.ss(
+        a, a @ b1 + b0, c, c @ b1,
+        inputs=inputs, outputs=out_names, states=list(STATE_NAMES), name=scenario.name,
+    )

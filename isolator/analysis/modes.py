@@ -1,0 +1,208 @@
+"""Natural frequencies, damping ratios and mode shapes of the parked table."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from isolator.analysis.linear import LinearModel, linearise
+from isolator.model.equilibrium import DOF_NAMES
+from isolator.scenario.definitions import Scenario
+
+__all__ = ["ModeTravel", "Modes", "modes", "modes_over_travel"]
+
+
+@dataclass(frozen=True)
+class Modes:
+    """The six rigid-body modes of the table on its isolators, by ascending frequency.
+
+    Attributes
+    ----------
+    frequencies_hz : ndarray (6,)
+        Undamped natural frequencies ``|lambda| / 2 pi`` [Hz].
+    damping_ratios : ndarray (6,)
+        ``-Re(lambda) / |lambda|`` (>= 1: overdamped).
+    eigenvalues : ndarray (6,) complex
+        One per mode: the one with positive imaginary part, or for an
+        overdamped mode the slower of its two real ones [1/s].
+    shapes : ndarray (6, 6)
+        Row k: mode k's displacement ``x, y, z`` [m] and rotation ``rx, ry, rz``
+        [rad] at the mass centre, phase-aligned and scaled so that its dominant
+        entry is 1.
+    energy_share : ndarray (6, 6)
+        Row k: the share of mode k's kinetic energy in each direction
+        (``M_ii |shape_i|^2``, normalised to sum 1).
+    """
+
+    frequencies_hz: np.ndarray
+    damping_ratios: np.ndarray
+    eigenvalues: np.ndarray
+    shapes: np.ndarray
+    energy_share: np.ndarray
+
+    @property
+    def dominant(self) -> tuple[str, ...]:
+        """The direction holding most of each mode's kinetic energy."""
+        return tuple(DOF_NAMES[int(i)] for i in np.argmax(self.energy_share, axis=1))
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: ``frequencies_hz``, ``damping_ratios``, ``shapes`` (objects keyed by direction), ``dominant``."""
+        return {
+            "frequencies_hz": [float(f) for f in self.frequencies_hz],
+            "damping_ratios": [float(z) for z in self.damping_ratios],
+            "shapes": [{d: float(v) for d, v in zip(DOF_NAMES, row, strict=True)} for row in self.shapes],
+            "dominant": list(self.dominant),
+        }
+
+    def summary(self) -> str:
+        """A text table: mode, frequency, damping ratio, dominant direction."""
+        lines = ["mode  frequency [Hz]  damping ratio  dominant  energy share"]
+        for k, (f, z, d) in enumerate(zip(self.frequencies_hz, self.damping_ratios, self.dominant, strict=True)):
+            share = ", ".join(
+                f"{n} {100 * e:.0f}%" for n, e in zip(DOF_NAMES, self.energy_share[k], strict=True) if e >= 0.05
+            )
+            lines.append(f"{k + 1:>4}  {f:>14.4g}  {z:>13.4g}  {d:>8}  {share}")
+        return "\n".join(lines)
+
+    def plot(self, title: str = "") -> Any:
+        """Bar charts of each mode's energy share per direction; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        fig, axes = plt.subplots(2, 3, figsize=(11, 6), sharey=True, layout="constrained")
+        colours = ["tab:blue"] * 3 + ["tab:orange"] * 3
+        for k, ax in enumerate(axes.flat):
+            ax.bar(DOF_NAMES, 100 * self.energy_share[k], color=colours)
+            ax.set_title(
+                f"mode {k + 1}: {self.frequencies_hz[k]:.3g} Hz, "
+                f"$\\zeta$ = {self.damping_ratios[k]:.3g}\nmostly {self.dominant[k]}",
+                fontsize=10,
+            )
+            ax.set_ylim(0, 105)
+            ax.grid(axis="y", alpha=0.3)
+        for ax in axes[:, 0]:
+            ax.set_ylabel("kinetic energy share [%]")
+        for ax in axes[1]:
+            ax.set_xlabel("direction (blue: translation, orange: rotation)")
+        fig.suptitle(title or "Rigid-body modes of the table on its isolators")
+        return fig
+
+
+def modes(lin: LinearModel) -> Modes:
+    """The modes of a linearised scenario.
+
+    Parameters
+    ----------
+    lin : LinearModel
+        From :func:`isolator.analysis.linear.linearise`.
+
+    Returns
+    -------
+    Modes
+    """
+    a = np.asarray(lin.system.A)
+    eig, vec = np.linalg.eig(a)
+    omega, zeta, lam, shapes = [], [], [], []
+    for idx in _one_per_mode(eig):
+        if len(idx) == 1:  # an oscillating mode
+            value = complex(eig[idx[0]])
+            omega.append(abs(value))
+            zeta.append(-value.real / abs(value))
+        else:  # two real eigenvalues: an overdamped mode (or a free direction)
+            l1, l2 = float(eig[idx[0]].real), float(eig[idx[1]].real)
+            w = float(np.sqrt(max(l1 * l2, 0.0)))
+            omega.append(w)
+            zeta.append(-(l1 + l2) / (2 * w) if w > 0 else 1.0)
+            value = complex(max(l1, l2))  # the slower of the two
+        lam.append(value)
+        shapes.append(vec[:6, idx[0]])
+    order = np.argsort(omega, kind="stable")
+    omega_arr, zeta_arr = np.array(omega)[order], np.array(zeta)[order]
+    lam_arr, shape_arr = np.array(lam)[order], np.array(shapes)[order]
+    mass = np.abs(np.diag(lin.mass))
+    energy = mass[None, :] * np.abs(shape_arr) ** 2
+    energy /= energy.sum(axis=1, keepdims=True)
+    dominant = np.argmax(energy, axis=1)
+    ref = shape_arr[np.arange(len(shape_arr)), dominant]
+    real = (shape_arr / ref[:, None]).real
+    return Modes(omega_arr / (2 * np.pi), zeta_arr, lam_arr, real, energy)
+
+
+def _one_per_mode(eig: np.ndarray) -> list[tuple[int, ...]]:
+    """Indices of the eigenvalues that make the modes: one of each complex pair, pairs of real ones."""
+    scale = max(1.0, float(np.abs(eig).max()))
+    complex_idx = [i for i in range(eig.size) if eig[i].imag > 1e-9 * scale]
+    real_idx = sorted((i for i in range(eig.size) if abs(eig[i].imag) <= 1e-9 * scale), key=lambda i: eig[i].real)
+    # overdamped (or free) directions give two real eigenvalues each; pair them in order
+    pairs = [(real_idx[k], real_idx[k + 1]) for k in range(0, len(real_idx) - 1, 2)]
+    return [(i,) for i in complex_idx] + pairs
+
+
+@dataclass(frozen=True)
+class ModeTravel:
+    """Modes as carriages travel, one carriage at a time (the others at their start).
+
+    Attributes
+    ----------
+    carriages : tuple of str
+        The carriages that move.
+    positions : list of ndarray
+        Their coordinates swept [m], one array per carriage.
+    frequencies_hz, damping_ratios : list of ndarray (n, 6)
+        Per carriage, per position, the six modes ascending.
+    """
+
+    carriages: tuple[str, ...]
+    positions: list[np.ndarray]
+    frequencies_hz: list[np.ndarray]
+    damping_ratios: list[np.ndarray]
+
+    def plot(self, title: str = "") -> Any:
+        """Frequencies (top) and damping ratios (bottom) over each carriage's travel; returns the figure."""
+        import matplotlib.pyplot as plt
+
+        n = max(1, len(self.carriages))
+        fig, axes = plt.subplots(2, n, figsize=(5.5 * n, 6.5), squeeze=False, sharex="col", layout="constrained")
+        for j, name in enumerate(self.carriages):
+            q = self.positions[j] * 1e3
+            for k in range(6):
+                axes[0, j].plot(q, self.frequencies_hz[j][:, k], label=f"mode {k + 1}")
+                axes[1, j].plot(q, self.damping_ratios[j][:, k], label=f"mode {k + 1}")
+            axes[0, j].set_title(f"carriage {name} travels (others at their start)")
+            axes[1, j].set_xlabel(f"position of {name} [mm]")
+            axes[0, j].set_ylabel("natural frequency [Hz]")
+            axes[1, j].set_ylabel("damping ratio [-]")
+            for ax in axes[:, j]:
+                ax.grid(alpha=0.3)
+        if not self.carriages:
+            axes[0, 0].text(0.5, 0.5, "no carriage moves", ha="center", transform=axes[0, 0].transAxes)
+        axes[0, -1].legend(fontsize=8, loc="best")
+        fig.suptitle(title or "How the modes move as the stage travels")
+        return fig
+
+
+def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
+    """Sweep each moving carriage over its stroke and compute the modes at each position.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    samples : int
+        Positions per carriage (>= 2).
+    """
+    if samples < 2:
+        raise ValueError(f"samples: must be >= 2, got {samples}")
+    t_end = scenario.simulation.duration
+    names, positions, freqs, zetas = [], [], [], []
+    for carriage in scenario.carriages:
+        lo, hi = carriage.profile.position_range(t_end)
+        if hi - lo <= 0:
+            continue
+        q = np.linspace(lo, hi, samples)
+        rows = [modes(linearise(scenario, positions={carriage.name: v})) for v in q]
+        names.append(carriage.name)
+        positions.append(q)
+        freqs.append(np.array([m.frequencies_hz for m in rows]))
+        zetas.append(np.array([m.damping_ratios for m in rows]))
+    return ModeTravel(tuple(names), positions, freqs, zetas)

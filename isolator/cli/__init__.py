@@ -1,0 +1,1 @@
+"""The ``isolator`` command line: a dispatcher (:mod:`isolator.cli.app`) and the plant's subcommands."""

@@ -1,0 +1,191 @@
+"""The plant's subcommands: simulate, modes, transmissibility, stability, criteria, scenarios."""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+from typing import Any
+
+from isolator.analysis.linear import LinearModel, linearise
+from isolator.cli.helpers import report, save_figure, scenario_argument, use_agg
+from isolator.errors import ParameterError
+from isolator.model.variants import MODEL_KINDS
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.reader import bundled_scenarios, load_scenario
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add the plant's subcommands to the ``isolator`` command's subparsers."""
+    sim = sub.add_parser(
+        "simulate",
+        help="simulate the carriages' transients and report peaks and 5 %% settling times",
+        description="Simulate a scenario from its initial static equilibrium; print peaks, "
+        "final values and settling times per signal, and write a figure.",
+    )
+    scenario_argument(sim)
+    sim.add_argument("--model", choices=MODEL_KINDS, default="exact",
+                     help="exact rigid-body model or the paper's small-angle model")
+    sim.add_argument("--out", type=Path, metavar="FILE.csv", help="write the response table")
+    sim.add_argument("--plot", type=Path, metavar="FILE.png",
+                     help="figure path (default: <scenario name>.png, none with --json)")
+    sim.add_argument("--json", action="store_true", help="print a JSON summary instead of the table")
+    sim.add_argument("--forces", type=Path, metavar="FILE.csv",
+                     help="actuator forces file (t and one column per actuator, N)")
+
+    sim.set_defaults(handler=_simulate)
+
+    modes = sub.add_parser(
+        "modes", help="natural frequencies, damping ratios and mode shapes of the parked table",
+        description="Linearise about a rest configuration and print the six rigid-body modes.",
+    )
+    _linear_arguments(modes)
+    modes.add_argument("--plot", type=Path, metavar="FILE.png", help="write the mode-shape figure")
+    modes.add_argument("--travel", type=Path, metavar="FILE.png",
+                       help="write a figure of the modes as each carriage travels over its stroke")
+
+    trans = sub.add_parser(
+        "transmissibility", help="floor-to-table transmissibility (or compliance) per axis",
+        description="Same-axis floor motion to table motion at the mass centre: peak, its frequency, "
+        "and the frequency above which isolation starts.",
+    )
+    _linear_arguments(trans)
+    trans.add_argument("--plot", type=Path, metavar="FILE.png", help="write the Bode plot")
+    trans.add_argument("--compliance", action="store_true",
+                       help="force / moment at the mass centre to table motion instead")
+    trans.add_argument("--points", type=int, default=1000, help="frequencies, log-spaced (default 1000)")
+
+    stab = sub.add_parser(
+        "stability", help="rocking-stiffness margin over the carriages' travel",
+        description="Check, before any simulation, that the table stands wherever the carriages go; "
+        "exit status 3 when it would tip.",
+    )
+    scenario_argument(stab)
+    stab.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+    crit = sub.add_parser(
+        "criteria", help="one-third-octave table velocity from a floor spectrum, and its VC class",
+        description="Pass a floor vibration spectrum through the parked table and rate a point "
+        "against the VC curves (VC-A 50 um/s ... VC-G 0.78 um/s, 1-80 Hz).",
+    )
+    _linear_arguments(crit)
+    crit.add_argument("--spectrum", type=Path, metavar="FILE.csv",
+                      help="floor spectrum CSV (frequency_hz and x, y, z columns); default: [ground.spectrum]")
+    crit.add_argument("--kind", choices=["third-octave", "psd"], default="third-octave",
+                      help="band RMS velocities [m/s] or a velocity PSD [(m/s)^2/Hz] (default third-octave)")
+    crit.add_argument("--point", default=None, help="a [[points]] name (default: the mass centre)")
+    crit.add_argument("--plot", type=Path, metavar="FILE.png", help="write the figure against the VC curves")
+
+    modes.set_defaults(handler=_modes)
+    trans.set_defaults(handler=_transmissibility)
+    stab.set_defaults(handler=_stability)
+    crit.set_defaults(handler=_criteria)
+    sub.add_parser("scenarios", help="list the bundled scenarios").set_defaults(handler=_scenarios)
+
+
+def _scenarios(args: argparse.Namespace) -> int:
+    for name, path in sorted(bundled_scenarios().items()):
+        print(f"{name}\t{path}")
+    return 0
+
+
+def _linear_arguments(parser: argparse.ArgumentParser) -> None:
+    scenario_argument(parser)
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument("--time", type=float, metavar="T",
+                       help="park the carriages where their profiles are at T seconds (default: their start)")
+    where.add_argument("--position", action="append", default=None, metavar="NAME=Q",
+                       help="park carriage NAME at Q metres (repeatable; the others at their start)")
+    parser.add_argument("--json", action="store_true", help="print JSON instead of text")
+
+
+def _linearised(args: argparse.Namespace) -> tuple[Scenario, LinearModel]:
+    scenario = load_scenario(args.scenario)
+    positions = None
+    if args.position:
+        positions = {}
+        for item in args.position:
+            name, sep, value = item.partition("=")
+            try:
+                positions[name.strip()] = float(value)
+            except ValueError:
+                raise ParameterError(f"--position: expected NAME=Q with Q in metres, got '{item}'") from None
+            if not sep:
+                raise ParameterError(f"--position: expected NAME=Q with Q in metres, got '{item}'")
+    return scenario, linearise(scenario, positions=positions, time=args.time)
+
+
+def _modes(args: argparse.Namespace) -> int:
+    use_agg()
+    from isolator.analysis.modes import modes, modes_over_travel
+
+    scenario, lin = _linearised(args)
+    result = modes(lin)
+    if args.plot:
+        save_figure(result.plot(title=f"Modes of {scenario.name}"), args.plot)
+    if args.travel:
+        travel = modes_over_travel(scenario)
+        save_figure(travel.plot(title=f"Modes of {scenario.name} as the stage travels"), args.travel)
+    return report(args.json, result.to_dict(), result.summary(), [("figure", args.plot), ("figure", args.travel)])
+
+
+def _transmissibility(args: argparse.Namespace) -> int:
+    use_agg()
+    from isolator.analysis.transmissibility import compliance, default_frequencies, transmissibility
+
+    if args.points < 2:
+        raise ParameterError(f"--points: must be >= 2, got {args.points}")
+    _, lin = _linearised(args)
+    f = default_frequencies(lin, args.points)
+    result = compliance(lin, f) if args.compliance else transmissibility(lin, f)
+    if args.plot:
+        save_figure(result.plot(), args.plot)
+    return report(args.json, result.to_dict(), result.summary(), [("figure", args.plot)], indent=None)
+
+
+def _stability(args: argparse.Namespace) -> int:
+    from isolator.analysis.stability import stability
+
+    report = stability(load_scenario(args.scenario))
+    print(json.dumps(report.to_dict(), indent=2) if args.json else report.describe())
+    return 0 if report.stable else 3
+
+
+def _criteria(args: argparse.Namespace) -> int:
+    use_agg()
+    from isolator.analysis.vibration import vibration_criteria
+    from isolator.scenario.tables import load_spectrum
+
+    _, lin = _linearised(args)
+    spectrum = load_spectrum(args.spectrum, args.kind, key="--spectrum") if args.spectrum else None
+    result = vibration_criteria(lin, spectrum, point=args.point)
+    if args.plot:
+        save_figure(result.plot(), args.plot)
+    text = (f"floor: {result.floor_class}; table at {result.point}: {result.table_class} "
+            f"(largest band RMS {result.table_max * 1e6:.3g} um/s over 1-80 Hz)")
+    return report(args.json, result.to_dict(), text, [("figure", args.plot)])
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from isolator.simulation.simulator import simulate
+
+    scenario = load_scenario(args.scenario)
+    if args.forces:
+        from isolator.simulation.actuation import load_forces
+        from isolator.simulation.simulator import Simulator
+
+        response = Simulator(scenario, args.model).run(forces=load_forces(args.forces, scenario, key="--forces"))
+    else:
+        response = simulate(scenario, model=args.model)
+    if args.out:
+        response.to_csv(args.out)
+    plot = args.plot
+    if plot is None and not args.json:
+        plot = Path(f"{scenario.name}.png")
+    if plot is not None:
+        use_agg()
+        fig = response.plot()
+        fig.savefig(plot, dpi=120)
+    return report(args.json, response.to_dict(), response.summary(), [("response table", args.out), ("figure", plot)])

@@ -1,0 +1,31 @@
+"""The built-model cache: one :class:`~isolator.model.variants.Model` per structure and variant, built once.
+
+Every consumer (simulation, linearisation, stability, optimisation) gets its model here, so a structure's
+casadi functions are built once per process.
+"""
+
+from __future__ import annotations
+
+from isolator.model.parameters import ParameterLayout
+from isolator.model.variants import EXACT, Model, ModelVariant, model_variant
+
+__all__ = ["get_model"]
+
+_MODELS: dict[tuple[ParameterLayout, ModelVariant], Model] = {}
+
+
+def get_model(layout: ParameterLayout, variant: str | ModelVariant = EXACT) -> Model:
+    """The (cached) model of a structure.
+
+    Parameters
+    ----------
+    layout : ParameterLayout
+        The scenario's structure.
+    variant : ModelVariant or {"exact", "paper"}
+        Which equations; a bad name is a :class:`~isolator.errors.ParameterError` naming ``model``.
+    """
+    chosen = model_variant(variant)
+    key = (layout, chosen)
+    if key not in _MODELS:
+        _MODELS[key] = chosen.build(layout)
+    return _MODELS[key]

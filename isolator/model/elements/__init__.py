@@ -1,0 +1,1 @@
+"""Isolator elements: the forces an isolator puts on the table, one module per kind."""

@@ -1,0 +1,268 @@
+"""Static equilibrium of the parked table, its stability and its rocking-stiffness margin."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from isolator.errors import UnstableTableError
+from isolator.model.linearisation import build_linearisation
+from isolator.model.variants import Model
+from isolator.numerics.native import MappedFunction
+
+__all__ = [
+    "DOF_NAMES",
+    "Equilibrium",
+    "RockingStiffness",
+    "rocking_stiffness",
+    "static_equilibria",
+    "static_equilibrium",
+]
+
+DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
+
+
+@dataclass(frozen=True)
+class Equilibrium:
+    """The table at rest under the carriages parked at ``positions``.
+
+    Attributes
+    ----------
+    pose : ndarray (6,)
+        Mass-centre position from the reference pose [m] and Cardan angles
+        (Rz Ry Rx) [rad].
+    state : ndarray
+        The model's state at rest in that pose.
+    positions : ndarray
+        Carriage coordinates [m].
+    eigenvalues : ndarray
+        Of the model linearised there [1/s].
+    """
+
+    pose: np.ndarray
+    state: np.ndarray
+    positions: np.ndarray
+    eigenvalues: np.ndarray
+
+    @property
+    def max_frequency(self) -> float:
+        """Largest eigenvalue modulus [rad/s]."""
+        return float(np.max(np.abs(self.eigenvalues), initial=0.0))
+
+
+@dataclass(frozen=True)
+class RockingStiffness:
+    """The table's static stiffness against rotation, translations free to follow.
+
+    The stiffness matrix about the rest pose is condensed onto the three
+    rotations (the translations take their static values), giving a 3x3
+    rocking stiffness whose eigenvalues must all be positive for the table to
+    stand. The weight above the isolators' attachment points takes part of the
+    isolators' own rocking stiffness away (about ``W h``).
+
+    Attributes
+    ----------
+    values : ndarray (3,)
+        Eigenvalues of the condensed rocking stiffness, ascending [N m/rad].
+    directions : ndarray (3, 3)
+        Their unit rotation axes (columns), world frame.
+    elastic : ndarray (3,)
+        The isolators' part along those axes, without gravity [N m/rad].
+    """
+
+    values: np.ndarray
+    directions: np.ndarray
+    elastic: np.ndarray
+
+    @property
+    def margin(self) -> float:
+        """Smallest rocking stiffness [N m/rad]; <= 0: the table tips."""
+        return float(self.values[0])
+
+    @property
+    def relative_margin(self) -> float:
+        """``margin`` as a fraction of the isolators' own rocking stiffness along that axis."""
+        return float(self.values[0] / self.elastic[0]) if self.elastic[0] > 0 else float("-inf")
+
+    @property
+    def weakest_axis(self) -> str:
+        """``rx``, ``ry`` or ``rz``: the world axis closest to the softest rotation."""
+        return DOF_NAMES[3 + int(np.argmax(np.abs(self.directions[:, 0])))]
+
+    @property
+    def stable(self) -> bool:
+        return self.margin > 0.0
+
+    def describe(self) -> str:
+        """One line for reports and error messages."""
+        taken = self.elastic[0] - self.values[0]
+        return (
+            f"rocking stiffness about {self.weakest_axis} = {self.margin:.4g} N m/rad "
+            f"({100 * self.relative_margin:.3g} % of the isolators' {self.elastic[0]:.4g}; "
+            f"the weight above their attachment points takes {taken:.4g})"
+        )
+
+
+def rocking_stiffness(model: Model, p: np.ndarray, positions: np.ndarray, pose: np.ndarray) -> RockingStiffness:
+    """Condensed rocking stiffness of the exact model at a rest ``pose`` (position [m], Cardan angles [rad]).
+
+    Parameters
+    ----------
+    model : Model
+        Any model of the scenario's structure (the exact equations are used).
+    p : ndarray
+        Parameter vector.
+    positions : ndarray
+        Carriage coordinates [m].
+    pose : ndarray (6,)
+        Usually the static equilibrium's.
+    """
+    lin = build_linearisation(model.layout)
+    c = np.concatenate([np.asarray(positions, float), np.zeros(2 * len(positions))])
+
+    def condensed(params: np.ndarray) -> np.ndarray:
+        k = np.asarray(lin(pose, c, params)[2], dtype=float)
+        k = 0.5 * (k + k.T)
+        return k[3:, 3:] - k[3:, :3] @ np.linalg.pinv(k[:3, :3]) @ k[:3, 3:]
+
+    values, vectors = np.linalg.eigh(condensed(p))
+    no_gravity = np.array(p, dtype=float)
+    no_gravity[0] = 0.0
+    elastic_matrix = condensed(no_gravity)
+    elastic = np.einsum("ik,ij,jk->k", vectors, elastic_matrix, vectors)
+    return RockingStiffness(values, vectors, elastic)
+
+
+def static_equilibrium(
+    model: Model, p: np.ndarray, positions: np.ndarray, where: str = "at rest", check: bool = True
+) -> Equilibrium:
+    """Solve for the table's static pose and check that it is stable.
+
+    Parameters
+    ----------
+    model : Model
+    p : ndarray
+        Parameter vector.
+    positions : ndarray
+        Carriage coordinates [m].
+    where : str
+        Words for messages, e.g. "with the carriages at their start".
+    check : bool
+        Raise when the equilibrium is unstable (False: return it anyway).
+
+    Raises
+    ------
+    UnstableTableError
+        No equilibrium, or one with a divergent mode (the table would tip);
+        the message gives the rocking-stiffness margin.
+    """
+    return static_equilibria(model, np.asarray(p, dtype=float)[None, :], positions, where, check)[0]
+
+
+def static_equilibria(
+    model: Model, params: np.ndarray, positions: np.ndarray, where: str = "at rest", check: bool = True
+) -> list[Equilibrium]:
+    """:func:`static_equilibrium` for many parameter vectors at once (Newton's method run side by side).
+
+    Parameters
+    ----------
+    model : Model
+    params : ndarray (runs, parameters)
+    positions : ndarray
+        Carriage coordinates [m], the same for every run.
+    where : str
+        Words for messages.
+    check : bool
+        Raise when an equilibrium is unstable.
+
+    Raises
+    ------
+    UnstableTableError
+        For the first run without a stable equilibrium; the message names the
+        run when there are several.
+    """
+    params = np.atleast_2d(np.asarray(params, dtype=float))
+    runs = params.shape[0]
+    solver = _solver(model)
+    c = model.layout.rest_inputs(positions)
+    z = np.zeros((runs, 6))
+    tolerance = 1e-11 * (np.abs(params[:, 0]) * params[:, 1] + 1.0)
+    active = np.ones(runs, dtype=bool)
+    failed = np.zeros(runs, dtype=bool)
+    for _ in range(40):
+        idx = np.nonzero(active)[0]
+        if idx.size == 0:
+            break
+        r, jac = solver.residual(z[idx], c, params[idx])
+        bad = ~np.all(np.isfinite(r), axis=1)
+        done = ~bad & (np.max(np.abs(r), axis=1) <= tolerance[idx])
+        failed[idx[bad]] = True
+        step = idx[~bad & ~done]
+        active[idx[bad | done]] = False
+        if step.size == 0:
+            continue
+        keep = ~bad & ~done
+        try:
+            dz = -np.linalg.solve(jac[keep], r[keep][:, :, None])[:, :, 0]
+        except np.linalg.LinAlgError:  # a free direction (no stiffness along it): least squares
+            dz = -np.einsum("nij,nj->ni", np.linalg.pinv(jac[keep]), r[keep])
+        z[step] += dz
+        small = np.max(np.abs(dz), axis=1) < 1e-15
+        tipped = np.max(np.abs(z[step, 3:]), axis=1) > 1.0
+        failed[step[tipped & ~small]] = True
+        active[step[small | tipped]] = False
+    failed |= active  # did not converge
+    label = (lambda i: f"run {i}: ") if runs > 1 else (lambda i: "")
+    if failed.any():
+        i = int(np.argmax(failed))
+        rock = rocking_stiffness(model, params[i], positions, np.zeros(6))
+        raise UnstableTableError(
+            f"{label(i)}no static equilibrium {where}: the isolators cannot hold the table upright; "
+            f"{rock.describe()} (the mass centre is too high for the isolator spacing, or they are too soft)"
+        )
+    states, jacobians = solver.linear(z, c, params)
+    eigenvalues = np.linalg.eigvals(jacobians)
+    scale = np.max(np.abs(eigenvalues), axis=1, initial=0.0)
+    growth = np.max(eigenvalues.real, axis=1)
+    unstable = growth > 1e-9 * scale + 1e-9
+    if check and unstable.any():
+        i = int(np.argmax(unstable))
+        eig, vec = np.linalg.eig(jacobians[i])
+        worst = int(np.argmax(eig.real))
+        dof = _dominant_dof(model, vec[:, worst])
+        rock = rocking_stiffness(model, params[i], positions, z[i])
+        raise UnstableTableError(
+            f"{label(i)}unstable table {where}: a mode mostly in {dof} grows at {eig.real[worst]:.3g} 1/s; "
+            f"{rock.describe()}; the mass centre is too high for the isolator spacing "
+            "(or an isolator is too soft) and the table would tip"
+        )
+    q = np.asarray(positions, float)
+    return [Equilibrium(z[i], states[i], q, eigenvalues[i]) for i in range(runs)]
+
+
+class _Solver:
+    """A model's static residual and rest linearisation, compiled for blocks of runs."""
+
+    def __init__(self, model: Model) -> None:
+        self.residual = MappedFunction(model.static_residual, f"isolator_static_{model.tag}")
+        z, c, p = ca.SX.sym("z", 6), ca.SX.sym("c", model.layout.input_size), ca.SX.sym("p", model.layout.size)
+        x = model.pose_state(z)
+        rest = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
+        self.linear = MappedFunction(rest, f"isolator_rest_{model.tag}", optimisation="-O1")
+
+
+_SOLVERS: dict[tuple, _Solver] = {}
+
+
+def _solver(model: Model) -> _Solver:
+    key = (model.layout, model.kind)
+    if key not in _SOLVERS:
+        _SOLVERS[key] = _Solver(model)
+    return _SOLVERS[key]
+
+
+def _dominant_dof(model: Model, vector: np.ndarray) -> str:
+    motion = model.variant.motion(vector)
+    return DOF_NAMES[int(np.argmax(motion))]

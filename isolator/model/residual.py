@@ -1,0 +1,181 @@
+"""Newton's and Euler's laws for the table and its carriages, written once in casadi.
+
+:func:`newton_euler_residual` states Newton's and Euler's laws for the rigid
+table carrying point-mass carriages whose motion relative to the table is
+prescribed; every model variant (:mod:`isolator.model.variants`) and the
+linearisation (:mod:`isolator.model.linearisation`) are built from it.
+Frames and signals follow ``docs/scenario-format.md``.
+"""
+
+from __future__ import annotations
+
+import casadi as ca
+
+from isolator.model.elements.spring_damper import isolator_preloads
+
+__all__ = ["carriage_kinematics", "newton_euler_residual", "solve_blocks"]
+
+
+def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...]) -> dict[str, ca.SX]:
+    """Mass moments of the carriages in the table frame.
+
+    Parameters
+    ----------
+    c : SX, (3 n,)
+        Carriage coordinates q [m], velocities [m/s], accelerations [m/s^2].
+    prm : dict
+        Unpacked parameters (masses, axes, origins).
+    parents : tuple of int
+        Parent index per carriage (-1: table).
+
+    Returns
+    -------
+    dict
+        ``m`` total carriage mass [kg]; ``S, Sd, Sdd`` first mass moment and its
+        table-frame rates [kg m, kg m/s, kg m/s^2]; ``Jc`` point-mass inertia
+        about the table's mass centre [kg m^2]; ``Hd`` sum m d x d'' [N m];
+        ``B`` the matrix with sum m d x (2 w x d') = B w [kg m^2/s].
+    """
+    n = len(parents)
+    zero = ca.SX.zeros(3, 1)
+    out = {"m": ca.SX(0), "S": zero, "Sd": zero, "Sdd": zero, "Jc": ca.SX.zeros(3, 3),
+           "Hd": zero, "B": ca.SX.zeros(3, 3)}
+    d: dict[int, tuple[ca.SX, ca.SX, ca.SX]] = {}
+    remaining = list(range(n))
+    while remaining:
+        for i in list(remaining):
+            if parents[i] != -1 and parents[i] not in d:
+                continue
+            remaining.remove(i)
+            base = d[parents[i]] if parents[i] != -1 else (zero, zero, zero)
+            axis = prm["axes"][:, i]
+            pos = base[0] + prm["origins"][:, i] + axis * c[i]
+            vel = base[1] + axis * c[n + i]
+            acc = base[2] + axis * c[2 * n + i]
+            d[i] = (pos, vel, acc)
+            m = prm["masses"][i]
+            out["m"] += m
+            out["S"] += m * pos
+            out["Sd"] += m * vel
+            out["Sdd"] += m * acc
+            out["Jc"] += m * (ca.dot(pos, pos) * ca.SX.eye(3) - pos @ pos.T)
+            out["Hd"] += m * ca.cross(pos, acc)
+            out["B"] += 2 * m * (ca.dot(pos, vel) * ca.SX.eye(3) - vel @ pos.T)
+    return out
+
+
+
+def newton_euler_residual(
+    pos: ca.SX,
+    rot: ca.SX,
+    vel: ca.SX,
+    w_body: ca.SX,
+    acc_body: ca.SX,
+    alpha_body: ca.SX,
+    c: ca.SX,
+    prm: dict[str, ca.SX],
+    parents: tuple[int, ...],
+    preload: bool = True,
+    ground: ca.SX | None = None,
+    actuator_forces: ca.SX | None = None,
+    wrench: ca.SX | None = None,
+    kin: dict[str, ca.SX] | None = None,
+) -> ca.SX:
+    """Newton's and Euler's laws for the table with its carriages, table frame.
+
+    Parameters
+    ----------
+    pos : SX (3,)
+        Table mass centre from the reference pose, world [m].
+    rot : SX (3, 3)
+        Table orientation (table to world).
+    vel : SX (3,)
+        Velocity of the mass centre, world [m/s].
+    w_body, alpha_body : SX (3,)
+        Angular velocity [rad/s] and acceleration [rad/s^2], table frame.
+    acc_body : SX (3,)
+        Acceleration of the mass centre in table-frame components, R^T a [m/s^2].
+    c : SX (3 n,)
+        Carriage coordinates, velocities, accelerations.
+    prm : dict
+        Unpacked parameters.
+    parents : tuple of int
+        Carriage chain structure.
+    preload : bool
+        Whether isolators carry their static preload (False: unloaded springs).
+    ground : SX (12,), optional
+        Floor displacement [m], rotation about the world origin [rad] and their
+        rates; the isolators' ground anchors move with the floor (their axes and
+        preload stay along the world axes).
+    actuator_forces : SX (n_a,), optional
+        Actuator forces [N] along their world directions at their table points.
+    wrench : SX (6,), optional
+        Force [N] and moment [N m] applied at the table's mass centre, world axes.
+    kin : dict, optional
+        The carriages' moments (:func:`carriage_kinematics`) when already
+        known; ``c`` is then not used.
+
+    Returns
+    -------
+    SX (6,)
+        Table-frame components of [sum of m a - forces (N); moment balance
+        about the table's mass centre (N m)]; zero when the motion obeys the
+        laws. Linear in ``acc_body`` and ``alpha_body`` with the constant-form
+        mass matrix [[m I, -[S]x], [[S]x, J + Jc]].
+    """
+    if kin is None:
+        kin = carriage_kinematics(c, prm, parents)
+    m_tot = prm["table_mass"] + kin["m"]
+    g_world = ca.vertcat(0, 0, -prm["gravity"])
+    J = ca.diag(prm["inertia"])
+    S, w = kin["S"], w_body
+
+    force = m_tot * g_world
+    moment = ca.SX.zeros(3, 1)
+    load = isolator_preloads(prm, kin["m"]) if preload else None
+    w_world = rot @ w
+    for k in range(prm["positions"].shape[1]):
+        s = prm["positions"][:, k]
+        arm = rot @ s
+        stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
+        if ground is not None:
+            stretch = stretch - ground[0:3] - ca.cross(ground[3:6], s)
+            rate = rate - ground[6:9] - ca.cross(ground[9:12], s)
+        f = -prm["stiffness"][:, k] * stretch - prm["damping"][:, k] * rate
+        if load is not None:
+            f = f + load[:, k]
+        force += f
+        moment += ca.cross(arm, f)
+    if actuator_forces is not None:
+        for k in range(actuator_forces.shape[0]):
+            f = prm["actuator_directions"][:, k] * actuator_forces[k]
+            force += f
+            moment += ca.cross(rot @ prm["actuator_positions"][:, k], f)
+    if wrench is not None:
+        force += wrench[0:3]
+        moment += wrench[3:6]
+    g_body = rot.T @ g_world
+    rel = kin["Sdd"] + 2 * ca.cross(w, kin["Sd"]) + ca.cross(alpha_body, S) + ca.cross(w, ca.cross(w, S))
+    translation = m_tot * acc_body + rel - rot.T @ force
+    rotation = (
+        (J + kin["Jc"]) @ alpha_body
+        + ca.cross(w, (J + kin["Jc"]) @ w)
+        + ca.cross(S, acc_body)
+        + kin["Hd"]
+        + kin["B"] @ w
+        - rot.T @ moment
+        - ca.cross(S, g_body)
+    )
+    return ca.vertcat(translation, rotation)
+
+
+
+def solve_blocks(mass: ca.SX, rhs: ca.SX) -> ca.SX:
+    """Solve the 6x6 (translation, rotation) system by its 3x3 Schur complement."""
+    a_tt, a_tr = mass[:3, :3], mass[:3, 3:]
+    a_rt, a_rr = mass[3:, :3], mass[3:, 3:]
+    inv_tt = ca.inv(a_tt)
+    schur = a_rr - a_rt @ inv_tt @ a_tr
+    alpha = ca.solve(schur, rhs[3:, :] - a_rt @ inv_tt @ rhs[:3, :])
+    acc = inv_tt @ (rhs[:3, :] - a_tr @ alpha)
+    return ca.vertcat(acc, alpha)

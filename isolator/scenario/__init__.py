@@ -1,0 +1,1 @@
+"""Scenarios: reading TOML, validation, the frozen dataclasses, motion profiles."""

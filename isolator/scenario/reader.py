@@ -1,0 +1,372 @@
+"""Reading and validating scenario files (TOML) into :class:`Scenario` objects.
+
+Every problem is reported as one :class:`ScenarioError` whose message starts
+with the key path, for example ``carriages[1].profile.acceleration: must be > 0``.
+"""
+
+from __future__ import annotations
+
+import tomllib
+from collections.abc import Mapping
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from isolator.errors import ScenarioError
+from isolator.scenario.definitions import (
+    SIGNALS,
+    Actuator,
+    Carriage,
+    FloorSpectrum,
+    Ground,
+    Isolator,
+    MotionLimits,
+    Point,
+    Scenario,
+    Settling,
+    SimulationSettings,
+    Table,
+)
+from isolator.scenario.keys import KeyReader, number, number_list, table_of_tables
+from isolator.scenario.profile_shapes import samples, scurve, trapezoid
+from isolator.scenario.profiles import Profile, SineProfile
+from isolator.scenario.tables import SPECTRUM_KINDS, load_spectrum, read_csv_columns, spectrum_from_columns
+from isolator.scenario.validation import check_carriage_tree, check_isolator_layout, check_strokes, check_unique_names
+
+__all__ = [
+    "bundled_scenarios",
+    "load_scenario",
+    "load_spectrum",
+    "read_csv_columns",
+    "resolve_scenario_path",
+    "scenario_from_dict",
+]
+
+DEFAULT_SCENARIO = "paper-table-3-2"
+
+
+def bundled_scenarios() -> dict[str, Path]:
+    """The scenarios shipped with the package, by name."""
+    folder = resources.files("isolator") / "data" / "scenarios"
+    return {
+        Path(str(entry)).stem: Path(str(entry))
+        for entry in folder.iterdir()
+        if str(entry).endswith(".toml")
+    }
+
+
+def resolve_scenario_path(spec: str | Path | None) -> Path:
+    """A scenario file path from a path or a bundled scenario's name (None: the default)."""
+    if spec is None:
+        spec = DEFAULT_SCENARIO
+    path = Path(spec)
+    if path.is_file():
+        return path
+    bundled = bundled_scenarios()
+    name = path.name[:-5] if path.name.endswith(".toml") else path.name
+    if name in bundled and not path.exists():
+        return bundled[name]
+    known = ", ".join(sorted(bundled))
+    raise ScenarioError(f"{spec}: no such scenario file (bundled scenarios: {known})")
+
+
+def load_scenario(spec: str | Path | None = None) -> Scenario:
+    """Read and validate a scenario.
+
+    Parameters
+    ----------
+    spec : str or Path or None
+        A TOML file, or the name of a bundled scenario (``paper-table-3-1``,
+        ``paper-table-3-2``); None loads ``paper-table-3-2``.
+
+    Returns
+    -------
+    Scenario
+
+    Raises
+    ------
+    ScenarioError
+        With the offending key path and the reason.
+    """
+    path = resolve_scenario_path(spec)
+    try:
+        with open(path, "rb") as handle:
+            data = tomllib.load(handle)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML ({exc})") from None
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot be read ({exc.strerror})") from None
+    return scenario_from_dict(data, base_dir=path.parent, default_name=path.stem)
+
+
+def scenario_from_dict(
+    data: Mapping[str, Any], base_dir: Path | str = ".", default_name: str = "scenario"
+) -> Scenario:
+    """Validate a parsed scenario (the TOML's dictionary) into a :class:`Scenario`.
+
+    Parameters
+    ----------
+    data : mapping
+        The scenario's keys, as ``tomllib`` returns them.
+    base_dir : path
+        Folder that relative file names (sampled profiles) are read from.
+    default_name : str
+        Name used when the data has none.
+    """
+    base_dir = Path(base_dir)
+    top = KeyReader(data, "")
+    name = top.string("name", default_name)
+    gravity = top.number("gravity", 9.81, nonnegative=True)
+    table = _read_table(KeyReader(top.raw("table"), "table"))
+    isolators = tuple(
+        _read_isolator(KeyReader(item, f"isolators[{i}]"))
+        for i, item in enumerate(table_of_tables(data, "isolators"))
+    )
+    top.used.add("isolators")
+    check_isolator_layout(isolators)
+    sim_reader = KeyReader(top.raw("simulation", {}), "simulation")
+    simulation = SimulationSettings(
+        duration=sim_reader.number("duration", 10.0, positive=True),
+        sample_rate=sim_reader.number("sample_rate", 1000.0, positive=True),
+    )
+    sim_reader.finish()
+    carriages = tuple(
+        _read_carriage(KeyReader(item, f"carriages[{i}]"), base_dir)
+        for i, item in enumerate(table_of_tables(data, "carriages"))
+    )
+    top.used.add("carriages")
+    check_carriage_tree(carriages)
+    actuators = tuple(
+        _read_actuator(KeyReader(item, f"actuators[{i}]"))
+        for i, item in enumerate(table_of_tables(data, "actuators"))
+    )
+    top.used.add("actuators")
+    check_unique_names([a.name for a in actuators], "actuators")
+    settling = _read_settling(KeyReader(top.raw("settling", {}), "settling"))
+    ground = _read_ground(KeyReader(top.raw("ground"), "ground"), base_dir) if top.has("ground") else None
+    top.used.add("ground")
+    points = tuple(
+        _read_point(KeyReader(item, f"points[{i}]"))
+        for i, item in enumerate(table_of_tables(data, "points"))
+    )
+    top.used.add("points")
+    check_unique_names([pt.name for pt in points], "points")
+    top.finish()
+    scenario = Scenario(
+        name=name,
+        table=table,
+        isolators=isolators,
+        carriages=carriages,
+        actuators=actuators,
+        simulation=simulation,
+        settling=settling,
+        gravity=gravity,
+        ground=ground,
+        points=points,
+    )
+    check_strokes(scenario)
+    return scenario
+
+
+def _read_table(r: KeyReader) -> Table:
+    mass = r.number("mass", positive=True)
+    size = r.vector("size", None, positive=True) if r.has("size") else None
+    r.used.add("size")
+    if r.has("inertia"):
+        inertia = r.vector("inertia", positive=True)
+        a, b, c = inertia
+        if a + b < c * (1 - 1e-9) or a + c < b * (1 - 1e-9) or b + c < a * (1 - 1e-9):
+            raise ScenarioError(
+                "table.inertia: principal moments must satisfy the triangle inequality "
+                f"(each <= the sum of the other two), got {list(inertia)}"
+            )
+    elif size is not None:
+        lx, ly, lz = size
+        inertia = (mass * (ly**2 + lz**2) / 12, mass * (lx**2 + lz**2) / 12, mass * (lx**2 + ly**2) / 12)
+    else:
+        raise ScenarioError("table: needs size (box inertia) or inertia")
+    r.finish()
+    return Table(mass=mass, inertia=inertia, size=size)
+
+
+def _read_isolator(r: KeyReader) -> Isolator:
+    iso = Isolator(
+        name=r.string("name", ""),
+        position=r.vector("position"),
+        stiffness=r.vector("stiffness", nonnegative=True),
+        damping=r.vector("damping", nonnegative=True),
+    )
+    r.finish()
+    return iso
+
+
+def _read_profile(r: KeyReader, base_dir: Path) -> Profile:
+    kind = r.string("type")
+    if kind == "sine":
+        prof: Profile = SineProfile(
+            amplitude=r.number("amplitude"),
+            omega=r.number("omega", positive=True),
+            phase=r.number("phase", 0.0),
+            offset=r.number("offset", 0.0),
+            t0=r.number("t0", 0.0, nonnegative=True),
+        )
+    elif kind in ("trapezoid", "scurve"):
+        common = {
+            "start": r.number("start"),
+            "stroke": r.number("stroke"),
+            "velocity": r.number("velocity", positive=True),
+            "acceleration": r.number("acceleration", positive=True),
+            "t0": r.number("t0", 0.0, nonnegative=True),
+        }
+        if kind == "trapezoid":
+            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
+            r.used.add("deceleration")
+            prof = trapezoid(deceleration=dec, **common)
+        else:
+            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
+            jerk_down = r.number("deceleration_jerk", positive=True) if r.has("deceleration_jerk") else None
+            r.used.update(("deceleration", "deceleration_jerk"))
+            prof = scurve(
+                jerk=r.number("jerk", positive=True), deceleration=dec, deceleration_jerk=jerk_down, **common
+            )
+    elif kind == "samples":
+        t, q = _read_samples(r, base_dir)
+        prof = samples(t, q)
+    else:
+        raise ScenarioError(
+            f"{r.key('type')}: unknown profile type '{kind}' (sine, trapezoid, scurve, samples)"
+        )
+    r.finish()
+    return prof
+
+
+def _read_samples(r: KeyReader, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
+    if r.has("file"):
+        if r.has("t") or r.has("q"):
+            raise ScenarioError(f"{r.key('file')}: give either file or inline t and q, not both")
+        file_key = r.key("file")
+        columns = read_csv_columns(base_dir / r.string("file"), file_key, ("t", "q"), exact=True)
+        t, q, key = columns["t"], columns["q"], file_key
+    else:
+        tk, qk = r.key("t"), r.key("q")
+        t_raw, q_raw = r.raw("t"), r.raw("q")
+        for k, v in ((tk, t_raw), (qk, q_raw)):
+            if not isinstance(v, list) or not all(
+                isinstance(x, int | float) and not isinstance(x, bool) for x in v
+            ):
+                raise ScenarioError(f"{k}: must be a list of numbers")
+        t, q, key = np.array(t_raw, float), np.array(q_raw, float), tk
+        if len(t) != len(q):
+            raise ScenarioError(f"{qk}: has {len(q)} values but t has {len(t)}")
+    r.used.update({"file", "t", "q"})
+    if len(t) < 2:
+        raise ScenarioError(f"{key}: needs at least two samples")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
+        raise ScenarioError(f"{key}: samples must be finite (found NaN or infinity)")
+    if np.any(np.diff(t) <= 0):
+        raise ScenarioError(f"{key}: sample times must be strictly increasing")
+    if t[0] < 0:
+        raise ScenarioError(f"{key}: sample times must be >= 0, got {t[0]:g}")
+    return t, q
+
+
+def _read_carriage(r: KeyReader, base_dir: Path) -> Carriage:
+    name = r.string("name")
+    if not name or name == "table":
+        raise ScenarioError(f"{r.key('name')}: must be a non-empty name other than 'table'")
+    carriage = Carriage(
+        name=name,
+        mass=r.number("mass", positive=True),
+        parent=r.string("parent", "table"),
+        axis=r.unit_vector("axis"),
+        origin=r.vector("origin", (0.0, 0.0, 0.0)),
+        profile=_read_profile(KeyReader(r.raw("profile"), r.key("profile")), base_dir),
+        limits=_read_limits(KeyReader(r.raw("limits", {}), r.key("limits"))),
+    )
+    r.finish()
+    return carriage
+
+
+def _read_limits(r: KeyReader) -> MotionLimits:
+    keys = ("velocity", "acceleration", "jerk")
+    values = {k: r.number(k, positive=True) if r.has(k) else None for k in keys}
+    r.used.update(keys)
+    r.finish()
+    return MotionLimits(**values)
+
+
+def _read_actuator(r: KeyReader) -> Actuator:
+    name = r.string("name")
+    if not name:
+        raise ScenarioError(f"{r.key('name')}: must be a non-empty name")
+    act = Actuator(
+        name=name,
+        position=r.vector("position"),
+        direction=r.unit_vector("direction"),
+        max_force=r.number("max_force", positive=True),
+        bandwidth=r.number("bandwidth", positive=True) if r.has("bandwidth") else None,
+        max_rate=r.number("max_rate", positive=True) if r.has("max_rate") else None,
+    )
+    r.used.update(("bandwidth", "max_rate"))
+    r.finish()
+    return act
+
+
+def _read_point(r: KeyReader) -> Point:
+    name = r.string("name")
+    if not name:
+        raise ScenarioError(f"{r.key('name')}: must be a non-empty name")
+    point = Point(name=name, position=r.vector("position"))
+    r.finish()
+    return point
+
+
+def _read_ground(r: KeyReader, base_dir: Path) -> Ground:
+    motion = {}
+    for axis in SIGNALS:
+        if r.has(axis):
+            motion[axis] = _read_profile(KeyReader(r.raw(axis), r.key(axis)), base_dir)
+    spectrum = None
+    if r.has("spectrum"):
+        spectrum = _read_spectrum(KeyReader(r.raw("spectrum"), r.key("spectrum")), base_dir)
+    r.used.add("spectrum")
+    r.finish()
+    return Ground(motion=motion, spectrum=spectrum)
+
+
+def _read_spectrum(r: KeyReader, base_dir: Path) -> FloorSpectrum:
+    kind = r.string("kind")
+    if kind not in SPECTRUM_KINDS:
+        raise ScenarioError(f"{r.key('kind')}: must be one of {', '.join(SPECTRUM_KINDS)}, got '{kind}'")
+    if r.has("file"):
+        if any(r.has(k) for k in ("frequency", "x", "y", "z")):
+            raise ScenarioError(f"{r.key('file')}: give either file or inline frequency and values, not both")
+        spectrum = load_spectrum(base_dir / r.string("file"), kind, key=r.key("file"))
+    else:
+        columns = {"frequency": np.array(number_list(r, "frequency"))}
+        for axis in ("x", "y", "z"):
+            if r.has(axis):
+                columns[axis] = np.array(number_list(r, axis))
+        spectrum = spectrum_from_columns(columns, kind, r.path)
+    r.used.update({"file", "frequency", "x", "y", "z"})
+    r.finish()
+    return spectrum
+
+
+def _read_settling(r: KeyReader) -> Settling:
+    if r.has("fraction") and r.has("tolerance"):
+        raise ScenarioError("settling: give fraction or tolerance, not both")
+    if r.has("tolerance"):
+        tol = r.raw("tolerance")
+        if not isinstance(tol, list) or len(tol) != 2:
+            raise ScenarioError("settling.tolerance: must be [translation m, rotation rad]")
+        pair = tuple(number(v, f"settling.tolerance[{i}]", positive=True) for i, v in enumerate(tol))
+        r.finish()
+        return Settling(fraction=None, tolerance=pair)  # type: ignore[arg-type]
+    fraction = r.number("fraction", 0.05, positive=True, below=1.0)
+    r.finish()
+    return Settling(fraction=fraction)
+
+

@@ -1,0 +1,94 @@
+"""Checks of a whole scenario that no single key can make (layout, carriage tree, strokes).
+
+:func:`validate_scenario` is run by the file reader on every scenario it builds, and by the API entry points
+that build or change scenarios; each failure is one :class:`ScenarioError` naming the key.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from isolator.errors import ScenarioError
+from isolator.scenario.definitions import Carriage, Isolator, Scenario
+
+__all__ = ["check_carriage_tree", "check_isolator_layout", "check_strokes", "check_unique_names", "validate_scenario"]
+
+
+def check_isolator_layout(isolators: tuple[Isolator, ...]) -> None:
+    if len(isolators) < 3:
+        raise ScenarioError(f"isolators: need at least three, got {len(isolators)}")
+    pts = np.array([iso.position for iso in isolators])
+    span = np.linalg.svd(pts - pts.mean(axis=0), compute_uv=False)
+    scale = max(float(np.abs(pts).max()), 1e-12)
+    if span[1] <= 1e-9 * scale:
+        raise ScenarioError("isolators: positions all lie on one line; the table could roll about it")
+
+
+def check_unique_names(names: list[str], section: str) -> None:
+    """Each name once per section, else an error naming the second use."""
+    for i, n in enumerate(names):
+        if n in names[:i]:
+            raise ScenarioError(f"{section}[{i}].name: '{n}' is used twice")
+
+
+def check_carriage_tree(carriages: tuple[Carriage, ...]) -> None:
+    names = [c.name for c in carriages]
+    check_unique_names(names, "carriages")
+    for i, c in enumerate(carriages):
+        if c.parent == c.name:
+            raise ScenarioError(f"carriages[{i}].parent: a carriage cannot be its own parent")
+        if c.parent != "table" and c.parent not in names:
+            raise ScenarioError(
+                f"carriages[{i}].parent: unknown parent '{c.parent}' (use 'table' or a carriage name)"
+            )
+    parent = {c.name: c.parent for c in carriages}
+    for i, c in enumerate(carriages):
+        seen = [c.name]
+        p = c.parent
+        while p != "table":
+            if p in seen:
+                chain = " -> ".join([*seen, p])
+                raise ScenarioError(f"carriages[{i}].parent: cyclic parents ({chain})")
+            seen.append(p)
+            p = parent[p]
+
+
+def check_strokes(scenario: Scenario) -> None:
+    """Every carriage's mass must stay above the table's footprint (when its size is known)."""
+    if scenario.table.size is None or not scenario.carriages:
+        return
+    t_end = scenario.simulation.duration
+    if math.isfinite(scenario.stop_time):
+        t_end = max(t_end, scenario.stop_time)
+    times = np.linspace(0.0, t_end, 4001)
+    extra = [b for b in scenario.breakpoints if 0.0 <= b <= t_end]
+    times = np.union1d(times, extra)
+    q = np.array([c.profile.evaluate(times)[0] for c in scenario.carriages])
+    excess = scenario.outside_footprint(q)
+    if excess is not None:
+        i, axis, k, coordinate = excess
+        half = scenario.table.size[axis] / 2.0
+        which = "half-length" if axis == 0 else "half-width"
+        raise ScenarioError(
+            f"carriages[{i}].profile: the carriage's mass reaches {'xy'[axis]} = "
+            f"{coordinate:.4g} m at t = {times[k]:.4g} s, beyond the table's "
+            f"{which} {half:.4g} m (table.size)"
+        )
+
+
+def validate_scenario(scenario: Scenario) -> Scenario:
+    """Run every whole-scenario check on ``scenario`` and return it.
+
+    Raises
+    ------
+    ScenarioError
+        The first check that fails, naming its key.
+    """
+    check_isolator_layout(scenario.isolators)
+    check_carriage_tree(scenario.carriages)
+    check_unique_names([a.name for a in scenario.actuators], "actuators")
+    check_unique_names([pt.name for pt in scenario.points], "points")
+    check_strokes(scenario)
+    return scenario

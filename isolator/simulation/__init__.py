@@ -1,0 +1,1 @@
+"""Transient simulation: the simulator, batches, responses and settling metrics."""

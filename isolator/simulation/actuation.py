@@ -1,0 +1,153 @@
+"""Actuator force histories: forces files, saturation and the actuators' first-order lag.
+
+A forces file (``docs/scenario-format.md``) is a CSV with a column ``t`` and
+one column per actuator name, in N along the actuator's direction, linearly
+interpolated in time and zero outside its time range. A time may appear twice
+in a row to give a step: the first row holds the value just before it, the
+second the value from it on (the simulation takes the side of each step that
+its integration interval lies on). What acts on the table
+is the command clipped at ``max_force`` and, for an actuator with a
+``bandwidth``, passed through the first-order lag ``tau f' = u - f`` with
+``tau = 1 / (2 pi bandwidth)`` (starting from zero force), solved exactly for
+a command that is linear between evaluation times.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from isolator.errors import ScenarioError
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.tables import read_csv_columns
+
+__all__ = ["ForceHistory", "applied_forces", "load_forces"]
+
+
+@dataclass(frozen=True)
+class ForceHistory:
+    """Commanded actuator forces over time.
+
+    Attributes
+    ----------
+    t : ndarray (N,)
+        Increasing times [s].
+    forces : ndarray (n_actuators, N)
+        [N] per scenario actuator, in the scenario's order (zero for actuators
+        the source did not name).
+    names : tuple of str
+        The scenario's actuator names.
+    """
+
+    t: np.ndarray
+    forces: np.ndarray
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.t, dtype=float)
+        f = np.asarray(self.forces, dtype=float).reshape(len(self.names), -1)
+        if t.ndim != 1 or t.size != f.shape[1]:
+            raise ScenarioError(f"forces: {t.size} times for {f.shape[1]} force samples")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
+            raise ScenarioError("forces: times and forces must be finite (found NaN or infinity)")
+        steps = np.diff(t)
+        if t.size and (np.any(steps < 0) or np.any((steps[1:] == 0) & (steps[:-1] == 0))):
+            raise ScenarioError("forces.t: times must be increasing (a time at most twice, for a step)")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "forces", f)
+
+    def command(self, times: np.ndarray, piece_time: np.ndarray | None = None) -> np.ndarray:
+        """Commanded forces at ``times`` [N], shape ``(*times.shape, n_actuators)``; zero outside.
+
+        At a step (a repeated time) the value is the one after it where
+        ``piece_time`` (e.g. the middle of the integration interval) lies
+        after ``times``, else the one before; without ``piece_time``, after.
+        """
+        times = np.asarray(times, dtype=float)
+        out = np.zeros((*times.shape, len(self.names)))
+        if self.t.size < 2:
+            return out
+        after = np.ones(times.shape, bool) if piece_time is None else np.asarray(piece_time) > times
+        right = np.searchsorted(self.t, times, side="right") - 1
+        left = np.searchsorted(self.t, times, side="left") - 1
+        i = np.clip(np.where(after, right, left), 0, self.t.size - 2)
+        t0, t1 = self.t[i], self.t[i + 1]
+        w = np.where(t1 > t0, (times - t0) / np.where(t1 > t0, t1 - t0, 1.0), 1.0)
+        inside = (times >= self.t[0]) & (times <= self.t[-1])
+        for k in range(len(self.names)):
+            f = self.forces[k]
+            out[..., k] = np.where(inside, f[i] + w * (f[i + 1] - f[i]), 0.0)
+        return out
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write the forces file (``t`` and one column per actuator) [s, N]."""
+        path = Path(path)
+        data = np.column_stack([self.t, self.forces.T])
+        with open(path, "w") as handle:
+            handle.write(",".join(["t", *self.names]) + "\n")
+            for row in data:
+                handle.write(",".join(f"{v:.10g}" for v in row) + "\n")
+        return path
+
+
+def load_forces(path: str | Path, scenario: Scenario, key: str = "forces") -> ForceHistory:
+    """Read a forces file for a scenario's actuators.
+
+    Raises
+    ------
+    ScenarioError
+        No actuators in the scenario; an unreadable file; a column that names
+        no actuator; non-numeric, non-finite or non-increasing values.
+    """
+    names = tuple(a.name for a in scenario.actuators)
+    if not names:
+        raise ScenarioError(f"{key}: the scenario has no [[actuators]] to apply forces with")
+    columns = read_csv_columns(Path(path), key, ("t",), names)
+    t = columns.pop("t")
+    forces = np.array([columns.get(n, np.zeros_like(t)) for n in names])
+    return ForceHistory(t, forces, names)
+
+
+def applied_forces(
+    scenario: Scenario, command: np.ndarray, times: np.ndarray, initial: np.ndarray | None = None
+) -> np.ndarray:
+    """What the actuators apply for a command: clipped at ``max_force``, then lagged.
+
+    Parameters
+    ----------
+    scenario : Scenario
+    command : ndarray (N, n_actuators)
+        Commanded forces [N] at ``times``.
+    times : ndarray (N,)
+        Non-decreasing times [s] (repeated times allowed).
+    initial : ndarray (n_actuators,), optional
+        The lagged actuators' force at ``times[0]`` [N] (default zero).
+
+    Returns
+    -------
+    ndarray (N, n_actuators)
+        [N]
+    """
+    limits = np.array([a.max_force for a in scenario.actuators])
+    u = np.clip(command, -limits, limits)
+    out = u.copy()
+    lagged = [k for k, a in enumerate(scenario.actuators) if a.bandwidth is not None]
+    if not lagged:
+        return out
+    tau = np.array([1.0 / (2 * math.pi * scenario.actuators[k].bandwidth) for k in lagged])  # type: ignore[operator]
+    h = np.diff(times)
+    step = h > 0
+    safe = np.where(step, h, 1.0)
+    decay = np.exp(-safe[:, None] / tau[None, :])
+    slope = np.where(step[:, None], np.diff(u[:, lagged], axis=0) / safe[:, None], 0.0)
+    ul = u[:, lagged]
+    y = np.zeros(len(lagged)) if initial is None else np.asarray(initial, dtype=float)[lagged]
+    out[0, lagged] = y
+    for i in range(h.size):  # exact for u linear over [t_i, t_i+1]; held where the time repeats
+        if step[i]:
+            y = ul[i + 1] + (y - ul[i] + slope[i] * tau) * decay[i] - slope[i] * tau
+        out[i + 1, lagged] = y
+    return out

@@ -1,0 +1,201 @@
+"""Many runs of one scenario with the isolators' stiffness and damping scaled per run.
+
+The runs' static equilibria are solved side by side; each run gets its own
+DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
+with single runs). Runs that share a plan are stepped ``LANES`` at a time, one
+per SIMD lane of the compiled loop (:mod:`isolator.numerics.dop853_driver`), in worker
+threads, in blocks of runs whose settling metrics are then computed together.
+Each run returns only what the metrics need: its peaks (taken in the compiled
+steps) and its signals from the carriages' stop on.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Literal
+
+import numpy as np
+
+from isolator.errors import ScenarioError, SimulationError
+from isolator.simulation.settling import signal_settling
+
+if TYPE_CHECKING:
+    from isolator.simulation.simulator import Simulator
+
+__all__ = ["BLOCK", "LANES", "BatchResult", "run_batch"]
+
+#: runs per task of a worker thread (their metrics are computed together)
+BLOCK = 16
+#: runs stepped side by side in one compiled call (AVX holds four doubles)
+LANES = 4
+
+
+@dataclass(frozen=True)
+class BatchResult:
+    """Metrics of many runs of one scenario with varied parameters.
+
+    Attributes
+    ----------
+    settling_time : ndarray (runs, 6)
+        Per signal [s]; NaN where a run cannot show it.
+    settling_time_max : ndarray (runs,)
+        [s]; NaN where unavailable.
+    peak : ndarray (runs, 6)
+        [m or rad]; NaN for a run that diverged.
+    failures : mapping of int to str
+        Why each diverged run failed, by run index (with ``diverged="record"``).
+    """
+
+    settling_time: np.ndarray
+    settling_time_max: np.ndarray
+    peak: np.ndarray
+    failures: Mapping[int, str] = field(default_factory=dict)
+
+
+def run_batch(
+    sim: Simulator,
+    stiffness: Sequence[float],
+    damping: Sequence[float],
+    workers: int = 2,
+    progress: bool = False,
+    diverged: Literal["raise", "record"] = "raise",
+) -> BatchResult:
+    """Runs of ``sim``'s scenario with every isolator's stiffness and damping scaled per run.
+
+    Parameters
+    ----------
+    sim : Simulator
+    stiffness, damping : sequence of float
+        Scale factors, one per run (stiffness > 0, damping >= 0).
+    workers : int
+        Threads (the compiled stepping releases the GIL).
+    progress : bool
+        Print a progress line every 10 %.
+    diverged : {"raise", "record"}
+        A run that diverges (or turns the table past 0.2 rad) stops the batch with
+        :class:`SimulationError` ("raise"), or gets NaN metrics and its reason in
+        ``BatchResult.failures`` ("record", for sweeps into soft designs).
+
+    Returns
+    -------
+    BatchResult
+        The same metrics as :meth:`Simulator.run` gives for each run.
+
+    Raises
+    ------
+    ScenarioError
+        A scale is not a finite positive number (named by index), or ``diverged`` is unknown.
+    UnstableTableError
+        A run's table has no stable equilibrium (the message names the run).
+    SimulationError
+        A run diverged (the message names the run), with ``diverged="raise"``.
+    """
+    from isolator.simulation.simulator import Method, _check_turn, _dense_stepper, _hold, _stepper
+
+    if diverged not in ("raise", "record"):
+        raise ScenarioError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
+    params = sim.scaled_parameter_sets(stiffness, damping)
+    n = params.shape[0]
+    if n == 0:
+        return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)))
+    starts, ends = sim._equilibria(params)
+    methods: list[Method] = [
+        sim.method_for(max(s.max_frequency, e.max_frequency if e else 0.0)) for s, e in zip(starts, ends, strict=True)
+    ]
+    # built before the threads start; scaling stiffness and damping leaves the staged inputs alone
+    plan_inputs = {}
+    for method in {m.plan_key: m for m in methods}.values():
+        if method.plan is not None:
+            plan_inputs[method.plan_key] = sim._plan_inputs(method, params[0])
+        else:
+            sim._model_inputs(method.substeps)
+            _stepper(sim.model, method.substeps)
+    stepper = _dense_stepper(sim.model, LANES)
+    t = sim.grid.samples
+    stop = sim.stop_time
+    tail_from = max(1, min(int(np.searchsorted(t, stop - 1e-12)), t.size - 1))
+    finals = np.zeros((n, 6))
+    stops = ends[0] is not None
+    if stops:
+        finals = sim.signals(np.array([e.state for e in ends]), np.array([s.state for s in starts])).T
+    holds = np.array([_hold(e) for e in ends])
+    settling = np.full((n, 6), np.nan)
+    peak = np.zeros((n, 6))
+    failures: dict[int, str] = {}
+    done = [0]
+
+    def failed(i: int, exc: SimulationError) -> None:
+        message = f"run {i} (stiffness x{_scale(stiffness, i):g}, damping x{_scale(damping, i):g}): {exc}"
+        if diverged == "raise":
+            raise SimulationError(message) from None
+        failures[i] = message
+        peak[i] = np.nan
+
+    def pack(runs: list[int], tails: np.ndarray) -> list[int]:
+        """Step ``runs`` (one plan, at most LANES) side by side; their peaks, and the signals
+        from the stop on of those that did not diverge (returned) into ``tails`` (runs, 6, samples)."""
+        method = methods[runs[0]]
+        lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
+        x0 = np.array([starts[i].state for i in lanes])
+        raw, step_peaks, _ = stepper.run_slots(x0, method.plan, plan_inputs[method.plan_key], params[lanes], x0)
+        tops = np.max(step_peaks, axis=0).T  # NaN propagates
+        good = []
+        for lane, i in enumerate(runs):
+            peak[i] = tops[lane]
+            try:
+                if not np.all(np.isfinite(peak[i])):
+                    sig = raw[method.plan.sample_slots, :, lane]
+                    bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
+                    raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
+                _check_turn(peak[i])
+            except SimulationError as exc:
+                failed(i, exc)
+                continue
+            tails[len(good)] = raw[method.plan.sample_slots[tail_from - 1 :], :, lane].T
+            good.append(i)
+        return good
+
+    def task(runs: list[int]) -> None:
+        """A thread's share: RK4 runs one by one, DOP853 runs in packs of one plan; then the
+        DOP853 runs' settling together."""
+        for i in runs:
+            if methods[i].plan is None:
+                try:
+                    metrics = sim._run(params[i], starts[i], ends[i], methods[i]).settling
+                except SimulationError as exc:
+                    failed(i, exc)
+                    continue
+                settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
+                peak[i] = [r.peak for r in metrics.values()]
+        stepped = [i for i in runs if methods[i].plan is not None]
+        tails = np.empty((len(stepped), 6, t.size - tail_from))
+        dense: list[int] = []
+        for lo in range(0, len(stepped), LANES):
+            dense += pack(stepped[lo : lo + LANES], tails[len(dense) :])
+        if dense:
+            rows = np.array(dense)
+            settling[rows] = signal_settling(
+                t[tail_from:], tails[: rows.size], finals[rows] if stops else None, sim.stop_time,
+                sim.scenario.settling, holds[rows], peak[rows],
+            )[0]
+        done[0] += len(runs)
+        if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
+            print(f"  batch: {done[0]}/{n} runs", flush=True)
+
+    # runs of one plan next to each other, so that packs share their plan; tasks of BLOCK runs
+    # (a whole number of packs per plan)
+    tasks: list[list[int]] = []
+    for key in sorted({m.plan_key for m in methods}):
+        same = [i for i in range(n) if methods[i].plan_key == key]
+        tasks += [same[lo : lo + BLOCK] for lo in range(0, len(same), BLOCK)]
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        list(pool.map(task, tasks))
+    with np.errstate(all="ignore"):
+        worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
+    return BatchResult(settling, worst, peak, dict(sorted(failures.items())))
+
+
+def _scale(values: Sequence[float], i: int) -> float:
+    return float(np.asarray(values, dtype=float).reshape(-1)[i])

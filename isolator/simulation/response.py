@@ -1,0 +1,209 @@
+"""The result of a transient simulation: signals, metrics, plot and CSV."""
+
+from __future__ import annotations
+
+import csv
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from isolator.scenario.definitions import SIGNALS
+from isolator.simulation.settling import SettlingResult
+
+__all__ = ["Response"]
+
+_UNITS = {"x": "µm", "y": "µm", "z": "µm", "rx": "µrad", "ry": "µrad", "rz": "µrad"}
+
+
+@dataclass(frozen=True)
+class Response:
+    """Table motion over time for one scenario and model.
+
+    Attributes
+    ----------
+    name : str
+        Scenario name.
+    model : str
+        "exact" or "paper".
+    t : ndarray (N,)
+        Sample times [s].
+    signals : ndarray (6, N)
+        ``x, y, z`` [m] and ``rx, ry, rz`` [rad]: displacement of the table's
+        mass centre from its initial static equilibrium and rotation vector of
+        R(t) R0^T (``docs/scenario-format.md``).
+    carriage_names : tuple of str
+    q : ndarray (n, N)
+        Carriage coordinates [m].
+    stop_time : float
+        When the last carriage stops [s] (inf: never).
+    final : ndarray (6,) or None
+        The signals' static equilibrium values with the carriages at their
+        final positions (None when a carriage never stops).
+    settling : dict of str to SettlingResult
+        Per signal: settling time [s] (or None with a reason), peak, band.
+    state_history : ndarray (N, n_states) or callable
+        The model's state at the samples, or a function computing it (read
+        :attr:`states`).
+    actuator_names : tuple of str
+    actuator_forces : ndarray (n_actuators, N)
+        Forces the actuators applied [N] (after saturation and lag).
+    """
+
+    name: str
+    model: str
+    t: np.ndarray
+    signals: np.ndarray
+    carriage_names: tuple[str, ...]
+    q: np.ndarray
+    stop_time: float
+    final: np.ndarray | None
+    settling: dict[str, SettlingResult]
+    state_history: np.ndarray | Callable[[], np.ndarray] = field(repr=False)
+    actuator_names: tuple[str, ...] = ()
+    actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+
+    @property
+    def states(self) -> np.ndarray:
+        """The model's state at the samples (N, n_states), for checks; evaluated on first use."""
+        history = self.state_history
+        if callable(history):
+            history = np.asarray(history(), dtype=float)
+            object.__setattr__(self, "state_history", history)
+        return history
+
+    @property
+    def signal_names(self) -> tuple[str, ...]:
+        return SIGNALS
+
+    def signal(self, name: str) -> np.ndarray:
+        """One table signal by name (``x`` ... ``rz``)."""
+        if name not in SIGNALS:
+            raise KeyError(f"signal: unknown '{name}' (one of {', '.join(SIGNALS)})")
+        return self.signals[SIGNALS.index(name)]
+
+    @property
+    def peak(self) -> dict[str, float]:
+        """max |s| over the run, per signal [m or rad]."""
+        return {k: r.peak for k, r in self.settling.items()}
+
+    @property
+    def settling_time(self) -> dict[str, float | None]:
+        """Settling time after the stop per signal [s]; None where the run cannot show it."""
+        return {k: r.time for k, r in self.settling.items()}
+
+    @property
+    def settling_time_max(self) -> float | None:
+        """The scenario's settling time: the largest over the six signals [s]."""
+        times = list(self.settling_time.values())
+        if any(v is None for v in times):
+            return None
+        return max(times)  # type: ignore[type-var]
+
+    def to_dict(self) -> dict[str, Any]:
+        """Summary as plain JSON-ready types (the ``isolator simulate --json`` object)."""
+
+        def num(v: float | None) -> float | None:
+            return None if v is None or not math.isfinite(v) else float(v)
+
+        return {
+            "name": self.name,
+            "model": self.model,
+            "stop_time": num(self.stop_time),
+            "signals": list(SIGNALS),
+            "peak": {k: num(v) for k, v in self.peak.items()},
+            "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
+            "settling_time": {k: num(v) for k, v in self.settling_time.items()},
+            "settling_time_max": num(self.settling_time_max),
+            "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
+        }
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``f:<actuator>...`` [N]
+        when actuators applied forces, to ``path``."""
+        path = Path(path)
+        header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names]]
+        columns = [self.t, self.signals.T, self.q.T]
+        if self.actuator_forces.size and np.any(self.actuator_forces):
+            header += [f"f:{n}" for n in self.actuator_names]
+            columns.append(self.actuator_forces.T)
+        data = np.column_stack(columns)
+        with open(path, "w", newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(header)
+            for row in data:
+                writer.writerow([f"{v:.10g}" for v in row])
+        return path
+
+    def summary(self) -> str:
+        """A text table of peaks, final values and settling times per signal."""
+        lines = [
+            f"{self.name} ({self.model} model), carriages stop at "
+            + ("never (sine)" if math.isinf(self.stop_time) else f"{self.stop_time:.4g} s"),
+            f"{'signal':>6}  {'peak':>12}  {'final':>12}  {'settling [s]':>12}",
+        ]
+        for i, k in enumerate(SIGNALS):
+            r = self.settling[k]
+            scale = 1e6
+            unit = _UNITS[k]
+            final = "-" if self.final is None else f"{self.final[i] * scale:.4g} {unit}"
+            st = "-" if r.time is None else f"{r.time:.4g}"
+            lines.append(f"{k:>6}  {r.peak * scale:>7.4g} {unit:<4}  {final:>12}  {st:>12}")
+        tmax = self.settling_time_max
+        lines.append(
+            "settling time (largest): "
+            + (f"{tmax:.4g} s" if tmax is not None else "not available")
+        )
+        for k, r in self.settling.items():
+            if r.reason and r.reason != "does not move":
+                lines.append(f"  {k}: {r.reason}")
+        return "\n".join(lines)
+
+    def plot(self, fig: Any = None, label: str | None = None):
+        """Rotations (left) and translations (right) over time, as in the paper's Fig. 3.5.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+        """
+        import matplotlib.pyplot as plt
+
+        if fig is None:
+            fig, _ = plt.subplots(3, 2, figsize=(11, 7.5), sharex=True, constrained_layout=True)
+        axes = np.asarray(fig.axes).reshape(3, 2)
+        for row in range(3):
+            for col, name in enumerate((SIGNALS[3 + row], SIGNALS[row])):
+                ax = axes[row, col]
+                i = SIGNALS.index(name)
+                ax.plot(self.t, self.signals[i] * 1e6, lw=1.0, label=label or self.model)
+                r = self.settling[name]
+                if self.final is not None and math.isfinite(self.stop_time):
+                    f = self.final[i] * 1e6
+                    ax.axvline(self.stop_time, color="0.5", ls=":", lw=1)
+                    ax.fill_between(
+                        [self.stop_time, self.t[-1]], f - r.band * 1e6, f + r.band * 1e6,
+                        color="tab:green", alpha=0.15, lw=0,
+                    )
+                    if r.time is not None and r.time > 0:
+                        ax.axvline(self.stop_time + r.time, color="tab:red", ls="--", lw=1)
+                ax.set_ylabel(f"{name} [{_UNITS[name]}]")
+                ax.grid(True, alpha=0.3)
+        for ax in axes[-1]:
+            ax.set_xlabel("time [s]")
+        axes[0, 0].set_title("rotations")
+        axes[0, 1].set_title("translations")
+        tmax = self.settling_time_max
+        st = f"5 % settling {tmax:.3g} s after the stop" if tmax is not None else "settling: n/a"
+        fig.suptitle(f"{self.name}: table response ({self.model} model); {st}")
+        handles = [
+            plt.Line2D([], [], color="tab:blue", label="table motion"),
+            plt.Rectangle((0, 0), 1, 1, color="tab:green", alpha=0.15, label="settling band"),
+            plt.Line2D([], [], color="0.5", ls=":", label="carriages stop"),
+            plt.Line2D([], [], color="tab:red", ls="--", label="settled"),
+        ]
+        if label is None:
+            axes[0, 1].legend(handles=handles, loc="upper left", fontsize=8)
+        return fig

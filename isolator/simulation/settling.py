@@ -1,0 +1,273 @@
+"""The paper's 5 % settling time, made exact (``docs/scenario-format.md``)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from isolator.scenario.definitions import SIGNALS, Settling
+
+__all__ = [
+    "SettlingResult",
+    "last_outside",
+    "settling_metrics",
+    "settling_time",
+    "settling_times",
+    "signal_bands",
+    "signal_peaks",
+    "signal_settling",
+    "still_signals",
+]
+
+#: peaks below this are numerical noise: such a signal does not move [m or rad]
+MOTION_FLOOR = 1e-13
+
+
+@dataclass(frozen=True)
+class SettlingResult:
+    """Settling of one signal.
+
+    Attributes
+    ----------
+    time : float or None
+        Settling time after the stop [s]; None when the run cannot show it.
+    peak : float
+        max |s| over the run [m or rad].
+    band : float
+        Half-width of the band around ``final`` [m or rad].
+    reason : str
+        Why ``time`` is None, or a remark ("" when settled normally).
+    """
+
+    time: float | None
+    peak: float
+    band: float
+    reason: str = ""
+
+
+def settling_time(
+    t: np.ndarray,
+    s: np.ndarray,
+    final: float,
+    stop_time: float,
+    band: float,
+    hold: float = 0.0,
+) -> tuple[float | None, str]:
+    """Settling time of one signal.
+
+    Parameters
+    ----------
+    t : ndarray
+        Sample times [s].
+    s : ndarray
+        Signal [m or rad].
+    final : float
+        Static equilibrium value with the carriages at their final positions.
+    stop_time : float
+        When the last carriage stops [s].
+    band : float
+        Half-width of the band [m or rad], > 0.
+    hold : float
+        How long [s] the signal must be seen inside the band before the run
+        ends for the result to count (e.g. one period of the slowest mode).
+
+    Returns
+    -------
+    time : float or None
+        The last time at or after ``stop_time`` at which ``|s - final| > band``,
+        minus ``stop_time``; 0 if inside from the stop on; None if the run does
+        not show the signal settled.
+    reason : str
+        Why the time is None ("" otherwise).
+    """
+    return settling_times(t, np.asarray(s)[None, :], np.array([final]), stop_time, np.array([band]), hold)[0]
+
+
+def settling_times(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray,
+    stop_time: float,
+    band: np.ndarray,
+    hold: float = 0.0,
+) -> list[tuple[float | None, str]]:
+    """:func:`settling_time` of several signals (rows of ``signals``) at once.
+
+    Parameters
+    ----------
+    t : ndarray (samples,)
+        [s].
+    signals : ndarray (k, samples)
+        [m or rad].
+    final, band : ndarray (k,)
+        Final values and band half-widths (> 0) [m or rad].
+    stop_time, hold : float
+        [s], as in :func:`settling_time`.
+    """
+    k = signals.shape[0]
+    why = _unavailable(t, stop_time)
+    if why:
+        return [(None, why)] * k
+    times, short = last_outside(t, signals, final, stop_time, band, hold)
+    return [(None, _outside(short[i])) if math.isnan(times[i]) else (float(times[i]), "") for i in range(k)]
+
+
+def _unavailable(t: np.ndarray, stop_time: float) -> str:
+    """Why a run over times ``t`` [s] shows no settling at all ("" when it can)."""
+    if math.isinf(stop_time):
+        return "a carriage never stops (sine profile): no settling time"
+    if stop_time > t[-1]:
+        return f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s"
+    return ""
+
+
+def _outside(short: float) -> str:
+    return f"still outside the band {short:.3g} s before the run ends; lengthen simulation.duration"
+
+
+def last_outside(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray,
+    stop_time: float,
+    band: np.ndarray,
+    hold: float | np.ndarray = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The settling rule on stacked signals: the core of :func:`settling_time`.
+
+    Parameters
+    ----------
+    t : ndarray (samples,)
+        [s]; the run must reach ``stop_time`` (finite).
+    signals : ndarray (..., samples)
+        [m or rad].
+    final, band : ndarray (...)
+        [m or rad].
+    stop_time : float
+        [s].
+    hold : float or ndarray (...)
+        [s].
+
+    Returns
+    -------
+    time : ndarray (...)
+        Settling time after the stop [s]; NaN where the signal is still outside
+        the band less than ``hold`` before the run ends.
+    short : ndarray (...)
+        How long before the run's end the signal was last outside [s].
+    """
+    first = int(np.searchsorted(t, stop_time - 1e-12, side="left"))
+    after = signals[..., first:]
+    outside = np.abs(after - np.asarray(final, float)[..., None]) > np.asarray(band, float)[..., None]
+    if not outside.shape[-1]:
+        zero = np.zeros(outside.shape[:-1])
+        return zero, zero
+    last = t[first:][outside.shape[-1] - 1 - np.argmax(outside[..., ::-1], axis=-1)]
+    never = ~outside.any(axis=-1)
+    short = t[-1] - last
+    times = np.where(never, 0.0, last - stop_time)
+    unsettled = ~never & ((last >= t[-1]) | (short < hold))
+    return np.where(unsettled, np.nan, times), np.where(never, 0.0, short)
+
+
+def signal_bands(settling: Settling, peaks: np.ndarray) -> np.ndarray:
+    """Band half-widths [m or rad] of the six signals (..., 6) with these peaks (``Settling.band``)."""
+    peaks = np.asarray(peaks, dtype=float)
+    if settling.tolerance is not None:
+        per_signal = np.array([settling.band(name, 0.0) for name in SIGNALS])
+        return np.broadcast_to(per_signal, peaks.shape).copy()
+    return float(settling.fraction) * peaks  # type: ignore[arg-type]
+
+
+def still_signals(settling: Settling, peaks: np.ndarray) -> np.ndarray:
+    """Which signals do not move (peak at numerical noise, band relative to the peak): settled at 0."""
+    if settling.tolerance is not None:
+        return np.zeros(np.shape(peaks), dtype=bool)
+    return np.asarray(peaks) <= MOTION_FLOOR
+
+
+def signal_peaks(signals: np.ndarray) -> np.ndarray:
+    """max |s| of each row of ``signals`` (0 for no samples)."""
+    if not signals.shape[1]:
+        return np.zeros(signals.shape[0])
+    return np.maximum(signals.max(axis=1), -signals.min(axis=1))
+
+
+def signal_settling(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray | None,
+    stop_time: float,
+    settling: Settling,
+    hold: float | np.ndarray,
+    peaks: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Settling times of the six table signals of one run or stacked runs, as numbers.
+
+    Parameters
+    ----------
+    t : ndarray (samples,)
+        [s]; from the stop on at least.
+    signals : ndarray (..., 6, samples)
+        [m or rad].
+    final : ndarray (..., 6) or None
+        Final equilibrium values (None: a carriage never stops; 0 is the target).
+    stop_time : float
+        [s].
+    settling : Settling
+        The scenario's band rule.
+    hold : float or ndarray (...)
+        [s], as in :func:`settling_time`.
+    peaks : ndarray (..., 6)
+        max |signal| over the whole run [m or rad].
+
+    Returns
+    -------
+    time : ndarray (..., 6)
+        [s]; NaN where the run cannot show it; 0 for a signal that does not move.
+    short : ndarray (..., 6)
+        How long before the run's end each signal was last outside its band [s].
+    """
+    peaks = np.asarray(peaks, dtype=float)
+    if _unavailable(t, stop_time):
+        times, short = np.full(peaks.shape, np.nan), np.zeros(peaks.shape)
+    else:
+        target = np.zeros(peaks.shape) if final is None else np.asarray(final, dtype=float)
+        bands = np.maximum(signal_bands(settling, peaks), 1e-300)
+        times, short = last_outside(t, signals, target, stop_time, bands, np.asarray(hold, dtype=float)[..., None])
+    if final is not None:
+        times = np.where(still_signals(settling, peaks), 0.0, times)
+    return times, short
+
+
+def settling_metrics(
+    t: np.ndarray,
+    signals: np.ndarray,
+    final: np.ndarray | None,
+    stop_time: float,
+    settling: Settling,
+    hold: float = 0.0,
+    peaks: np.ndarray | None = None,
+) -> dict[str, SettlingResult]:
+    """Settling of each of the six table signals, keyed by name (``SIGNALS``).
+
+    ``peaks`` (max |signal| per row), when the caller has them already.
+    """
+    if peaks is None:
+        peaks = signal_peaks(signals)
+    times, short = signal_settling(t, signals, final, stop_time, settling, hold, peaks)
+    still = still_signals(settling, peaks) if final is not None else np.zeros(len(SIGNALS), dtype=bool)
+    why = _unavailable(t, stop_time)
+    bands = signal_bands(settling, peaks)
+    out: dict[str, SettlingResult] = {}
+    for i, name in enumerate(SIGNALS):
+        if still[i]:
+            time, reason = 0.0, "does not move"
+        elif math.isnan(times[i]):
+            time, reason = None, why or _outside(short[i])
+        else:
+            time, reason = float(times[i]), ""
+        out[name] = SettlingResult(time, float(peaks[i]), float(bands[i]), reason)
+    return out

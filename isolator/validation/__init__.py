@@ -1,0 +1,1 @@
+"""Independent checks of the model: the MuJoCo multibody build of a scenario."""

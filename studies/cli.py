@@ -1,0 +1,75 @@
+"""The ``isolator study`` subcommand (registered with the ``isolator`` command)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+from typing import Any
+
+from isolator.cli.helpers import use_agg
+from isolator.errors import ParameterError
+from isolator.scenario.reader import DEFAULT_SCENARIO, load_scenario
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``study`` to the ``isolator`` command's subparsers."""
+    study = sub.add_parser("study", help="run a study that writes figures and a report")
+    study.add_argument("name", choices=["paper", "control", "profiles", "tradeoff"],
+                       help="paper: reproduce Shin, Sun and Kim; control: passive, feedforward, feedback and both; "
+                       "profiles: paper profile, input shapers, time-optimal and optimised moves; "
+                       "tradeoff: isolator stiffness and damping, settling time against transmissibility")
+    study.add_argument("scenario", nargs="?", default=None,
+                       help="control: scenario with [[actuators]] (default: paper-table-3-2-active); "
+                       f"profiles and tradeoff: (default: {DEFAULT_SCENARIO})")
+    study.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
+    study.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
+    study.add_argument("--controller", choices=["skyhook", "lead", "lqr", "hinf"], default="skyhook",
+                       help="control: the feedback design in the time runs")
+    study.add_argument("--feedforward", choices=["allocation", "optimal"], default="allocation",
+                       help="control: the feedforward method")
+    study.add_argument("--frequency", type=float, default=10.0, metavar="HZ",
+                       help="tradeoff: frequency of the transmissibility figure (default 10 Hz)")
+
+    study.set_defaults(handler=_study)
+
+
+def _study(args: argparse.Namespace) -> int:
+    use_agg()
+    if args.name == "paper":
+        from studies.paper import run_paper_study
+
+        report = run_paper_study(args.out, quick=args.quick)
+        print(f"report: {report}")
+    elif args.name == "control":
+        from studies.control import run_control_study
+
+        scenario = load_scenario(args.scenario or "paper-table-3-2-active")
+        study = run_control_study(args.out, scenario, args.controller, args.feedforward)
+        for run in ("passive", "feedforward", "feedback", "both"):
+            value = study.settling_time_max(run)
+            print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
+        print(f"report: {args.out / 'report.md'}")
+    elif args.name == "tradeoff":
+        from studies.tradeoff import run_tradeoff_study
+
+        if not (math.isfinite(args.frequency) and args.frequency > 0):
+            raise ParameterError(f"--frequency: must be a finite frequency > 0 Hz, got {args.frequency}")
+        grids = {"stiffness": [0.5, 1.0, 2.0], "damping": [0.5, 1.0, 2.0, 4.0]} if args.quick else {}
+        study = run_tradeoff_study(args.out, load_scenario(args.scenario), reference_hz=args.frequency, **grids)
+        front = study.pareto()
+        print(f"{len(front)} Pareto-optimal designs of {study.stiffness.size * study.damping.size}")
+        print(f"report: {args.out / 'report.md'}")
+    elif args.name == "profiles":
+        from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant
+        from studies.profiles import run_profile_study
+
+        variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
+        profiles = run_profile_study(args.out, load_scenario(args.scenario), variants)
+        for name, m in profiles.methods.items():
+            settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
+            print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
+        print(f"report: {args.out / 'report.md'}")
+    return 0
