@@ -32,7 +32,8 @@ class Equilibrium:
     ----------
     pose : ndarray (6,)
         Mass-centre position from the reference pose [m] and Cardan angles
-        (Rz Ry Rx) [rad].
+        (Rz Ry Rx) [rad]; for pneumatic tables followed by each leveling
+        group's gauge pressure [Pa].
     state : ndarray
         The model's state at rest in that pose.
     positions : ndarray
@@ -122,15 +123,25 @@ def rocking_stiffness(model: Model, p: np.ndarray, positions: np.ndarray, pose: 
     lin = build_linearisation(model.layout)
     c = np.concatenate([np.asarray(positions, float), np.zeros(2 * len(positions))])
 
-    def condensed(params: np.ndarray) -> np.ndarray:
-        k = np.asarray(lin(pose, c, params)[2], dtype=float)
+    pneumatic = model.layout.pneumatic is not None
+
+    def stiffness(params: np.ndarray, at: np.ndarray, air_at: np.ndarray) -> np.ndarray:
+        k = np.asarray(lin(at, c, params)[2], dtype=float)
+        if pneumatic:  # the air's slow stiffness at the rest pressures
+            k = k + np.asarray(lin(air_at, c, params)[-1], dtype=float)
+        return condensed(k)
+
+    def condensed(k: np.ndarray) -> np.ndarray:
         k = 0.5 * (k + k.T)
         return k[3:, 3:] - k[3:, :3] @ np.linalg.pinv(k[:3, :3]) @ k[:3, 3:]
 
-    values, vectors = np.linalg.eigh(condensed(p))
+    pose = np.asarray(pose, dtype=float)
+    values, vectors = np.linalg.eigh(stiffness(p, pose, pose))
     no_gravity = np.array(p, dtype=float)
     no_gravity[0] = 0.0
-    elastic_matrix = condensed(no_gravity)
+    unloaded = pose.copy()
+    unloaded[6:] = 0.0  # no weight: the chambers at the atmosphere, their air springs as they are
+    elastic_matrix = stiffness(no_gravity, unloaded, pose)
     elastic = np.einsum("ik,ij,jk->k", vectors, elastic_matrix, vectors)
     return RockingStiffness(values, vectors, elastic)
 
@@ -187,7 +198,7 @@ def static_equilibria(
     runs = params.shape[0]
     solver = _solver(model)
     c = model.layout.rest_inputs(positions)
-    z = np.zeros((runs, 6))
+    z = np.zeros((runs, model.n_static))
     tolerance = 1e-11 * (np.abs(params[:, 0]) * params[:, 1] + 1.0)
     active = np.ones(runs, dtype=bool)
     failed = np.zeros(runs, dtype=bool)
@@ -210,14 +221,14 @@ def static_equilibria(
             dz = -np.einsum("nij,nj->ni", np.linalg.pinv(jac[keep]), r[keep])
         z[step] += dz
         small = np.max(np.abs(dz), axis=1) < 1e-15
-        tipped = np.max(np.abs(z[step, 3:]), axis=1) > 1.0
+        tipped = np.max(np.abs(z[step, 3:6]), axis=1) > 1.0
         failed[step[tipped & ~small]] = True
         active[step[small | tipped]] = False
     failed |= active  # did not converge
     label = (lambda i: f"run {i}: ") if runs > 1 else (lambda i: "")
     if failed.any():
         i = int(np.argmax(failed))
-        rock = rocking_stiffness(model, params[i], positions, np.zeros(6))
+        rock = rocking_stiffness(model, params[i], positions, np.zeros(model.n_static))
         raise UnstableTableError(
             f"{label(i)}no static equilibrium {where}: the isolators cannot hold the table upright; "
             f"{rock.describe()} (the mass centre is too high for the isolator spacing, or they are too soft)"
@@ -247,8 +258,9 @@ class _Solver:
 
     def __init__(self, model: Model) -> None:
         self.residual = MappedFunction(model.static_residual, f"isolator_static_{model.tag}")
-        z, c, p = ca.SX.sym("z", 6), ca.SX.sym("c", model.layout.input_size), ca.SX.sym("p", model.layout.size)
-        x = model.pose_state(z)
+        z, c = ca.SX.sym("z", model.n_static), ca.SX.sym("c", model.layout.input_size)
+        p = ca.SX.sym("p", model.layout.size)
+        x = model.pose_state(z, p)
         rest = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
         self.linear = MappedFunction(rest, f"isolator_rest_{model.tag}", optimisation="-O1")
 

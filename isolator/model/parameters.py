@@ -8,8 +8,115 @@ import casadi as ca
 import numpy as np
 
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.pneumatic import PneumaticIsolator
 
-__all__ = ["ParameterLayout"]
+__all__ = ["AIR_KEYS", "ParameterLayout", "PneumaticStructure"]
+
+#: the ``[air]`` keys, in the parameter vector's order
+AIR_KEYS = ("atmosphere", "temperature", "gas_constant", "viscosity", "polytropic")
+_VALVE_KEYS = ("gain", "deadband", "max_flow")
+
+
+@dataclass(frozen=True)
+class PneumaticStructure:
+    """What fixes a pneumatic model's states and equations (its numbers stay parameters).
+
+    Attributes
+    ----------
+    groups : tuple of tuple of int
+        The isolators of each leveling group, in the listed order.
+    valves : tuple of bool
+        Whether each group has a leveling valve.
+    chambers : tuple of bool
+        Whether each isolator has a damping chamber.
+    """
+
+    groups: tuple[tuple[int, ...], ...]
+    valves: tuple[bool, ...]
+    chambers: tuple[bool, ...]
+
+    @property
+    def n_states(self) -> int:
+        """Spring-chamber pressures, then damping-chamber pressures [Pa]."""
+        return len(self.chambers) + sum(self.chambers)
+
+    def names(self) -> list[str]:
+        """Parameter names of the isolators, groups and air, in order."""
+        out: list[str] = []
+        for i, damped in enumerate(self.chambers):
+            out += [f"isolators[{i}].position.{a}" for a in "xyz"]
+            out += [f"isolators[{i}].{k}" for k in ("area", "volume", "damping_volume")]
+            if damped:
+                out += [f"isolators[{i}].orifice.diameter", f"isolators[{i}].orifice.length"]
+            out += [f"isolators[{i}].horizontal_stiffness.{a}" for a in "xy"]
+            out += [f"isolators[{i}].horizontal_damping.{a}" for a in "xy"]
+        for j, (members, valve) in enumerate(zip(self.groups, self.valves, strict=True)):
+            if len(members) > 1:
+                out += [f"leveling[{j}].line.diameter", f"leveling[{j}].line.length"]
+            out += [f"leveling[{j}].sensor.x", f"leveling[{j}].sensor.y", f"leveling[{j}].supply"]
+            if valve:
+                out += [f"leveling[{j}].valve.{k}" for k in _VALVE_KEYS]
+        return out + [f"air.{k}" for k in AIR_KEYS]
+
+    @classmethod
+    def of(cls, scenario: Scenario) -> PneumaticStructure | None:
+        if not scenario.is_pneumatic:
+            return None
+        return cls(
+            tuple(g.isolators for g in scenario.leveling),
+            tuple(g.valve is not None for g in scenario.leveling),
+            tuple(isinstance(iso, PneumaticIsolator) and iso.has_damping_chamber for iso in scenario.isolators),
+        )
+
+    def pack(self, scenario: Scenario) -> list[float]:
+        """The values of :meth:`names` for a scenario of this structure."""
+        out: list[float] = []
+        for iso in scenario.isolators:
+            if not isinstance(iso, PneumaticIsolator):
+                raise ValueError("scenario does not have this model's structure")
+            out += [*iso.position, iso.area, iso.volume, iso.damping_volume]
+            if iso.has_damping_chamber and iso.orifice is not None:
+                out += [iso.orifice.diameter, iso.orifice.length]
+            out += [*iso.horizontal_stiffness, *iso.horizontal_damping]
+        for g in scenario.leveling:
+            if len(g.isolators) > 1 and g.line is not None:
+                out += [g.line.diameter, g.line.length]
+            out += [*g.sensor, g.supply]
+            if g.valve is not None:
+                out += [g.valve.gain, g.valve.deadband, g.valve.max_flow]
+        air = scenario.air
+        if air is None:
+            raise ValueError("scenario does not have this model's structure")
+        return out + [getattr(air, k) for k in AIR_KEYS]
+
+    def unpack(self, block: ca.SX) -> dict[str, ca.SX]:
+        """Named symbols of the pneumatic block: per isolator ``area, volume, damping_volume, orifice``
+        (conductance-defining diameter and length, or zeros), ``positions`` (3, m), ``stiffness`` and
+        ``damping`` (3, m; zero vertically), per group ``line``, ``sensor``, ``supply``, ``valve``; ``air``."""
+        values = dict(zip(self.names(), ca.vertsplit(block), strict=True))
+        m = len(self.chambers)
+        zero = ca.SX(0)
+
+        def iso(i: int, key: str) -> ca.SX:
+            return values.get(f"isolators[{i}].{key}", zero)
+
+        def column(i: int, key: str) -> ca.SX:
+            return ca.vertcat(iso(i, f"{key}.x"), iso(i, f"{key}.y"), zero) if key != "position" else \
+                ca.vertcat(*[iso(i, f"position.{a}") for a in "xyz"])
+
+        out: dict[str, ca.SX] = {
+            "positions": ca.horzcat(*[column(i, "position") for i in range(m)]),
+            "stiffness": ca.horzcat(*[column(i, "horizontal_stiffness") for i in range(m)]),
+            "damping": ca.horzcat(*[column(i, "horizontal_damping") for i in range(m)]),
+        }
+        for key in ("area", "volume", "damping_volume", "orifice.diameter", "orifice.length"):
+            out[key] = ca.vertcat(*[iso(i, key) for i in range(m)])
+        for key in ("line.diameter", "line.length", "sensor.x", "sensor.y", "supply", "valve.gain",
+                    "valve.deadband", "valve.max_flow"):
+            out[key] = ca.vertcat(*[values.get(f"leveling[{j}].{key}", zero) for j in range(len(self.groups))])
+        for key in AIR_KEYS:
+            out[f"air.{key}"] = values[f"air.{key}"]
+        return out
 
 
 @dataclass(frozen=True)
@@ -41,6 +148,7 @@ class ParameterLayout:
     parents: tuple[int, ...]
     n_actuators: int = 0
     ground: bool = False
+    pneumatic: PneumaticStructure | None = None
     names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -48,10 +156,13 @@ class ParameterLayout:
         names += [f"carriages[{i}].mass" for i in range(self.n_carriages)]
         for key in ("axis", "origin"):
             names += [f"carriages[{i}].{key}.{a}" for i in range(self.n_carriages) for a in "xyz"]
-        for key in ("position", "stiffness", "damping"):
-            names += [f"isolators[{i}].{key}.{a}" for i in range(self.n_isolators) for a in "xyz"]
+        if self.pneumatic is None:
+            for key in ("position", "stiffness", "damping"):
+                names += [f"isolators[{i}].{key}.{a}" for i in range(self.n_isolators) for a in "xyz"]
         for key in ("position", "direction"):
             names += [f"actuators[{i}].{key}.{a}" for i in range(self.n_actuators) for a in "xyz"]
+        if self.pneumatic is not None:
+            names += self.pneumatic.names()
         object.__setattr__(self, "names", tuple(names))
 
     @property
@@ -89,6 +200,7 @@ class ParameterLayout:
             scenario.parent_indices(),
             len(scenario.actuators),
             scenario.has_ground_motion,
+            PneumaticStructure.of(scenario),
         )
 
     def pack(self, scenario: Scenario) -> np.ndarray:
@@ -99,10 +211,13 @@ class ParameterLayout:
         values += [c.mass for c in scenario.carriages]
         values += [v for c in scenario.carriages for v in c.axis]
         values += [v for c in scenario.carriages for v in c.origin]
-        for key in ("position", "stiffness", "damping"):
-            values += [v for iso in scenario.isolators for v in getattr(iso, key)]
+        if self.pneumatic is None:
+            for key in ("position", "stiffness", "damping"):
+                values += [v for iso in scenario.isolators for v in getattr(iso, key)]
         for key in ("position", "direction"):
             values += [v for act in scenario.actuators for v in getattr(act, key)]
+        if self.pneumatic is not None:
+            values += self.pneumatic.pack(scenario)
         return np.array(values, dtype=float)
 
     def unpack(self, p: ca.SX) -> dict[str, ca.SX]:
@@ -123,15 +238,18 @@ class ParameterLayout:
         take("masses", n)
         take("axes", 3, n)
         take("origins", 3, n)
-        take("positions", 3, m)
-        take("stiffness", 3, m)
-        take("damping", 3, m)
+        if self.pneumatic is None:
+            take("positions", 3, m)
+            take("stiffness", 3, m)
+            take("damping", 3, m)
         take("actuator_positions", 3, self.n_actuators)
         take("actuator_directions", 3, self.n_actuators)
+        if self.pneumatic is not None:
+            out.update(self.pneumatic.unpack(p[i:]))
         sizes = {"axes": n, "origins": n, "actuator_positions": self.n_actuators,
                  "actuator_directions": self.n_actuators}
         for k in ("axes", "origins", "positions", "stiffness", "damping", "actuator_positions",
                   "actuator_directions"):
-            if sizes.get(k, m) <= 1:
+            if sizes.get(k, m) <= 1 and out[k].shape != (3, sizes.get(k, m)):
                 out[k] = ca.reshape(out[k], 3, sizes.get(k, m))
         return out

@@ -11,9 +11,32 @@ from __future__ import annotations
 
 import casadi as ca
 
-from isolator.model.elements.spring_damper import isolator_preloads
+from isolator.model.elements.base import AttachmentMotion, IsolatorElement
+from isolator.model.elements.spring_damper import SPRING_DAMPER, isolator_preloads
 
-__all__ = ["carriage_kinematics", "newton_euler_residual", "solve_blocks"]
+__all__ = ["attachment_motion", "carriage_kinematics", "newton_euler_residual", "solve_blocks"]
+
+
+def attachment_motion(
+    pos: ca.SX, rot: ca.SX, vel: ca.SX, w_body: ca.SX, prm: dict[str, ca.SX], ground: ca.SX | None = None
+) -> AttachmentMotion:
+    """The isolators' attachment points relative to their floor points (world axes) [m], [m/s].
+
+    ``ground`` (12,): floor displacement [m], rotation about the world origin
+    [rad] and their rates; the floor points move with the floor.
+    """
+    w_world = rot @ w_body
+    stretches, rates = [], []
+    for k in range(prm["positions"].shape[1]):
+        s = prm["positions"][:, k]
+        arm = rot @ s
+        stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
+        if ground is not None:
+            stretch = stretch - ground[0:3] - ca.cross(ground[3:6], s)
+            rate = rate - ground[6:9] - ca.cross(ground[9:12], s)
+        stretches.append(stretch)
+        rates.append(rate)
+    return AttachmentMotion(stretches, rates, pos, rot)
 
 
 def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...]) -> dict[str, ca.SX]:
@@ -80,6 +103,8 @@ def newton_euler_residual(
     actuator_forces: ca.SX | None = None,
     wrench: ca.SX | None = None,
     kin: dict[str, ca.SX] | None = None,
+    element: IsolatorElement = SPRING_DAMPER,
+    element_states: ca.SX | None = None,
 ) -> ca.SX:
     """Newton's and Euler's laws for the table with its carriages, table frame.
 
@@ -114,6 +139,10 @@ def newton_euler_residual(
     kin : dict, optional
         The carriages' moments (:func:`carriage_kinematics`) when already
         known; ``c`` is then not used.
+    element : IsolatorElement
+        The isolators' kind (:mod:`isolator.model.elements`).
+    element_states : SX, optional
+        Its internal states (the pneumatic element's chamber pressures [Pa]).
 
     Returns
     -------
@@ -132,20 +161,11 @@ def newton_euler_residual(
 
     force = m_tot * g_world
     moment = ca.SX.zeros(3, 1)
-    load = isolator_preloads(prm, kin["m"]) if preload else None
-    w_world = rot @ w
-    for k in range(prm["positions"].shape[1]):
-        s = prm["positions"][:, k]
-        arm = rot @ s
-        stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
-        if ground is not None:
-            stretch = stretch - ground[0:3] - ca.cross(ground[3:6], s)
-            rate = rate - ground[6:9] - ca.cross(ground[9:12], s)
-        f = -prm["stiffness"][:, k] * stretch - prm["damping"][:, k] * rate
-        if load is not None:
-            f = f + load[:, k]
+    load = isolator_preloads(prm, kin["m"]) if preload and element is SPRING_DAMPER else None
+    motion = attachment_motion(pos, rot, vel, w, prm, ground)
+    for k, f in enumerate(element.forces(prm, motion, element_states, load)):
         force += f
-        moment += ca.cross(arm, f)
+        moment += ca.cross(rot @ prm["positions"][:, k], f)
     if actuator_forces is not None:
         for k in range(actuator_forces.shape[0]):
             f = prm["actuator_directions"][:, k] * actuator_forces[k]

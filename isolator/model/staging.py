@@ -11,6 +11,7 @@ from __future__ import annotations
 import casadi as ca
 
 from isolator.model.parameters import ParameterLayout
+from isolator.model.pneumatic_statics import element_of, element_rates
 from isolator.model.residual import carriage_kinematics, newton_euler_residual, solve_blocks
 from isolator.model.rotations import quaternion_rate
 
@@ -74,16 +75,21 @@ def staged_functions(
     v = ca.SX.sym("v", size + rest.shape[0])
     kin, inv_mass = _unpack_time_only(v[:size], ca.sum1(prm["masses"]))
     moved = {k: None if e is None else ca.substitute(e, rest, v[size:]) for k, e in extra.items()}
-    pos, qt, vel, w = x[0:3], x[3:7], x[7:10], x[10:13]
+    pos, qt, vel, w, inner = x[0:3], x[3:7], x[7:10], x[10:13], x[13:]
+    element = element_of(layout)
+    states = inner if inner.shape[0] else None
     res = newton_euler_residual(
-        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin, **moved
+        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin, **moved,
+        element=element, element_states=states,
     )
     bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
     accel = -inv_mass @ bias
-    xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
+    inner_rates = element_rates(layout, prm, pos, rot, vel, w, inner, moved["ground"])
+    xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:], inner_rates)
     moments = carriage_kinematics(c[: 3 * n], prm, layout.parents)
     mass = ca.jacobian(newton_euler_residual(
-        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=moments, **extra
+        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=moments, **extra,
+        element=element, element_states=states,
     ), acc_vars)
     inputs = ca.vertcat(_pack_time_only(moments, solve_blocks(mass, ca.SX.eye(6))), rest)
     return (

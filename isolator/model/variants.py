@@ -32,6 +32,13 @@ import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.model.parameters import ParameterLayout
+from isolator.model.pneumatic_statics import (
+    element_of,
+    element_rates,
+    level_residual,
+    pneumatic_tag,
+    rest_element_states,
+)
 from isolator.model.residual import newton_euler_residual, solve_blocks
 from isolator.model.rotations import cardan_matrix, cardan_to_quaternion, quaternion_rate, quaternion_to_matrix
 from isolator.model.signals import exact_sensed_motion, table_signals
@@ -65,9 +72,11 @@ class Model:
         ``(x, c, p) -> dx/dt``.
     static_residual : casadi.Function
         ``(z, c, p) -> (r, dr/dz)`` with z = (position, Cardan angles) of the
-        table at rest: zero at a static equilibrium.
+        table at rest, then for pneumatic tables each leveling group's gauge
+        pressure [Pa]: zero at a static equilibrium (pneumatic: with every
+        height sensor at zero, the level rest pose).
     pose_state : casadi.Function
-        ``(z) -> x`` the state at rest in pose z.
+        ``(z, p) -> x`` the state at rest in pose z.
     state_jacobian : casadi.Function
         ``(x, c, p) -> d(dx/dt)/dx``.
     linear_matrices : casadi.Function or None
@@ -93,6 +102,11 @@ class Model:
     staged_rhs: ca.Function | None = None
 
     @property
+    def n_static(self) -> int:
+        """Unknowns of the static residual: 6 (pose), plus 3 group pressures for pneumatic tables."""
+        return int(self.static_residual.size1_in(0))
+
+    @property
     def kind(self) -> str:
         """The variant's name, ``"exact"`` or ``"paper"``."""
         return self.variant.name
@@ -101,7 +115,10 @@ class Model:
     def tag(self) -> str:
         """Kind and structure in a name, e.g. ``exact_c2_i4_a0_g0``, for compiled functions and their cache."""
         lay = self.layout
-        return f"{self.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}_g{int(lay.ground)}"
+        tag = f"{self.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}_g{int(lay.ground)}"
+        if lay.pneumatic is not None:
+            tag += "_pn" + pneumatic_tag(lay.pneumatic)
+        return tag
 
 
 
@@ -142,7 +159,7 @@ class ModelVariant(ABC):
         static_fn = ca.Function(
             "static", [z, c, p], [eq.static, ca.jacobian(eq.static, z)], ["z", "c", "p"], ["r", "drdz"]
         )
-        pose_fn = ca.Function("pose_state", [z], [eq.pose], ["z"], ["x"])
+        pose_fn = ca.Function("pose_state", [z, p], [eq.pose], ["z", "p"], ["x"])
         jac = ca.Function("state_jacobian", [x, c, p], [ca.jacobian(eq.xdot, x)], ["x", "c", "p"], ["A"])
         return Model(self, layout, int(x.shape[0]), rhs, static_fn, pose_fn, jac, eq.linear, *eq.staged)
 
@@ -172,7 +189,8 @@ class _Symbols:
                 "actuator_forces": u[layout.actuator_slice] if layout.n_actuators else None,
             }
 
-        return cls(p, c, ca.SX.sym("z", 6), layout.unpack(p), rest, extra(c), extra(rest))
+        n_static = 6 + (len(layout.pneumatic.groups) if layout.pneumatic is not None else 0)
+        return cls(p, c, ca.SX.sym("z", n_static), layout.unpack(p), rest, extra(c), extra(rest))
 
 
 @dataclass(frozen=True)
@@ -195,22 +213,33 @@ class ExactModel(ModelVariant):
         n, c, p, prm, z, rest = layout.n_carriages, sym.c, sym.p, sym.prm, sym.z, sym.rest
         parents, extra, rest_extra = layout.parents, sym.extra, sym.rest_extra
         zero3 = ca.SX.zeros(3, 1)
-        x = ca.SX.sym("x", 13)
-        pos, qt, vel, w = x[0:3], x[3:7], x[7:10], x[10:13]
+        element = element_of(layout)
+        x = ca.SX.sym("x", 13 + element.n_states(layout.pneumatic))
+        pos, qt, vel, w, inner = x[0:3], x[3:7], x[7:10], x[10:13], x[13:]
+        states = inner if inner.shape[0] else None
         rot = quaternion_to_matrix(qt)
         acc_vars = ca.SX.sym("a", 6)
         res = newton_euler_residual(
-            pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c[: 3 * n], prm, parents, **extra
+            pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c[: 3 * n], prm, parents, **extra,
+            element=element, element_states=states,
         )
         mass = ca.jacobian(res, acc_vars)
         bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
         accel = solve_blocks(mass, -bias)
-        xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:])
+        inner_rates = element_rates(layout, prm, pos, rot, vel, w, inner, extra["ground"])
+        xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:], inner_rates)
         staged = staged_functions(layout, x, rot, acc_vars, c, p, prm, extra)
+        pose_z = z[:6]
+        rest_states = rest_element_states(layout, prm, z[6:]) if states is not None else None
         static = newton_euler_residual(
-            z[:3], cardan_matrix(z[3:]), zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents, **rest_extra
+            pose_z[:3], cardan_matrix(pose_z[3:]), zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents,
+            **rest_extra, element=element, element_states=rest_states,
         )
-        pose = ca.vertcat(z[:3], cardan_to_quaternion(z[3:]), ca.SX.zeros(6, 1))
+        if layout.pneumatic is not None:
+            static = ca.vertcat(static, level_residual(layout, prm, pose_z))
+        pose = ca.vertcat(pose_z[:3], cardan_to_quaternion(pose_z[3:]), ca.SX.zeros(6, 1))
+        if rest_states is not None:
+            pose = ca.vertcat(pose, rest_states)
         return _Equations(x, xdot, static, pose, staged)
 
     def sensed_motion(self, x: Any, reference: Any) -> Any:
@@ -233,6 +262,10 @@ class PaperModel(ModelVariant):
     def equations(self, layout: ParameterLayout, sym: _Symbols) -> _Equations:
         n, c, p, prm, z, rest = layout.n_carriages, sym.c, sym.p, sym.prm, sym.z, sym.rest
         parents, extra = layout.parents, sym.extra
+        if layout.pneumatic is not None:
+            raise ParameterError(
+                "model: the paper's model is for spring-damper isolators; use model='exact' for pneumatic ones"
+            )
         x = ca.SX.sym("x", 12)
         gen = ca.SX.sym("g", 18)  # position/angles, rates, accelerations
         pos, th = gen[0:3], gen[3:6]

@@ -6,10 +6,12 @@ Read one with :func:`isolator.load_scenario`; the file format is described in
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
+from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
+from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
 
 __all__ = [
@@ -26,9 +28,6 @@ __all__ = [
     "SimulationSettings",
     "Table",
 ]
-
-#: names of the six table signals, in order
-SIGNALS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
 
 Vector3 = tuple[float, float, float]
 
@@ -166,58 +165,6 @@ class Point:
 
 
 @dataclass(frozen=True)
-class FloorSpectrum:
-    """A floor vibration spectrum, per world axis.
-
-    Attributes
-    ----------
-    kind : {"third-octave", "psd"}
-        ``third-octave``: RMS velocity [m/s] in the one-third-octave band of each
-        centre frequency; ``psd``: velocity power spectral density [(m/s)^2/Hz].
-    frequency : ndarray
-        Band centres or PSD frequencies [Hz], increasing.
-    values : dict of str to ndarray
-        Per axis ``x``, ``y``, ``z`` (axes not given have no floor motion).
-    """
-
-    kind: str
-    frequency: np.ndarray
-    values: dict[str, np.ndarray]
-
-
-@dataclass(frozen=True)
-class Ground:
-    """Prescribed floor motion and an optional floor vibration spectrum.
-
-    Attributes
-    ----------
-    motion : dict of str to Profile
-        Floor translation [m] along ``x, y, z`` and rotation [rad] about ``rx, ry, rz``
-        (world axes, rotations about the world origin), each a profile of time.
-    spectrum : FloorSpectrum or None
-    """
-
-    motion: dict[str, Profile] = field(default_factory=dict)
-    spectrum: FloorSpectrum | None = None
-
-    def displacement(self, t: np.ndarray, piece_time: np.ndarray | None = None) -> np.ndarray:
-        """Floor displacement and its rate, shape ``(*t.shape, 12)``: 6 values then 6 rates."""
-        t = np.asarray(t, dtype=float)
-        out = np.zeros((*t.shape, 12))
-        for k, axis in enumerate(SIGNALS):
-            if axis in self.motion:
-                q, v, _ = self.motion[axis].evaluate(t, piece_time)
-                out[..., k] = q
-                out[..., 6 + k] = v
-        return out
-
-    @property
-    def breakpoints(self) -> tuple[float, ...]:
-        """Times [s] where a floor acceleration may jump."""
-        return tuple(sorted({b for p in self.motion.values() for b in p.breakpoints}))
-
-
-@dataclass(frozen=True)
 class Settling:
     """The settling band: a fraction of each signal's peak, or absolute tolerances.
 
@@ -262,11 +209,15 @@ class SimulationSettings:
 
 @dataclass(frozen=True)
 class Scenario:
-    """A validated, immutable scenario. Build one with :func:`isolator.load_scenario`."""
+    """A validated, immutable scenario. Build one with :func:`isolator.load_scenario`.
+
+    Its isolators are all spring-dampers (:class:`Isolator`) or all pneumatic
+    (:class:`PneumaticIsolator`, with ``air`` and the ``leveling`` groups).
+    """
 
     name: str
     table: Table
-    isolators: tuple[Isolator, ...]
+    isolators: tuple[Isolator, ...] | tuple[PneumaticIsolator, ...]
     carriages: tuple[Carriage, ...] = ()
     actuators: tuple[Actuator, ...] = ()
     simulation: SimulationSettings = SimulationSettings()
@@ -274,12 +225,19 @@ class Scenario:
     gravity: float = 9.81
     ground: Ground | None = None
     points: tuple[Point, ...] = ()
+    air: Air | None = None
+    leveling: tuple[LevelingGroup, ...] = ()
 
     # -- derived quantities -------------------------------------------------
     @property
     def total_mass(self) -> float:
         """Table plus carriages [kg]."""
         return self.table.mass + sum(c.mass for c in self.carriages)
+
+    @property
+    def is_pneumatic(self) -> bool:
+        """Whether the isolators are pneumatic (air springs with leveling groups)."""
+        return self.air is not None
 
     @property
     def stop_time(self) -> float:

@@ -30,10 +30,18 @@ from isolator.scenario.definitions import (
     Table,
 )
 from isolator.scenario.keys import KeyReader, number, number_list, table_of_tables
+from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
 from isolator.scenario.tables import SPECTRUM_KINDS, load_spectrum, read_csv_columns, spectrum_from_columns
-from isolator.scenario.validation import check_carriage_tree, check_isolator_layout, check_strokes, check_unique_names
+from isolator.scenario.validation import (
+    check_carriage_tree,
+    check_isolator_layout,
+    check_pneumatics,
+    check_strokes,
+    check_unique_names,
+)
 
 __all__ = [
     "bundled_scenarios",
@@ -126,6 +134,7 @@ def scenario_from_dict(
     )
     top.used.add("isolators")
     check_isolator_layout(isolators)
+    air, leveling = read_pneumatics(top, data, isolators)
     sim_reader = KeyReader(top.raw("simulation", {}), "simulation")
     simulation = SimulationSettings(
         duration=sim_reader.number("duration", 10.0, positive=True),
@@ -165,8 +174,11 @@ def scenario_from_dict(
         gravity=gravity,
         ground=ground,
         points=points,
+        air=air,
+        leveling=leveling,
     )
     check_strokes(scenario)
+    check_pneumatics(scenario)
     return scenario
 
 
@@ -191,7 +203,12 @@ def _read_table(r: KeyReader) -> Table:
     return Table(mass=mass, inertia=inertia, size=size)
 
 
-def _read_isolator(r: KeyReader) -> Isolator:
+def _read_isolator(r: KeyReader) -> Isolator | PneumaticIsolator:
+    kind = r.string("model", "spring-damper")
+    if kind == "pneumatic":
+        return read_pneumatic_isolator(r)
+    if kind != "spring-damper":
+        raise ScenarioError(f"{r.key('model')}: must be 'spring-damper' or 'pneumatic', got '{kind}'")
     iso = Isolator(
         name=r.string("name", ""),
         position=r.vector("position"),

@@ -12,11 +12,20 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
+from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
 
-__all__ = ["check_carriage_tree", "check_isolator_layout", "check_strokes", "check_unique_names", "validate_scenario"]
+__all__ = [
+    "check_carriage_tree",
+    "check_isolator_layout",
+    "check_pneumatics",
+    "check_strokes",
+    "check_unique_names",
+    "rest_gauge_pressures",
+    "validate_scenario",
+]
 
 
-def check_isolator_layout(isolators: tuple[Isolator, ...]) -> None:
+def check_isolator_layout(isolators: tuple[Isolator, ...] | tuple[PneumaticIsolator, ...]) -> None:
     if len(isolators) < 3:
         raise ScenarioError(f"isolators: need at least three, got {len(isolators)}")
     pts = np.array([iso.position for iso in isolators])
@@ -78,6 +87,53 @@ def check_strokes(scenario: Scenario) -> None:
         )
 
 
+def rest_gauge_pressures(scenario: Scenario, positions: np.ndarray | None = None) -> np.ndarray:
+    """Gauge pressure of each leveling group holding the table level at its rest pose [Pa], (groups,).
+
+    Three equations (vertical force, moments about x and y, table frame at the
+    reference pose) in the three group pressures, with the carriages at
+    ``positions`` [m] (default: their start).
+
+    Raises
+    ------
+    ScenarioError
+        When the groups' isolators make the statics singular.
+    """
+    pneumatic = tuple(iso for iso in scenario.isolators if isinstance(iso, PneumaticIsolator))
+    matrix = group_statics_matrix(pneumatic, scenario.leveling)
+    q = scenario.initial_positions() if positions is None else np.asarray(positions, dtype=float)
+    g = scenario.gravity
+    load = np.array([g * scenario.total_mass, 0.0, 0.0])
+    if scenario.carriages:
+        where = scenario.carriage_positions(q)
+        masses = np.array([c.mass for c in scenario.carriages])
+        load[1:] = g * masses @ where[:, [1, 0]]
+    if matrix.shape != (3, 3) or np.linalg.cond(matrix) > 1e12:
+        raise ScenarioError(
+            "leveling: the groups' isolators make the statics singular (three groups whose isolators "
+            "do not all lie on one line are needed to hold the table level)"
+        )
+    return np.asarray(np.linalg.solve(matrix, load), dtype=float)
+
+
+def check_pneumatics(scenario: Scenario) -> None:
+    """Every group's rest gauge pressure (carriages at their start) within ``(0, supply]``."""
+    if not scenario.is_pneumatic:
+        return
+    pressures = rest_gauge_pressures(scenario)
+    for j, (group, p) in enumerate(zip(scenario.leveling, pressures, strict=True)):
+        if p <= 0.0:
+            raise ScenarioError(
+                f"leveling[{j}]: group '{group.name}' would need a gauge pressure of {p:.4g} Pa at rest "
+                "(at or below the atmosphere: it cannot pull the table down; move the isolators or the groups)"
+            )
+        if p > group.supply:
+            raise ScenarioError(
+                f"leveling[{j}].supply: group '{group.name}' needs a rest gauge pressure of {p:.4g} Pa, "
+                f"above its supply {group.supply:.4g} Pa (larger piston areas or a higher supply)"
+            )
+
+
 def validate_scenario(scenario: Scenario) -> Scenario:
     """Run every whole-scenario check on ``scenario`` and return it.
 
@@ -91,4 +147,5 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_unique_names([a.name for a in scenario.actuators], "actuators")
     check_unique_names([pt.name for pt in scenario.points], "points")
     check_strokes(scenario)
+    check_pneumatics(scenario)
     return scenario

@@ -1,0 +1,66 @@
+"""Floor motion: prescribed profiles per axis and floor vibration spectra."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from isolator.scenario.profiles import Profile
+
+__all__ = ["SIGNALS", "FloorSpectrum", "Ground"]
+
+#: names of the six table signals, in order
+SIGNALS: tuple[str, ...] = ("x", "y", "z", "rx", "ry", "rz")
+
+
+@dataclass(frozen=True)
+class FloorSpectrum:
+    """A floor vibration spectrum, per world axis.
+
+    Attributes
+    ----------
+    kind : {"third-octave", "psd"}
+        ``third-octave``: RMS velocity [m/s] in the one-third-octave band of each
+        centre frequency; ``psd``: velocity power spectral density [(m/s)^2/Hz].
+    frequency : ndarray
+        Band centres or PSD frequencies [Hz], increasing.
+    values : dict of str to ndarray
+        Per axis ``x``, ``y``, ``z`` (axes not given have no floor motion).
+    """
+
+    kind: str
+    frequency: np.ndarray
+    values: dict[str, np.ndarray]
+
+
+@dataclass(frozen=True)
+class Ground:
+    """Prescribed floor motion and an optional floor vibration spectrum.
+
+    Attributes
+    ----------
+    motion : dict of str to Profile
+        Floor translation [m] along ``x, y, z`` and rotation [rad] about ``rx, ry, rz``
+        (world axes, rotations about the world origin), each a profile of time.
+    spectrum : FloorSpectrum or None
+    """
+
+    motion: dict[str, Profile] = field(default_factory=dict)
+    spectrum: FloorSpectrum | None = None
+
+    def displacement(self, t: np.ndarray, piece_time: np.ndarray | None = None) -> np.ndarray:
+        """Floor displacement and its rate, shape ``(*t.shape, 12)``: 6 values then 6 rates."""
+        t = np.asarray(t, dtype=float)
+        out = np.zeros((*t.shape, 12))
+        for k, axis in enumerate(SIGNALS):
+            if axis in self.motion:
+                q, v, _ = self.motion[axis].evaluate(t, piece_time)
+                out[..., k] = q
+                out[..., 6 + k] = v
+        return out
+
+    @property
+    def breakpoints(self) -> tuple[float, ...]:
+        """Times [s] where a floor acceleration may jump."""
+        return tuple(sorted({b for p in self.motion.values() for b in p.breakpoints}))
