@@ -20,8 +20,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import timed
 
 from controllers import feedback as fb
-from controllers.feedforward import feedforward_allocation
-from controllers.optimal_feedforward import feedforward_optimal
+from controllers.feedforward import feedforward_allocation, feedforward_optimal
 from isolator import Simulator, load_scenario
 from isolator.analysis.linear import linearise
 

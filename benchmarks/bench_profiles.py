@@ -26,8 +26,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from timing import timed
 
-from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant
-from controllers.profile_optimisation import ProfileSettings, optimise_profiles
+from controllers.profiles import ROBUSTNESS_VARIANTS, ModelVariant, ProfileSettings, optimise_profiles
 from isolator import Simulator, load_scenario
 
 

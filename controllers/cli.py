@@ -5,11 +5,14 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from isolator.cli.helpers import report, scenario_argument, use_agg
 from isolator.errors import OptimisationError
 from isolator.scenario.reader import load_scenario
+
+if TYPE_CHECKING:
+    from controllers.profiles import ProfileOptimisation
 
 __all__ = ["register"]
 
@@ -57,13 +60,11 @@ def register(sub: Any) -> None:
 
 def _feedforward(args: argparse.Namespace) -> int:
     use_agg()
-    from controllers.feedforward import compare_feedforward
+    from controllers.feedforward import compare_feedforward, feedforward_optimal
 
     scenario = load_scenario(args.scenario or "paper-table-3-2-active")
     feedforward = None
     if args.method == "optimal":
-        from controllers.optimal_feedforward import feedforward_optimal
-
         feedforward = feedforward_optimal(scenario, progress=not args.json)
     result = compare_feedforward(scenario, feedforward)
     if args.out:
@@ -73,9 +74,15 @@ def _feedforward(args: argparse.Namespace) -> int:
 
 def _optimise_profile(args: argparse.Namespace) -> int:
     use_agg()
-    from controllers.move_design import command_time
-    from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, over_variants
-    from controllers.profile_optimisation import ProfileSettings, optimise_profiles, write_scenario
+    from controllers.profiles import (
+        ROBUSTNESS_VARIANTS,
+        ModelVariant,
+        ProfileSettings,
+        command_time,
+        optimise_profiles,
+        over_variants,
+        write_scenario,
+    )
 
     scenario = load_scenario(args.scenario)
     settings = ProfileSettings(
@@ -105,7 +112,7 @@ def _optimise_profile(args: argparse.Namespace) -> int:
     return report(args.json, data, _profile_summary(result, spread), [("optimised scenario", args.out)])
 
 
-def _profile_summary(result, spread: dict) -> str:
+def _profile_summary(result: ProfileOptimisation, spread: dict[str, Any]) -> str:
     def num(value: float | None) -> str:
         return "n/a" if value is None else f"{value:.3f}"
 
@@ -113,8 +120,8 @@ def _profile_summary(result, spread: dict) -> str:
     for m in (result.baseline, result.optimised):
         lines.append(f"{m.label:>10} {m.move_time:>9.3f} {num(m.settling_time_max):>13} {num(m.cycle_time):>10}")
     for d in result.designs:
-        values = ", ".join(f"{n} {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
-        lines.append(f"{d.name} ({d.shape}): {values}")
+        text = ", ".join(f"{n} {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
+        lines.append(f"{d.name} ({d.shape}): {text}")
     for run in ("baseline", "optimised"):
         values = [v for v in spread[run] if v is not None]
         if values:

@@ -63,7 +63,7 @@ def _study(args: argparse.Namespace) -> int:
         print(f"{len(front)} Pareto-optimal designs of {study.stiffness.size * study.damping.size}")
         print(f"report: {args.out / 'report.md'}")
     elif args.name == "profiles":
-        from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant
+        from controllers.profiles import ROBUSTNESS_VARIANTS, ModelVariant
         from studies.profiles import run_profile_study
 
         variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS

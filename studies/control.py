@@ -26,7 +26,13 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from controllers import feedback as fb
-from controllers.feedforward import Feedforward, feedforward_allocation, path_deviation, settling_in_band
+from controllers.feedforward import (
+    Feedforward,
+    feedforward_allocation,
+    feedforward_optimal,
+    path_deviation,
+    settling_in_band,
+)
 from isolator import SIGNALS, Response, Scenario, ScenarioError, Simulator
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
@@ -134,8 +140,6 @@ def run_control_study(
     runs = {"passive": sim.run()}
     say(f"feedforward ({feedforward})")
     if feedforward == "optimal":
-        from controllers.optimal_feedforward import feedforward_optimal
-
         ff = feedforward_optimal(scenario, progress=progress)
     else:
         ff = feedforward_allocation(scenario)

@@ -22,11 +22,21 @@ from pathlib import Path
 import matplotlib.pyplot as plt
 import numpy as np
 
-from controllers.input_shaping import SHAPERS, dominant_modes, shaped_scenario
-from controllers.move_design import command_time
-from controllers.move_metrics import ROBUSTNESS_VARIANTS, ModelVariant, MoveMetrics, evaluate_move, over_variants
-from controllers.profile_optimisation import ProfileOptimisation, ProfileSettings, optimise_profiles
-from controllers.time_optimal import time_optimal_scenario
+from controllers.profiles import (
+    ROBUSTNESS_VARIANTS,
+    SHAPERS,
+    ModelVariant,
+    MoveMetrics,
+    ProfileOptimisation,
+    ProfileSettings,
+    command_time,
+    dominant_modes,
+    evaluate_move,
+    optimise_profiles,
+    over_variants,
+    shaped_scenario,
+    time_optimal_scenario,
+)
 from isolator import SIGNALS, Scenario
 
 __all__ = ["ProfileStudy", "run_profile_study"]

@@ -41,6 +41,21 @@ def base_dict(**overrides: Any) -> dict[str, Any]:
     return data
 
 
+def active_dict(max_force: float = 500.0, bandwidth: float | None = None) -> dict[str, Any]:
+    """:func:`base_dict` made active: three actuators (x, y, z) at each isolator, 3 s long."""
+    data = base_dict()
+    data["simulation"]["duration"] = 3.0
+    acts = []
+    for k, iso in enumerate(data["isolators"]):
+        for axis, d in (("x", [1.0, 0, 0]), ("y", [0, 1.0, 0]), ("z", [0, 0, 1.0])):
+            act = {"name": f"{axis}{k}", "position": iso["position"], "direction": d, "max_force": max_force}
+            if bandwidth is not None:
+                act["bandwidth"] = bandwidth
+            acts.append(act)
+    data["actuators"] = acts
+    return data
+
+
 def make(data: dict[str, Any]) -> Scenario:
     return scenario_from_dict(copy.deepcopy(data))
 

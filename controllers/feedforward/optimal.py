@@ -12,7 +12,7 @@ deviation ``e`` from its quasi-static path through the exact model linearised
 ``M(t) e'' + C(t) e' + K(t) e = B(t) f(t) - w(t)``
 
 with ``w`` the cancelling wrench and ``B`` the actuators' allocation (both from
-:func:`controllers.feedforward.path_demand`). The quadratic programme (solved
+:func:`controllers.feedforward.path.path_demand`). The quadratic programme (solved
 in multiple-shooting form, one RK4 step per knot interval; casadi gives each
 interval's Jacobians, Clarabel solves the sparse QP) minimises the deviation,
 normalised per signal by the passive run's, plus the vibration left at the end of the window, within ``max_force`` and
@@ -31,13 +31,6 @@ import casadi as ca
 import numpy as np
 from scipy import sparse
 
-from controllers.feedforward import (
-    Feedforward,
-    QuasiStaticPath,
-    path_demand,
-    path_deviation,
-    quasi_static_path,
-)
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.errors import OptimisationError, ScenarioError
 from isolator.scenario.definitions import Scenario
@@ -45,8 +38,11 @@ from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.simulator import Simulator
 from isolator.simulation.time_grid import grid_breakpoints
 
-__all__ = ["OptimalSettings", "feedforward_optimal"]
+from .allocation import Feedforward
+from .comparison import path_deviation
+from .path import QuasiStaticPath, path_demand, quasi_static_path
 
+__all__ = ["OptimalSettings", "feedforward_optimal"]
 
 
 @dataclass(frozen=True)
@@ -131,7 +127,7 @@ def _interval_function(n_a: int, tau: np.ndarray, lagged: list[int]) -> ca.Funct
     data = ca.SX.sym("d", 3 * width)
     slope = (u1 - u0) / h
 
-    def applied(s: ca.SX) -> ca.SX:
+    def applied(s: ca.SX | float) -> ca.SX:
         f = u0 + slope * s
         if not lagged:
             return f
@@ -141,7 +137,7 @@ def _interval_function(n_a: int, tau: np.ndarray, lagged: list[int]) -> ca.Funct
                 - slope[k] * tau[j]
         return ca.vertcat(*parts)
 
-    def rates(x: ca.SX, stage: int, s: ca.SX) -> ca.SX:
+    def rates(x: ca.SX, stage: int, s: ca.SX | float) -> ca.SX:
         d = data[stage * width:(stage + 1) * width]
         mk = ca.reshape(d[0:36], 6, 6)
         mc = ca.reshape(d[36:72], 6, 6)

@@ -8,10 +8,11 @@ import casadi as ca
 import numpy as np
 import pytest
 
-from controllers import profile_optimisation as po
-from controllers.input_shaping import shaped_scenario
-from controllers.move_design import move_designs
-from controllers.move_metrics import ModelVariant, evaluate_move, with_moves
+from controllers import profiles as po
+from controllers.profiles import ModelVariant, evaluate_move, move_designs, shaped_scenario, with_moves
+from controllers.profiles.objective import peak_floor
+from controllers.profiles.problem import Problem
+from controllers.profiles.transcription import variant_data
 from isolator import OptimisationError, ScenarioError, Simulator, load_scenario
 from isolator.cli.app import main
 
@@ -34,11 +35,11 @@ def test_the_optimisers_phase_integration_agrees_with_the_simulation(paper):
     designs = move_designs(paper, "scurve")
     designs = (designs[0].with_values([0.5, 0.19, 0.45, 0.3, 8.0, 1.0]), designs[1].with_values(
         [0.62, 0.08, 0.4, 0.2, 5.0, 0.6]))
-    data = [po._variant_data(paper)]
-    problem = po._Problem(paper, designs, po.ProfileSettings(variants=NOMINAL, step_angle=0.1), data,
-                          po._peak_floor(base.peak), 0.5, 8.0)
-    x_stop, _, _, _ = problem._trajectory(data[0], None)
-    sense = ca.Function("s", [problem.theta], [problem.sense(x_stop, data[0].start_state)])
+    data = [variant_data(paper)]
+    problem = Problem(paper, designs, po.ProfileSettings(variants=NOMINAL, step_angle=0.1), data,
+                      peak_floor(base.peak), 0.5, 8.0)
+    x_stop, _, _, _ = problem.run.trajectory(data[0], None)
+    sense = ca.Function("s", [problem.theta], [problem.run.sense(x_stop, data[0].start_state)])
     at_stop = np.asarray(sense(problem.x0[: problem.n_theta])).ravel()[:6]
     scenario = with_moves(paper, designs)
     run = Simulator(scenario).run()

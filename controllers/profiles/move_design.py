@@ -164,9 +164,10 @@ class MoveDesign:
         s[0] = math.inf
         return s
 
-    def with_values(self, values: Sequence[float]) -> MoveDesign:
+    def with_values(self, values: Sequence[float] | np.ndarray) -> MoveDesign:
         """The same move with new parameter values (in :attr:`names` order)."""
-        return replace(self, **{n: float(v) for n, v in zip(self.names, values, strict=True)})
+        changes: dict[str, Any] = {n: float(v) for n, v in zip(self.names, values, strict=True)}
+        return replace(self, **changes)
 
     # -- geometry -------------------------------------------------------------------
     def segments(self, values: Sequence[Any] | None = None) -> list[Segment]:

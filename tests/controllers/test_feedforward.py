@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from conftest import base_dict, make
+from conftest import active_dict, base_dict, make
 from controllers.feedforward import compare_feedforward, feedforward_allocation
 from isolator import ScenarioError, Simulator, load_scenario
 from isolator.cli.app import main
@@ -18,23 +18,9 @@ from isolator.simulation.actuation import ForceHistory, applied_forces, load_for
 from isolator.validation.multibody import MujocoTable, mujoco_available
 
 
-def _active_dict(max_force: float = 500.0, bandwidth: float | None = None) -> dict:
-    data = base_dict()
-    data["simulation"]["duration"] = 3.0
-    acts = []
-    for k, iso in enumerate(data["isolators"]):
-        for axis, d in (("x", [1.0, 0, 0]), ("y", [0, 1.0, 0]), ("z", [0, 0, 1.0])):
-            act = {"name": f"{axis}{k}", "position": iso["position"], "direction": d, "max_force": max_force}
-            if bandwidth is not None:
-                act["bandwidth"] = bandwidth
-            acts.append(act)
-    data["actuators"] = acts
-    return data
-
-
 @pytest.mark.skipif(not mujoco_available(), reason="needs mujoco")
 def test_unlimited_allocation_leaves_the_table_on_its_quasi_static_path_in_mujoco():
-    scenario = make(_active_dict(max_force=1e6))
+    scenario = make(active_dict(max_force=1e6))
     ff = feedforward_allocation(scenario, limits=False)
     passive = MujocoTable(scenario).simulate(rtol=1e-9, atol=1e-13)
 
@@ -68,7 +54,7 @@ def test_targets_on_the_active_paper_scenario():
 
 
 def test_force_limits_are_respected():
-    scenario = make(_active_dict(max_force=15.0))
+    scenario = make(active_dict(max_force=15.0))
     ff = feedforward_allocation(scenario)
     assert np.max(np.abs(ff.forces.forces)) <= 15.0 + 1e-9
     assert np.max(np.abs(ff.residual)) > 1.0  # the limits leave part of the wrench
@@ -78,7 +64,7 @@ def test_force_limits_are_respected():
 
 
 def test_first_order_lag_is_exact():
-    scenario = make(_active_dict(bandwidth=20.0))
+    scenario = make(active_dict(bandwidth=20.0))
     tau = 1 / (2 * math.pi * 20.0)
     times = np.linspace(0.0, 0.05, 51)
     command = np.zeros((51, 12))
@@ -91,7 +77,7 @@ def test_first_order_lag_is_exact():
 
 
 def test_forces_files(tmp_path: Path):
-    scenario = make(_active_dict())
+    scenario = make(active_dict())
     path = tmp_path / "f.csv"
     path.write_text("t,z0,x1\n0,0,0\n0.5,0,0\n0.5,100,-20\n1,100,-20\n")
     forces = load_forces(path, scenario)
@@ -126,11 +112,11 @@ def test_feedforward_and_forces_commands(tmp_path: Path, capsys):
 
 # -- optimal feedforward ---------------------------------------------------------------
 def test_optimal_feedforward_beats_allocation_with_slow_actuators():
-    data = _active_dict(bandwidth=20.0)
+    data = active_dict(bandwidth=20.0)
     for act in data["actuators"]:
         act["max_rate"] = 2e4
     scenario = make(data)
-    from controllers.optimal_feedforward import feedforward_optimal
+    from controllers.feedforward import feedforward_optimal
 
     optimal = feedforward_optimal(scenario)
     assert optimal.method == "optimal"
@@ -154,14 +140,14 @@ def test_optimal_feedforward_beats_allocation_with_slow_actuators():
 
 
 def test_optimal_feedforward_failures_are_reported():
-    from controllers.optimal_feedforward import OptimalSettings, feedforward_optimal
+    from controllers.feedforward import OptimalSettings, feedforward_optimal
     from isolator import OptimisationError
 
-    scenario = make(_active_dict())
+    scenario = make(active_dict())
     with pytest.raises(OptimisationError, match=r"stopped with '.*' after 1 iterations; the best point") as info:
         feedforward_optimal(scenario, OptimalSettings(max_iterations=1))
     assert info.value.feedforward.forces.forces.shape[0] == len(scenario.actuators)
-    data = _active_dict()
+    data = active_dict()
     data["carriages"][0]["profile"] = {"type": "sine", "amplitude": 0.1, "omega": 3.0}
     with pytest.raises(ScenarioError, match="needs moves that stop"):
         feedforward_optimal(make(data))

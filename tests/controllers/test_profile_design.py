@@ -9,9 +9,7 @@ import pytest
 from scipy import signal
 
 from conftest import base_dict
-from controllers.input_shaping import dominant_modes, residual_vibration, shaper
-from controllers.move_design import move_designs
-from controllers.time_optimal import time_optimal_profile
+from controllers.profiles import dominant_modes, move_designs, residual_vibration, shaper, time_optimal_profile
 from isolator import ScenarioError, linearise, load_scenario, scenario_from_dict, scurve, shaped, trapezoid
 from isolator.analysis.modes import modes
 

@@ -1,7 +1,7 @@
 """Time-optimal jerk-limited moves from ruckig, the fastest a drive's limits allow.
 
 Each carriage moves alone from rest to rest within its ``limits`` (speed,
-acceleration, jerk; see :func:`controllers.move_design.drive_limits`), starting
+acceleration, jerk; see :func:`controllers.profiles.move_design.drive_limits`), starting
 when its scenario profile starts. Ruckig returns each move as seven
 constant-jerk phases; they become an exact piecewise-cubic profile.
 """

@@ -17,13 +17,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controllers.feedforward.wrench import carriage_inertia_wrench
 from isolator.analysis.linear import linearise
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import shaped
 from isolator.scenario.profiles import PiecewisePolynomialProfile
 
-from .feedforward import carriage_inertia_wrench
 from .move_metrics import with_moves
 
 __all__ = [
@@ -206,7 +206,7 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
             train = shaper(kind, mode.frequency, mode.damping)
             amps = np.outer(amps, train.amplitudes).ravel()
             times = np.add.outer(times, train.times).ravel()
-        profiles.append(shaped(profile, amps, times, kind=f"{kind}-shaped"))
+        profiles.append(shaped(profile, list(amps), list(times), kind=f"{kind}-shaped"))
     return with_moves(scenario, profiles)
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from isolator.errors import ScenarioError
-from isolator.scenario.definitions import Carriage, Scenario
+from isolator.scenario.definitions import Carriage, Isolator, Scenario
 from isolator.simulation.response import Response
 from isolator.simulation.simulator import Simulator
 
@@ -61,14 +61,22 @@ class ModelVariant:
 
     def apply(self, scenario: Scenario) -> Scenario:
         """The scenario with this variant's isolators and table."""
-        isolators = tuple(
-            replace(iso, stiffness=tuple(self.stiffness * k for k in iso.stiffness),
-                    damping=tuple(self.damping * c for c in iso.damping))
-            for iso in scenario.isolators
-        )
+        isolators = []
+        for iso in scenario.isolators:
+            if not isinstance(iso, Isolator):
+                kind = type(iso).__name__
+                raise ScenarioError(f"isolators: model variants scale spring-damper isolators, not {kind}")
+            isolators.append(replace(iso, stiffness=_scaled(iso.stiffness, self.stiffness),
+                                     damping=_scaled(iso.damping, self.damping)))
         table = replace(scenario.table, mass=self.mass * scenario.table.mass,
-                        inertia=tuple(self.mass * i for i in scenario.table.inertia))
-        return scenario.with_changes(isolators=isolators, table=table)
+                        inertia=_scaled(scenario.table.inertia, self.mass))
+        return scenario.with_changes(isolators=tuple(isolators), table=table)
+
+
+
+def _scaled(values: tuple[float, float, float], factor: float) -> tuple[float, float, float]:
+    """Each of three values times ``factor``."""
+    return (factor * values[0], factor * values[1], factor * values[2])
 
 
 #: the variants a profile is checked against (and optimised over, when asked):

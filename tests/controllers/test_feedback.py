@@ -10,18 +10,18 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import solve_continuous_are
 
-from conftest import make
+from conftest import active_dict, make
 from controllers import feedback as fb
+from controllers.feedback.designs import actuated
 from isolator import SimulationError, Simulator, UnstableClosedLoopError
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, linearise
 from isolator.analysis.transmissibility import transmissibility
 from isolator.scenario.definitions import SIGNALS
-from test_feedforward import _active_dict
 
 
 @pytest.fixture(scope="module")
 def active():
-    return make(_active_dict())
+    return make(active_dict())
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def lin(active):
 
 
 def test_lqr_gain_is_the_riccati_solution_and_python_controls(lin):
-    a, b = fb._actuated(lin)
+    a, b = actuated(lin)
     for scale in (1e-4, 1e-3):
         controller = fb.lqr(lin, scale, scale, 10 * scale, 10 * scale)
         gain = -np.asarray(controller.system.D)
@@ -90,7 +90,7 @@ def test_unstable_loops_are_detected_and_reported(active, lin):
     with pytest.raises(UnstableClosedLoopError):
         fb.closed_loop(lin, hard)
     # and the same loop run anyway, with actuators strong enough not to saturate, diverges and says so
-    strong = make(_active_dict(max_force=1e12))
+    strong = make(active_dict(max_force=1e12))
     law = fb.feedback_law(strong, fb.skyhook(linearise(strong), 5e7), check=False)
     with pytest.raises(SimulationError, match="diverged"):
         Simulator(strong).run(feedback=law)
@@ -99,7 +99,7 @@ def test_unstable_loops_are_detected_and_reported(active, lin):
 
 
 def test_sampled_loop_in_the_simulation_matches_an_independent_linear_loop():
-    data = _active_dict()
+    data = active_dict()
     data["carriages"][0]["profile"]["t0"] = 50.0  # parked
     data["simulation"]["duration"] = 1.0
     motion = {"x": (2e-6, 9.0), "z": (3e-6, 21.0), "ry": (1e-6, 30.0)}
@@ -142,7 +142,7 @@ def test_sampled_loop_in_the_simulation_matches_an_independent_linear_loop():
 
 
 def test_saturation_and_lag_hold_in_closed_loop():
-    data = _active_dict(max_force=20.0, bandwidth=50.0)
+    data = active_dict(max_force=20.0, bandwidth=50.0)
     data["simulation"]["duration"] = 6.0
     scenario = make(data)
     lin = linearise(scenario)
@@ -182,7 +182,7 @@ def test_closed_loop_final_value_follows_the_controllers_dc_stiffness(active, li
     run_sky = Simulator(active).run(feedback=fb.feedback_law(active, fb.skyhook(lin, 2e4)))
     passive = Simulator(active).run()
     np.testing.assert_allclose(run_sky.final, passive.final, rtol=1e-12)  # no DC gain: same final value
-    data = _active_dict(max_force=1e6)  # strong enough to hold the tilt without saturating
+    data = active_dict(max_force=1e6)  # strong enough to hold the tilt without saturating
     data["simulation"]["duration"] = 5.0
     strong = make(data)
     stiff = fb.feedback_law(strong, fb.pid(linearise(strong), kp=2e6))

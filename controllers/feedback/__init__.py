@@ -1,0 +1,44 @@
+"""Feedback controllers for the active table, designed on the linearised plant (python-control).
+
+Every controller here maps the table's measured motion to actuator commands:
+
+* measurements: the 12 states of :mod:`isolator.analysis.linear` (``x, y, z`` [m],
+  ``rx, ry, rz`` [rad], ``vx .. wz`` [m/s, rad/s]; world axes, from the
+  reference the controller regulates to), as ideal inertial sensors give them;
+* outputs: one commanded force per actuator [N] (``actuator:<name>``).
+
+Modules: :mod:`.designs` (:func:`skyhook`, :func:`pid`, :func:`lead`,
+:func:`lqr`, :func:`hinf`, :func:`decentralised`; the :class:`Controller`
+they return), :mod:`.loops` (:func:`closed_loop` on the linear plant with the
+actuators' lag, for transmissibility and compliance with control;
+:func:`check_stability` continuous and as sampled: Tustin controller around
+the plant held by a zero-order hold) and :mod:`.laws` (:func:`feedback_law`:
+the controller as the simulation runs it). The designs ignore the actuators'
+lag and saturation; the checks and the simulation include them. No
+anti-windup: an integrator keeps integrating while its actuator saturates.
+"""
+
+from __future__ import annotations
+
+from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, hinf, lead, lqr, pid, skyhook
+from .laws import DiscreteLaw, feedback_law
+from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
+
+__all__ = [
+    "MEASUREMENTS",
+    "REFERENCE_INPUTS",
+    "SAMPLE_RATE",
+    "ClosedLoop",
+    "Controller",
+    "DiscreteLaw",
+    "LoopStability",
+    "check_stability",
+    "closed_loop",
+    "decentralised",
+    "feedback_law",
+    "hinf",
+    "lead",
+    "lqr",
+    "pid",
+    "skyhook",
+]

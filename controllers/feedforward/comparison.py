@@ -1,0 +1,126 @@
+"""What the feedforward buys: the passive run against the run with feedforward, one settling band."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from isolator.scenario.definitions import SIGNALS, Scenario
+from isolator.simulation.response import Response
+from isolator.simulation.settling import settling_time
+from isolator.simulation.simulator import Simulator
+
+from .allocation import Feedforward, feedforward_allocation
+
+__all__ = ["FeedforwardComparison", "compare_feedforward", "path_deviation", "settling_in_band"]
+
+
+def path_deviation(run: Response, quasi_static: np.ndarray) -> dict[str, float]:
+    """Largest |signal - quasi-static path| per signal of a run [m or rad], the path given at the
+    run's samples, shape (6, N)."""
+    dev = np.max(np.abs(run.signals - quasi_static), axis=1)
+    return dict(zip(SIGNALS, (float(v) for v in dev), strict=True))
+
+
+def settling_in_band(run: Response, band: dict[str, float]) -> dict[str, float | None]:
+    """Settling time per signal [s] of a run in a given band per signal [m or rad], about the run's
+    final value (None where the run cannot show it)."""
+    final = run.final if run.final is not None else np.zeros(6)
+    return {k: settling_time(run.t, run.signals[i], float(final[i]), run.stop_time, max(band[k], 1e-300))[0]
+            for i, k in enumerate(SIGNALS)}
+
+
+@dataclass(frozen=True)
+class FeedforwardComparison:
+    """The passive run against the run with feedforward, judged with one settling band.
+
+    Attributes
+    ----------
+    passive, controlled : Response
+    quasi_static : ndarray (6, N)
+        The quasi-static path at the samples [m, rad].
+    band : dict of str to float
+        Per signal: 5 % of the passive run's peak [m or rad].
+    settling : dict of str to dict
+        ``passive`` and ``controlled``: settling time per signal [s] (None if
+        the run cannot show it) in that band.
+    feedforward : Feedforward
+    """
+
+    passive: Response
+    controlled: Response
+    quasi_static: np.ndarray
+    band: dict[str, float]
+    settling: dict[str, dict[str, float | None]]
+    feedforward: Feedforward
+
+    def deviation_peak(self, which: str) -> dict[str, float]:
+        """Largest |signal - quasi-static path| per signal [m or rad] of ``passive`` or ``controlled``."""
+        return path_deviation(self.passive if which == "passive" else self.controlled, self.quasi_static)
+
+    def reduction_db(self) -> dict[str, float]:
+        """Peak deviation from the quasi-static path, controlled over passive [dB] per signal."""
+        p, c = self.deviation_peak("passive"), self.deviation_peak("controlled")
+        return {k: 20 * math.log10(max(c[k], 1e-300) / p[k]) if p[k] > 0 else 0.0 for k in SIGNALS}
+
+    def settling_time_max(self, which: str) -> float | None:
+        values = self.settling[which].values()
+        return None if any(v is None for v in values) else max(values)  # type: ignore[type-var]
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: ``passive`` and ``controlled`` (``peak``, ``deviation_peak``,
+        ``settling_time``, ``settling_time_max``), ``band``, ``reduction_db``, ``max_force``."""
+        out: dict[str, Any] = {"name": self.passive.name, "method": self.feedforward.method}
+        for which, r in (("passive", self.passive), ("controlled", self.controlled)):
+            out[which] = {
+                "peak": r.peak,
+                "deviation_peak": self.deviation_peak(which),
+                "settling_time": self.settling[which],
+                "settling_time_max": self.settling_time_max(which),
+            }
+        out["band"] = self.band
+        out["reduction_db"] = self.reduction_db()
+        out["max_force"] = self.feedforward.max_force
+        if self.feedforward.info:
+            out["optimisation"] = self.feedforward.info
+        return out
+
+    def summary(self) -> str:
+        """A text table per signal: deviation peaks, reduction, settling times."""
+        red = self.reduction_db()
+        dp, dc = self.deviation_peak("passive"), self.deviation_peak("controlled")
+        lines = [
+            f"{self.passive.name}: feedforward by {self.feedforward.method} (deviation from the quasi-static path; "
+            "settling band 5 % of the passive peak)",
+            f"{'signal':>6}  {'passive dev.':>12}  {'with ff':>12}  {'change':>9}  "
+            f"{'settling passive':>16}  {'with ff':>8}",
+        ]
+        for k in SIGNALS:
+            sp, sc = self.settling["passive"][k], self.settling["controlled"][k]
+            unit = "urad" if k.startswith("r") else "um"
+            lines.append(
+                f"{k:>6}  {dp[k] * 1e6:>7.4g} {unit:<4}  {dc[k] * 1e6:>7.4g} {unit:<4}  {red[k]:>6.1f} dB  "
+                f"{'-' if sp is None else f'{sp:.4g} s':>16}  {'-' if sc is None else f'{sc:.4g} s':>8}"
+            )
+        forces = self.feedforward.max_force.items()
+        lines.append("largest actuator force: " + ", ".join(f"{n} {f:.0f} N" for n, f in forces))
+        return "\n".join(lines)
+
+
+def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = None) -> FeedforwardComparison:
+    """Simulate the scenario without and with the feedforward forces.
+
+    Both runs' settling times use one band per signal: 5 % of the passive
+    run's peak (the issue's criterion), about the final static equilibrium.
+    """
+    ff = feedforward_allocation(scenario) if feedforward is None else feedforward
+    sim = Simulator(scenario)
+    passive = sim.run()
+    controlled = sim.run(forces=ff.forces)
+    qs = ff.path(passive.t).T
+    band = {k: 0.05 * v for k, v in passive.peak.items()}
+    settling = {"passive": settling_in_band(passive, band), "controlled": settling_in_band(controlled, band)}
+    return FeedforwardComparison(passive, controlled, qs, band, settling, ff)
