@@ -26,6 +26,7 @@ import isolator.model.cache as modelcache
 import isolator.model.equilibrium as eqmod
 import isolator.simulation.batch as batchmod
 import isolator.simulation.simulator as simmod
+import isolator.simulation.stepping as stepping
 from isolator import Simulator, load_scenario
 from isolator.model.signals import table_signals
 from isolator.validation.multibody import MujocoTable, mujoco_available
@@ -33,10 +34,9 @@ from studies.paper import relative_rms
 
 
 def _clear_caches() -> None:
-    for cache in (modelcache._MODELS, simmod._STEPPERS, simmod._DENSE, eqmod._SOLVERS):
+    for cache in (modelcache._MODELS, eqmod._SOLVERS):
         cache.clear()
-    simmod._staged_map.cache_clear()
-    simmod._staged_parameters.cache_clear()
+    stepping.clear_caches()
 
 
 def _reference(sc, stiffness: float = 1.0, damping: float = 1.0, rtol: float = 1e-12) -> np.ndarray:
@@ -102,7 +102,7 @@ def main() -> None:
 
     rk4 = simmod.Method(method.substeps)
     p = sim.parameters
-    t_rk4, _ = timed(lambda: sim._run(p, *sim.equilibria(p), rk4), max(3, args.repeat // 3))
+    t_rk4, _ = timed(lambda: sim.run_method(p, *sim.equilibria(p), rk4), max(3, args.repeat // 3))
     print(f"baseline RK4 on the sample grid, same model, compiled:       {t_rk4 * 1e3:8.2f} ms   "
           f"ratio {t_rk4 / t_sim:6.1f}x slower")
 

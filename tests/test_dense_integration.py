@@ -29,7 +29,7 @@ from isolator.model.variants import EXACT
 from isolator.numerics.dop853 import STAGES, TAIL, dop853_tableau, step_plan
 from isolator.numerics.native import MappedFunction
 from isolator.simulation.settling import settling_time, settling_times
-from isolator.simulation.simulator import _stepper
+from isolator.simulation.stepping import rk4_stepper
 from studies.paper import relative_rms
 
 
@@ -92,7 +92,7 @@ def test_the_step_plan_keeps_breakpoints_on_step_edges_and_reads_every_sample_on
 def _tight(sim: Simulator, p: np.ndarray) -> np.ndarray:
     """RK4 with eight substeps per sample interval: the reference signals."""
     start, _ = sim.equilibria(p)
-    states = _stepper(sim.model, 8).run(start.state, sim._model_inputs(8), np.diff(sim.grid.nodes), p)
+    states = rk4_stepper(sim.model, 8).run(start.state, sim.grid_inputs(8), np.diff(sim.grid.nodes), p)
     return table_signals(np.vstack([start.state, states])[sim.grid.is_sample], start.state)
 
 
@@ -246,7 +246,7 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
     p = sim.parameters
     start, end = sim.equilibria(p)
     method = sim.method_for(max(start.max_frequency, end.max_frequency))
-    inputs = sim._plan_inputs(method, p)
+    inputs = sim.plan_inputs(method, p)
     signals = signal_function(EXACT, 13)
     compiled = DenseStepper(sim.model, signals)
     evaluated = DenseStepper(sim.model, signals, compile=False)
@@ -264,7 +264,8 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
         graph = DenseStepper(sim.model, signals)
     assert not graph.native
     c = graph.run(start.state, method.plan, inputs, p, start.state)
-    assert graph._graph(method.plan.per_step, True)[0].native
+    assert graph.graph is not None
+    assert graph.graph.functions(method.plan.per_step, True)[0].native
     assert np.allclose(c[0], b[0], rtol=0, atol=1e-10 * np.abs(a[0]).max())
 
 
@@ -279,7 +280,7 @@ def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
     params = np.array([sim.scaled_parameters(k, c) for k, c in ((0.6, 3.0), (1.0, 1.0), (1.4, 0.5), (2.0, 2.0))])
     starts = [sim.equilibria(p)[0] for p in params]
     method = sim.method_for(max(s.max_frequency for s in starts))  # one plan for all four
-    plan, inputs = method.plan, sim._plan_inputs(method, params[0])
+    plan, inputs = method.plan, sim.plan_inputs(method, params[0])
     x0 = np.array([s.state for s in starts])
     signals = signal_function(sim.model.variant, sim.model.n_states)
     lanes = DenseStepper(sim.model, signals, lanes=4)

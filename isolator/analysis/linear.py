@@ -334,7 +334,8 @@ def _state_space(
     out_names = list(DOF_NAMES)
     for point in scenario.points:
         arm = rot0 @ np.asarray(point.position, dtype=float)
-        rows.append(np.hstack([np.eye(3), -np.asarray(skew(ca.DM(arm)), dtype=float), np.zeros((3, 6))]))
+        cross = ca.evalf(skew(ca.SX(arm))).full()
+        rows.append(np.hstack([np.eye(3), -cross, np.zeros((3, 6))]))
         out_names += [f"{point.name}:{a}" for a in "xyz"]
     c = np.vstack(rows)
     inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators)]

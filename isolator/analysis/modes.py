@@ -135,8 +135,9 @@ def _one_per_mode(eig: np.ndarray) -> list[tuple[int, ...]]:
     complex_idx = [i for i in range(eig.size) if eig[i].imag > 1e-9 * scale]
     real_idx = sorted((i for i in range(eig.size) if abs(eig[i].imag) <= 1e-9 * scale), key=lambda i: eig[i].real)
     # overdamped (or free) directions give two real eigenvalues each; pair them in order
-    pairs = [(real_idx[k], real_idx[k + 1]) for k in range(0, len(real_idx) - 1, 2)]
-    return [(i,) for i in complex_idx] + pairs
+    pairs: list[tuple[int, ...]] = [(real_idx[k], real_idx[k + 1]) for k in range(0, len(real_idx) - 1, 2)]
+    singles: list[tuple[int, ...]] = [(i,) for i in complex_idx]
+    return singles + pairs
 
 
 @dataclass(frozen=True)

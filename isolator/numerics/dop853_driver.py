@@ -1,9 +1,11 @@
-"""The DOP853 stepping loop in generated C++: one run, or several side by side in SIMD lanes.
+"""The DOP853 stepping loop in C++: one run, or several side by side in SIMD lanes.
 
-The loop (the stages, the dense output, the samples and their peaks) is
-written here around two casadi-generated functions: the model's right-hand
-side and the table signals of a state. Compiled with ``casadi_real`` a vector
-of ``lanes`` doubles (GCC/Clang vector extensions), the same source steps
+The loop (the stages, the dense output, the samples and their peaks) is C++
+source shipped with the package (``cpp/dop853_loop.cpp``, ``cpp/lanes.hpp``);
+this module puts it together with two casadi-generated functions (the model's
+right-hand side and the table signals of a state) and the tableau's
+coefficients, unrolled as macros, compiles it and calls it. Compiled with
+``casadi_real`` a vector of ``lanes`` doubles (GCC/Clang vector extensions), the same source steps
 ``lanes`` runs that share a step plan and staged inputs, such as the runs of
 a batch whose isolators differ, with one instruction stream. With AVX, four
 runs cost little more than one.
@@ -15,135 +17,29 @@ shared arrays (stage inputs, step lengths, sample fractions) are plain.
 from __future__ import annotations
 
 import ctypes
+from functools import cache
+from importlib import resources
 
 import casadi as ca
 import numpy as np
 
-from isolator.numerics.dop853 import STAGES, StepPlan, dop853_tableau, stepped_rhs
+from isolator.numerics.dop853_tableau import STAGES, dop853_tableau
 from isolator.numerics.native import FLAGS, compiled_library
-from isolator.numerics.rk4 import SteppedSystem
+from isolator.numerics.step_plan import StepPlan
+from isolator.numerics.systems import SteppedSystem, stepped_rhs
 
 __all__ = ["Dop853Driver", "driver_source", "signal_rows"]
 
-# casadi_real as a struct of `lanes` doubles: arithmetic, comparisons (1.0 / 0.0 per lane, as casadi
-# expects) and the math functions casadi emits, lane by lane where there is no vector instruction
-_LANE_TYPE = r"""
-#include <math.h>
-#if LANES == 1
-typedef double V;
-static inline V worst(V a, V b) { return (a > b || a != a) ? a : b; }
-#else
-typedef double vraw __attribute__((vector_size(8 * LANES), aligned(8)));
-typedef long long vmask __attribute__((vector_size(8 * LANES)));
-struct V {
-  vraw v;
-  V() = default;
-  V(vraw x) : v(x) {}
-  V(double d) : v(vraw{} + d) {}
-  V(int d) : v(vraw{} + (double)d) {}
-};
-static inline V operator+(V a, V b) { return a.v + b.v; }
-static inline V operator-(V a, V b) { return a.v - b.v; }
-static inline V operator*(V a, V b) { return a.v * b.v; }
-static inline V operator/(V a, V b) { return a.v / b.v; }
-static inline V operator-(V a) { return -a.v; }
-static inline V operator+(V a) { return a; }
-static inline V truth(vmask m) { return m ? vraw{} + 1.0 : vraw{}; }
-static inline V operator<(V a, V b) { return truth(a.v < b.v); }
-static inline V operator<=(V a, V b) { return truth(a.v <= b.v); }
-static inline V operator>(V a, V b) { return truth(a.v > b.v); }
-static inline V operator>=(V a, V b) { return truth(a.v >= b.v); }
-static inline V operator==(V a, V b) { return truth(a.v == b.v); }
-static inline V operator!=(V a, V b) { return truth(a.v != b.v); }
-static inline V operator!(V a) { return truth(a.v == 0); }
-static inline V operator&&(V a, V b) { return truth((a.v != 0) & (b.v != 0)); }
-static inline V operator||(V a, V b) { return truth((a.v != 0) | (b.v != 0)); }
-static inline V fmax(V a, V b) { return (a.v > b.v) | (b.v != b.v) ? a.v : b.v; }
-static inline V fmin(V a, V b) { return (a.v < b.v) | (b.v != b.v) ? a.v : b.v; }
-static inline V fabs(V a) { return a.v < 0 ? -a.v : a.v; }
-static inline V worst(V a, V b) { return (a.v > b.v) | (a.v != a.v) ? a.v : b.v; }
-#define LANEWISE(f) static inline V f(V a) { V r; for (int i = 0; i < LANES; ++i) r.v[i] = f(a.v[i]); return r; }
-LANEWISE(sqrt) LANEWISE(sin) LANEWISE(cos) LANEWISE(tan) LANEWISE(asin) LANEWISE(acos) LANEWISE(atan)
-LANEWISE(exp) LANEWISE(log) LANEWISE(tanh) LANEWISE(sinh) LANEWISE(cosh) LANEWISE(floor) LANEWISE(ceil)
-static inline V atan2(V a, V b) { V r; for (int i = 0; i < LANES; ++i) r.v[i] = atan2(a.v[i], b.v[i]); return r; }
-static inline V pow(V a, V b) { V r; for (int i = 0; i < LANES; ++i) r.v[i] = pow(a.v[i], b.v[i]); return r; }
-#endif
-#define casadi_real V
-#ifndef __STDC_VERSION__
-#define __STDC_VERSION__ 199901L  /* casadi's helpers then call fmax/fabs, which V overloads */
-#endif
-"""
 
-_LOOP = r"""
-static inline void rhs(const V* x, const V* u, const V* p, V* out) {
-  const V* arg[RHS_ARG]; V* res[RHS_RES]; casadi_int iw[RHS_IW]; V w[RHS_W];
-  arg[0] = x; arg[1] = u; arg[2] = p; res[0] = out;
-  NAME_rhs(arg, res, iw, w, 0);
-}
+@cache
+def _source_file(name: str) -> str:
+    """A C++ source file of the loop (``cpp/lanes.hpp``, ``cpp/dop853_loop.cpp``), shipped as package data."""
+    return resources.files("isolator.numerics").joinpath("cpp", name).read_text()
 
-static inline void signals(const V* x, const V* ref, V* out) {
-  const V* arg[SIG_ARG]; V* res[SIG_RES]; casadi_int iw[SIG_IW]; V w[SIG_W];
-  arg[0] = x; arg[1] = ref; res[0] = out;
-  NAME_signals(arg, res, iw, w, 0);
-}
 
-/* the dense output's coefficients of s, s^2, ... for state j */
-static inline void dense_row(const V K[ST][NX], double h, int j, V coef[DEG][NX]) {
-DENSE
-}
-
-extern "C" int NAME(int steps, int per, const double* x0, const double* u, const double* hs,
-                    const double* first, const double* frac, const double* p, const double* ref,
-                    double* sig, double* peak, double* poly) {
-  static const int rows[NROWS + 1] = {ROWS};
-  static const int others[NOTHERS + 1] = {OTHERS};
-  V x[NX], xi[NX], xn[NX], xs[NX], K[ST][NX], coef[DEG][NX];
-  const V* P = (const V*)p;
-  const V* R = (const V*)ref;
-  for (int j = 0; j < NX; ++j) { x[j] = ((const V*)x0)[j]; xs[j] = 0.0; }
-#if LANES > 1
-  V ub[ST * NU + 1];
-#endif
-  for (int s = 0; s < steps; ++s) {
-    const double* us = u + (long)s * ST * NU;
-#if LANES > 1
-    for (int j = 0; j < ST * NU; ++j) ub[j] = us[j];
-    const V* uv = ub;
-#else
-    const V* uv = us;
-#endif
-    const double h = hs[s];
-    if (first[s] != 0.0) rhs(x, uv, P, K[0]);
-    else for (int j = 0; j < NX; ++j) K[0][j] = K[END][j];
-STAGES
-    for (int r = 0; r < NROWS; ++r) dense_row(K, h, rows[r], coef);
-    V top[6];
-    for (int k = 0; k < 6; ++k) top[k] = 0.0;
-    for (int m = 0; m < per; ++m) {
-      const double f = frac[(long)s * per + m];
-      if (f < 0.0) continue;
-      for (int r = 0; r < NROWS; ++r) {
-        const int j = rows[r];
-        V acc = coef[DEG - 1][j];
-        for (int d = DEG - 2; d >= 0; --d) acc = coef[d][j] + f * acc;
-        xs[j] = x[j] + f * acc;
-      }
-      V* out = (V*)sig + ((long)s * per + m) * 6;
-      signals(xs, R, out);
-      for (int k = 0; k < 6; ++k) top[k] = worst(top[k], fabs(out[k]));
-    }
-    for (int k = 0; k < 6; ++k) ((V*)peak)[(long)s * 6 + k] = top[k];
-    if (poly) {
-      for (int r = 0; r < NOTHERS; ++r) dense_row(K, h, others[r], coef);
-      V* out = (V*)poly + (long)s * (DEG + 1) * NX;
-      for (int j = 0; j < NX; ++j) out[j] = x[j];
-      for (int d = 0; d < DEG; ++d) for (int j = 0; j < NX; ++j) out[(d + 1) * NX + j] = coef[d][j];
-    }
-    for (int j = 0; j < NX; ++j) x[j] = xn[j];
-  }
-  return 0;
-}
-"""
+def _macro(name: str, lines: list[str]) -> str:
+    """``#define name`` with a body of several lines."""
+    return f"#define {name} \\\n" + " \\\n".join(lines) + "\n"
 
 
 def signal_rows(signals: ca.Function, n_states: int) -> list[int]:
@@ -165,8 +61,9 @@ def _weighted(weights: np.ndarray, row: str) -> str:
 
 
 def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: int) -> str:
-    """The C++ source of :class:`Dop853Driver` (casadi's code for the right-hand side and the
-    signals, then the stepping loop).
+    """The C++ source of :class:`Dop853Driver`: ``cpp/lanes.hpp``, casadi's code for the right-hand
+    side and the signals, the definitions the loop expects (sizes, names, the unrolled stages and
+    dense output), then ``cpp/dop853_loop.cpp``.
 
     Parameters
     ----------
@@ -184,32 +81,36 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
     nx = model.n_states
     functions = []
     for suffix, f in (("rhs", rhs), ("signals", signals)):
-        args = f.sx_in() if f.is_a("SXFunction") else f.mx_in()
-        functions.append(ca.Function(f"{name}_{suffix}", args, f.call(args)))
+        if f.is_a("SXFunction"):
+            sx = f.sx_in()
+            functions.append(ca.Function(f"{name}_{suffix}", sx, f.call(sx)))
+        else:
+            mx = f.mx_in()
+            functions.append(ca.Function(f"{name}_{suffix}", mx, f.call(mx)))
     generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     for f in functions:
         generator.add(f)
     stages = []
     for i in range(1, STAGES):
-        stages.append(f"    for (int j = 0; j < NX; ++j) xi[j] = x[j] + h * ({_weighted(tab.a[i, :i], 'j')});")
-        stages.append(f"    rhs(xi, uv + {i} * NU, P, K[{i}]);")
+        stages.append(f"for (int j = 0; j < NX; ++j) xi[j] = x[j] + h * ({_weighted(tab.a[i, :i], 'j')});")
+        stages.append(f"rhs(xi, uv + {i} * NU, P, K[{i}]);")
         if i == tab.end:
-            stages.append("    for (int j = 0; j < NX; ++j) xn[j] = xi[j];")
-    dense = "\n".join(
-        f"  coef[{d}][j] = h * ({_weighted(tab.dense[:, d], 'j')});" for d in range(tab.dense.shape[1])
-    )
+            stages.append("for (int j = 0; j < NX; ++j) xn[j] = xi[j];")
+    dense = [f"coef[{d}][j] = h * ({_weighted(tab.dense[:, d], 'j')});" for d in range(tab.dense.shape[1])]
     rows = signal_rows(signals, nx)
     others = [j for j in range(nx) if j not in rows]
-    loop = _LOOP.replace("STAGES\n", "\n".join(stages) + "\n").replace("DENSE\n", dense + "\n")
-    loop = loop.replace("{ROWS}", "{" + ", ".join(map(str, rows)) + "}")
-    loop = loop.replace("{OTHERS}", "{" + ", ".join(map(str, others or [0])) + "}")
-    defines = {"LANES": lanes, "NX": nx, "NU": rhs.size1_in(1), "ST": STAGES, "DEG": tab.dense.shape[1],
-               "END": tab.end, "NROWS": len(rows), "NOTHERS": len(others)}
+    defines = {"NX": nx, "NU": rhs.size1_in(1), "ST": STAGES, "DEG": tab.dense.shape[1], "END": tab.end,
+               "NROWS": len(rows), "NOTHERS": len(others)}
     defines |= {f"RHS_{k}": v for k, v in _sized(functions[0]).items()}
     defines |= {f"SIG_{k}": v for k, v in _sized(functions[1]).items()}
-    head = "".join(f"#define {k} {v}\n" for k, v in defines.items() if k == "LANES")
-    body = "".join(f"#define {k} {v}\n" for k, v in defines.items() if k != "LANES")
-    return head + _LANE_TYPE + generator.dump() + body + loop.replace("NAME", name)
+    defines |= {"DOP853_NAME": name, "DOP853_RHS": f"{name}_rhs", "DOP853_SIGNALS": f"{name}_signals",
+                "DOP853_ROWS": ", ".join(map(str, rows)), "DOP853_OTHERS": ", ".join(map(str, others or [0]))}
+    body = "".join(f"#define {k} {v}\n" for k, v in defines.items())
+    body += _macro("DOP853_STAGES", stages) + _macro("DOP853_DENSE", dense)
+    return (
+        f"#define LANES {lanes}\n" + _source_file("lanes.hpp") + generator.dump() + body
+        + _source_file("dop853_loop.cpp")
+    )
 
 
 class Dop853Driver:

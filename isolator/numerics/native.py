@@ -89,7 +89,7 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     if compiler is None:
         raise RuntimeError(f"no {language.upper()} compiler found (set {'CC' if language == 'c' else 'CXX'})")
     digest = hashlib.sha256(
-        (source + " ".join(flags) + ca.__version__ + compiler + _cpu_identity()).encode()
+        (source + " ".join(flags) + ca.CasadiMeta.version() + compiler + _cpu_identity()).encode()
     ).hexdigest()[:20]
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
@@ -146,7 +146,7 @@ class NativeFunction:
         self.in_shapes = [function.size_in(i) for i in range(function.n_in())]
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
         self.library: Path | None = None
-        self._lib = None
+        self._lib: ctypes.CDLL | None = None
         self._local = threading.local()
         if compile:
             try:
@@ -195,9 +195,9 @@ class NativeFunction:
         float arrays of shape ``(columns, rows)``.
         """
         if self._lib is None:
-            out = self.function(*[self._as_dm(x, shape) for x, shape in zip(inputs, self.in_shapes, strict=False)])
-            out = out if isinstance(out, tuple | list) else [out]
-            return [np.asarray(o, dtype=float).T.copy() for o in out]
+            value = self.function(*[self._as_dm(x, shape) for x, shape in zip(inputs, self.in_shapes, strict=False)])
+            values = value if isinstance(value, tuple | list) else [value]
+            return [np.asarray(o, dtype=float).T.copy() for o in values]
         ins = [np.ascontiguousarray(x, dtype=np.float64) for x in inputs]
         for x, (r, c) in zip(ins, self.in_shapes, strict=False):
             if x.size != r * c:
@@ -245,7 +245,7 @@ class NativeFunction:
                 raise RuntimeError(f"{self.name}: native evaluation failed")
             return outs
 
-        call.buffers = keep  # type: ignore[attr-defined]  # what the pointers point into
+        call.__dict__["buffers"] = keep  # what the pointers point into: alive as long as the caller
         return call
 
     def _pointers(self, ins: list[np.ndarray], outs: list[np.ndarray]) -> tuple[tuple, tuple]:

@@ -10,12 +10,13 @@ number of intervals.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, Protocol, TypeVar
+from typing import Any, TypeVar
 
 import casadi as ca
 import numpy as np
 
 from isolator.numerics.native import NativeFunction
+from isolator.numerics.systems import SteppedSystem
 
 __all__ = ["Motion", "SteppedSystem", "Stepper", "rk4_step"]
 
@@ -24,22 +25,6 @@ CHUNK = 512
 X = TypeVar("X")
 #: ``(x, reference) -> (12,)``: the sensed motion of a state, casadi
 Motion = Callable[[Any, Any], Any]
-
-
-class SteppedSystem(Protocol):
-    """What the steppers need of a model: its right-hand side, state count and a tag naming its structure."""
-
-    @property
-    def tag(self) -> str: ...
-
-    @property
-    def n_states(self) -> int: ...
-
-    @property
-    def rhs(self) -> ca.Function: ...
-
-    @property
-    def staged_rhs(self) -> ca.Function | None: ...
 
 
 def rk4_step(rates: Callable[[X, int], X], x: X, h: Any) -> X:
@@ -60,10 +45,10 @@ def rk4_step(rates: Callable[[X, int], X], x: X, h: Any) -> X:
     The state at the step's end.
     """
     k1 = rates(x, 0)
-    k2 = rates(x + h / 2 * k1, 1)  # type: ignore[operator]
-    k3 = rates(x + h / 2 * k2, 1)  # type: ignore[operator]
-    k4 = rates(x + h * k3, 2)  # type: ignore[operator]
-    return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)  # type: ignore[operator, no-any-return]
+    k2 = rates(x + h / 2 * k1, 1)
+    k3 = rates(x + h / 2 * k2, 1)
+    k4 = rates(x + h * k3, 2)
+    return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)  # type: ignore[operator]
 
 
 class Stepper:
@@ -96,7 +81,11 @@ class Stepper:
         xk = x
         for j in range(substeps):
             at = (cin[:, 2 * j], cin[:, 2 * j + 1], cin[:, 2 * j + 2])
-            xk = rk4_step(lambda xs, k, at=at: model.rhs(xs, at[k], p), xk, dt)
+
+            def rates(xs: ca.MX, k: int, at: tuple[ca.MX, ca.MX, ca.MX] = at) -> ca.MX:
+                return model.rhs(xs, at[k], p)
+
+            xk = rk4_step(rates, xk, dt)
         step = ca.Function("step", [x, cin, h, p], [xk])
         reference = ca.MX.sym("x_ref", nx)
         self._step_parts = ([x, cin, h, p, reference], [xk, motion(xk, reference)])

@@ -14,17 +14,20 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Literal
+from typing import Literal, Protocol
 
 import numpy as np
 
 from isolator.errors import ScenarioError, SimulationError
+from isolator.model.equilibrium import Equilibrium
+from isolator.model.variants import Model
+from isolator.scenario.definitions import Scenario
+from isolator.simulation.response import Response
 from isolator.simulation.settling import signal_settling
+from isolator.simulation.stepping import Method, check_turn, dense_stepper, hold_time, rk4_stepper
+from isolator.simulation.time_grid import TimeGrid
 
-if TYPE_CHECKING:
-    from isolator.simulation.simulator import Simulator
-
-__all__ = ["BLOCK", "LANES", "BatchResult", "run_batch"]
+__all__ = ["BLOCK", "LANES", "BatchResult", "BatchSimulator", "run_batch"]
 
 #: runs per task of a worker thread (their metrics are computed together)
 BLOCK = 16
@@ -54,8 +57,33 @@ class BatchResult:
     failures: Mapping[int, str] = field(default_factory=dict)
 
 
+class BatchSimulator(Protocol):
+    """What a batch needs of its simulator (:class:`isolator.simulation.simulator.Simulator`)."""
+
+    scenario: Scenario
+    model: Model
+    grid: TimeGrid
+    stop_time: float
+
+    def scaled_parameter_sets(
+        self, stiffness: float | Sequence[float], damping: float | Sequence[float]
+    ) -> np.ndarray: ...
+
+    def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]: ...
+
+    def method_for(self, omega_max: float) -> Method: ...
+
+    def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray: ...
+
+    def grid_inputs(self, substeps: int) -> np.ndarray: ...
+
+    def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray: ...
+
+    def run_method(self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, method: Method) -> Response: ...
+
+
 def run_batch(
-    sim: Simulator,
+    sim: BatchSimulator,
     stiffness: Sequence[float],
     damping: Sequence[float],
     workers: int = 2,
@@ -67,6 +95,7 @@ def run_batch(
     Parameters
     ----------
     sim : Simulator
+        (or anything with what :class:`BatchSimulator` lists)
     stiffness, damping : sequence of float
         Scale factors, one per run (stiffness > 0, damping >= 0).
     workers : int
@@ -92,15 +121,13 @@ def run_batch(
     SimulationError
         A run diverged (the message names the run), with ``diverged="raise"``.
     """
-    from isolator.simulation.simulator import Method, _check_turn, _dense_stepper, _hold, _stepper
-
     if diverged not in ("raise", "record"):
         raise ScenarioError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
     params = sim.scaled_parameter_sets(stiffness, damping)
     n = params.shape[0]
     if n == 0:
         return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)))
-    starts, ends = sim._equilibria(params)
+    starts, ends = sim.equilibria_of(params)
     methods: list[Method] = [
         sim.method_for(max(s.max_frequency, e.max_frequency if e else 0.0)) for s, e in zip(starts, ends, strict=True)
     ]
@@ -108,19 +135,19 @@ def run_batch(
     plan_inputs = {}
     for method in {m.plan_key: m for m in methods}.values():
         if method.plan is not None:
-            plan_inputs[method.plan_key] = sim._plan_inputs(method, params[0])
+            plan_inputs[method.plan_key] = sim.plan_inputs(method, params[0])
         else:
-            sim._model_inputs(method.substeps)
-            _stepper(sim.model, method.substeps)
-    stepper = _dense_stepper(sim.model, LANES)
+            sim.grid_inputs(method.substeps)
+            rk4_stepper(sim.model, method.substeps)
+    stepper = dense_stepper(sim.model, LANES)
     t = sim.grid.samples
     stop = sim.stop_time
     tail_from = max(1, min(int(np.searchsorted(t, stop - 1e-12)), t.size - 1))
     finals = np.zeros((n, 6))
     stops = ends[0] is not None
     if stops:
-        finals = sim.signals(np.array([e.state for e in ends]), np.array([s.state for s in starts])).T
-    holds = np.array([_hold(e) for e in ends])
+        finals = sim.signals(np.array([e.state for e in ends if e is not None]), np.array([s.state for s in starts])).T
+    holds = np.array([hold_time(e) for e in ends])
     settling = np.full((n, 6), np.nan)
     peak = np.zeros((n, 6))
     failures: dict[int, str] = {}
@@ -137,23 +164,25 @@ def run_batch(
         """Step ``runs`` (one plan, at most LANES) side by side; their peaks, and the signals
         from the stop on of those that did not diverge (returned) into ``tails`` (runs, 6, samples)."""
         method = methods[runs[0]]
+        plan = method.plan
+        assert plan is not None
         lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
         x0 = np.array([starts[i].state for i in lanes])
-        raw, step_peaks, _ = stepper.run_slots(x0, method.plan, plan_inputs[method.plan_key], params[lanes], x0)
+        raw, step_peaks, _ = stepper.run_slots(x0, plan, plan_inputs[method.plan_key], params[lanes], x0)
         tops = np.max(step_peaks, axis=0).T  # NaN propagates
-        good = []
+        good: list[int] = []
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]
             try:
                 if not np.all(np.isfinite(peak[i])):
-                    sig = raw[method.plan.sample_slots, :, lane]
+                    sig = raw[plan.sample_slots, :, lane]
                     bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
-                _check_turn(peak[i])
+                check_turn(peak[i])
             except SimulationError as exc:
                 failed(i, exc)
                 continue
-            tails[len(good)] = raw[method.plan.sample_slots[tail_from - 1 :], :, lane].T
+            tails[len(good)] = raw[plan.sample_slots[tail_from - 1 :], :, lane].T
             good.append(i)
         return good
 
@@ -163,7 +192,7 @@ def run_batch(
         for i in runs:
             if methods[i].plan is None:
                 try:
-                    metrics = sim._run(params[i], starts[i], ends[i], methods[i]).settling
+                    metrics = sim.run_method(params[i], starts[i], ends[i], methods[i]).settling
                 except SimulationError as exc:
                     failed(i, exc)
                     continue

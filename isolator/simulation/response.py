@@ -162,7 +162,7 @@ class Response:
                 lines.append(f"  {k}: {r.reason}")
         return "\n".join(lines)
 
-    def plot(self, fig: Any = None, label: str | None = None):
+    def plot(self, fig: Any = None, label: str | None = None) -> Any:
         """Rotations (left) and translations (right) over time, as in the paper's Fig. 3.5.
 
         Returns

@@ -4,110 +4,44 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
-from functools import lru_cache
-from typing import TYPE_CHECKING, Literal, Protocol
+from typing import Literal
 
-import casadi as ca
 import numpy as np
 
 from isolator.errors import ScenarioError, SimulationError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, static_equilibria
 from isolator.model.parameters import ParameterLayout
-from isolator.model.signals import signal_function
-from isolator.model.variants import Model
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
-from isolator.numerics.native import MappedFunction
-from isolator.numerics.rk4 import Stepper
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.simulation.actuation import ForceHistory, applied_forces
+from isolator.simulation.batch import BatchResult, run_batch
+from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
 from isolator.simulation.response import Response
 from isolator.simulation.settling import SettlingResult, settling_metrics, signal_peaks
+from isolator.simulation.stepping import (
+    DENSE_STEP_ANGLE,
+    MAX_DENSE_STEP,
+    STEP_ANGLE,
+    Method,
+    check_turn,
+    dense_stepper,
+    hold_time,
+    rk4_stepper,
+    staged_map,
+    staged_parameters,
+    with_start,
+)
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, stage_times, time_grid
-
-if TYPE_CHECKING:
-    from isolator.simulation.batch import BatchResult
 
 __all__ = [
     "FeedbackLaw",
+    "Method",
     "Simulator",
+    "get_model",
     "simulate",
 ]
-
-#: most the table may turn [rad] before a run is reported as diverged
-MAX_TURN = 0.2
-#: largest |lambda| h per RK4 step; keeps the relative error well below 1e-6
-STEP_ANGLE = 0.05
-#: largest |lambda| h per DOP853 step (Table 3.2: 2e-8 relative RMS at 0.9, 1e-7 with stiffness x2)
-DENSE_STEP_ANGLE = 0.9
-#: longest DOP853 step [s]; shorter ones come in ratios of 2^(1/8)
-MAX_DENSE_STEP = 0.05
-
-_STEPPERS: dict[tuple[ParameterLayout, str, int], Stepper] = {}
-_DENSE: dict[tuple[ParameterLayout, str, int], DenseStepper] = {}
-
-
-def _stepper(model: Model, substeps: int) -> Stepper:
-    key = (model.layout, model.kind, substeps)
-    if key not in _STEPPERS:
-        _STEPPERS[key] = Stepper(model, substeps, model.variant.sensed_motion)
-    return _STEPPERS[key]
-
-
-def _dense_stepper(model: Model, lanes: int = 1) -> DenseStepper:
-    key = (model.layout, model.kind, lanes)
-    if key not in _DENSE:
-        _DENSE[key] = DenseStepper(model, signal_function(model.variant, model.n_states), lanes)
-    return _DENSE[key]
-
-
-@lru_cache(maxsize=16)
-def _staged_parameters(model: Model) -> np.ndarray:
-    """Indices of the parameters the model's staged inputs depend on (none without a staged form)."""
-    if model.staged_inputs is None:
-        return np.zeros(0, dtype=int)
-    c, p = model.staged_inputs.sx_in()
-    v = model.staged_inputs(c, p)
-    return np.array([i for i in range(p.shape[0]) if ca.depends_on(v, p[i])], dtype=int)
-
-
-@lru_cache(maxsize=16)
-def _staged_map(model: Model) -> MappedFunction:
-    return MappedFunction(model.staged_inputs, f"isolator_staged_{model.tag}", block=256, optimisation="-O1")
-
-
-@dataclass(frozen=True)
-class Method:
-    """How a run is integrated: DOP853 steps (``plan``) or RK4 on the sample grid (``substeps``)."""
-
-    substeps: int
-    plan: StepPlan | None = None
-    plan_key: int = 0
-
-
-class FeedbackLaw(Protocol):
-    """A sampled controller the simulation runs (e.g. :class:`controllers.feedback.DiscreteLaw`).
-
-    Attributes
-    ----------
-    sample_rate : float
-        [Hz]; must divide the simulation's output sample rate.
-    """
-
-    sample_rate: float
-
-    def reset(self) -> None:
-        """Forget the controller's state (called at the start of a run)."""
-
-    def __call__(self, t: float, measurement: np.ndarray) -> np.ndarray:
-        """Commands [N] per actuator at tick ``t`` [s] from the measured table state (12,): displacement
-        [m] and rotation vector [rad] from the initial equilibrium, velocity [m/s] and angular velocity
-        [rad/s], world axes. Held until the next tick."""
-
-    def final(self, passive: np.ndarray) -> np.ndarray:
-        """The six signals' closed-loop final value given the passive one (the settling reference)."""
 
 
 class Simulator:
@@ -165,10 +99,10 @@ class Simulator:
     # -- pieces ----------------------------------------------------------------
     def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
         """Initial and final static equilibria (final None if a carriage never stops)."""
-        start, end = self._equilibria(np.asarray(p, dtype=float)[None, :])
+        start, end = self.equilibria_of(np.asarray(p, dtype=float)[None, :])
         return start[0], end[0]
 
-    def _equilibria(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
+    def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
         first, last = self._positions
         start = static_equilibria(self.model, params, first, "with the carriages at their start")
         if last is None:
@@ -197,23 +131,26 @@ class Simulator:
             return Method(substeps)
         return Method(substeps, plan, key)
 
-    def _model_inputs(self, substeps: int) -> np.ndarray:
+    def grid_inputs(self, substeps: int) -> np.ndarray:
+        """The model's inputs at every RK4 stage of the grid, ``substeps`` steps per interval (cached)."""
         if substeps not in self._inputs:
             self._inputs[substeps] = model_inputs(self.scenario, self.grid, substeps)
         return self._inputs[substeps]
 
-    def _plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray:
+    def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray:
         """The DOP853 stepper's inputs at every stage of the plan: the model's inputs, or their
         staged form (time-only moments; cached per carriage and table inertia)."""
         staged = self.model.staged_inputs
-        uses = _staged_parameters(self.model)
+        uses = staged_parameters(self.model)
         key = (method.plan_key, np.asarray(p, dtype=float)[uses].tobytes())
         if key not in self._staged:
             plan = method.plan
+            if plan is None:
+                raise ValueError("plan_inputs: the method steps RK4 on the sample grid, it has no step plan")
             inputs = inputs_at(self.scenario, *plan.stage_times())
             if staged is not None:
                 flat = inputs.reshape(inputs.shape[0] * inputs.shape[1], inputs.shape[2])
-                inputs = _staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
+                inputs = staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
             if len(self._staged) >= 16:
                 self._staged.pop(next(iter(self._staged)))
             self._staged[key] = np.ascontiguousarray(inputs)
@@ -270,7 +207,7 @@ class Simulator:
         p = self.parameter_vector(changes) if p is None else np.asarray(p, dtype=float)
         start, end = self.equilibria(p)
         method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        return self._run(p, start, end, method, forces, feedback)
+        return self.run_method(p, start, end, method, forces, feedback)
 
     def _with_forces(self, inputs: np.ndarray, substeps: int, forces: ForceHistory | None) -> np.ndarray:
         """The inputs with the actuators' applied forces at every stage time."""
@@ -286,7 +223,7 @@ class Simulator:
         out[..., self.layout.actuator_slice] = applied.reshape(*times.shape, len(names))
         return out
 
-    def _run(
+    def run_method(
         self,
         p: np.ndarray,
         start: Equilibrium,
@@ -295,32 +232,39 @@ class Simulator:
         forces: ForceHistory | None = None,
         feedback: FeedbackLaw | None = None,
     ) -> Response:
+        """One run from the equilibria ``start`` (and ``end``, None if a carriage never stops) with
+        ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
         grid = self.grid
         n = len(self.scenario.carriages)
         if forces is None and feedback is None and method.plan is not None:
             plan = method.plan
-            raw, step_peaks, polynomials = _dense_stepper(self.model).run_slots(
-                start.state, plan, self._plan_inputs(method, p), p, start.state, with_states=True
+            raw, step_peaks, polynomials = dense_stepper(self.model).run_slots(
+                start.state, plan, self.plan_inputs(method, p), p, start.state, with_states=True
             )
-            peaks = np.max(step_peaks, axis=0)
+            assert polynomials is not None
+            peaks: np.ndarray | None = np.max(step_peaks, axis=0)
             if not np.all(np.isfinite(polynomials)):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
-            signals = _with_start(raw[plan.sample_slots])
-            x0 = start.state
+            signals = with_start(raw[plan.sample_slots])
+            x0, dense = start.state, polynomials
 
-            def states() -> np.ndarray:
-                return np.vstack([x0, DenseStepper.states(plan, polynomials)])
+            def history() -> np.ndarray:
+                return np.vstack([x0, DenseStepper.states(plan, dense)])
 
+            states: np.ndarray | None = None
             at_samples = self._at_samples()
         else:
             substeps = method.substeps
             if feedback is None:
-                inputs = self._with_forces(self._model_inputs(substeps), substeps, forces)
-                states = _stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+                inputs = self._with_forces(self.grid_inputs(substeps), substeps, forces)
+                stepped = rk4_stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
             else:
-                states, inputs = self._run_feedback(p, start, substeps, forces, feedback)
-            states = np.vstack([start.state, states])[grid.is_sample]
+                stepped, inputs = run_closed_loop(
+                    self.scenario, self.layout, self.model, grid, self.grid_inputs(substeps), p, start, substeps,
+                    forces, feedback,
+                )
+            states = np.vstack([start.state, stepped])[grid.is_sample]
             at_samples = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
             bad = ~np.all(np.isfinite(states), axis=1)
             if bad.any():
@@ -342,7 +286,7 @@ class Simulator:
             stop_time=self.stop_time,
             final=final,
             settling=metrics,
-            state_history=states,
+            state_history=history if states is None else states,
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
         )
@@ -359,62 +303,8 @@ class Simulator:
         ``peaks`` over the whole run when the samples are not all there."""
         t = self.grid.samples[first:]
         peaks = signal_peaks(signals) if peaks is None else peaks
-        _check_turn(peaks, t, signals)
-        return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, _hold(end), peaks)
-
-    def _controller_period(self, feedback: FeedbackLaw) -> int:
-        """Output samples per controller tick."""
-        ratio = self.scenario.simulation.sample_rate / float(feedback.sample_rate)
-        period = round(ratio)
-        if not (math.isfinite(ratio) and period >= 1 and abs(ratio - period) <= 1e-9 * ratio):
-            raise ScenarioError(
-                f"simulation.sample_rate: the controller's {feedback.sample_rate:.6g} Hz must divide it "
-                f"({self.scenario.simulation.sample_rate:.6g} Hz)"
-            )
-        return period
-
-    def _run_feedback(
-        self, p: np.ndarray, start: Equilibrium, substeps: int, forces: ForceHistory | None,
-        feedback: FeedbackLaw,
-    ) -> tuple[np.ndarray, np.ndarray]:
-        """Step interval by interval, the controller ticking at its rate; the states after each
-        interval and the inputs (with the applied forces) at every stage."""
-        period = self._controller_period(feedback)
-        grid = self.grid
-        inputs = self._model_inputs(substeps).copy()  # the actuator forces are filled in as the run goes
-        acts = self.layout.actuator_slice
-        times, mid = stage_times(grid, substeps)
-        # the feedforward command before saturation and lag
-        commanded = None if forces is None else forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, -1)
-        sample_index = np.cumsum(grid.is_sample) - 1
-        ticks = grid.is_sample & (sample_index % period == 0)
-        stepper = _stepper(self.model, substeps)
-        steps = np.diff(grid.nodes)
-        n_a = self.layout.n_actuators
-        u = np.zeros(n_a)
-        lag = np.zeros(n_a)
-        x = start.state.copy()
-        out = np.empty((steps.size, x.size))
-        feedback.reset()
-        motion = np.zeros(12)
-        limits = np.array([a.max_force for a in self.scenario.actuators])
-        lagged = any(a.bandwidth is not None for a in self.scenario.actuators)
-        for i, h in enumerate(steps):
-            if ticks[i]:
-                u = np.asarray(feedback(float(grid.nodes[i]), motion), dtype=float).reshape(n_a)
-            command = u if commanded is None else commanded[i] + u
-            if lagged:
-                applied = applied_forces(self.scenario, np.broadcast_to(command, (times.shape[1], n_a)), times[i], lag)
-                lag = applied[-1]
-            else:  # what applied_forces does without a lag, without its per-call overhead
-                applied = np.clip(command, -limits, limits)
-            inputs[i, :, acts] = applied
-            x, motion = stepper.step(x, inputs[i], float(h), p, start.state)
-            out[i] = x
-            if not np.all(np.isfinite(x)):
-                out[i:] = np.nan
-                break
-        return out, inputs
+        check_turn(peaks, t, signals)
+        return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold_time(end), peaks)
 
     def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``
@@ -443,8 +333,6 @@ class Simulator:
         diverged : {"raise", "record"}
             Stop at a diverging run, or give it NaN metrics and its reason in ``failures``.
         """
-        from isolator.simulation.batch import run_batch
-
         return run_batch(self, stiffness, damping, workers, progress, diverged)
 
     def scaled_parameter_sets(
@@ -475,35 +363,6 @@ def _scales(values: float | Sequence[float], key: str, positive: bool) -> np.nda
         where = key if array.ndim == 0 else f"{key}[{i}]"
         raise ScenarioError(f"{where}: scale must be a finite number {'>' if positive else '>='} 0, got {flat[i]}")
     return flat
-
-
-def _check_turn(peaks: np.ndarray, t: np.ndarray | None = None, signals: np.ndarray | None = None) -> None:
-    """Report a run whose rotation peaks pass ``MAX_TURN`` as diverged (naming the first sample past it
-    when the signals (6, samples) at times ``t`` are given)."""
-    if np.max(peaks[3:]) <= MAX_TURN:
-        return
-    when = ""
-    if signals is not None and t is not None:
-        too_far = np.max(np.abs(signals[3:]), axis=0) > MAX_TURN
-        when = f" at t = {t[np.argmax(too_far)]:.4g} s" if too_far.any() else ""
-    raise SimulationError(f"the run diverged: the table turned by more than {MAX_TURN:g} rad{when}")
-
-
-def _with_start(signals: np.ndarray) -> np.ndarray:
-    """Signals (samples - 1, 6) after the start as (6, samples) rows, C order, zero at the start."""
-    out = np.zeros((6, signals.shape[0] + 1))
-    out[:, 1:] = signals.T
-    return out
-
-
-def _hold(end: Equilibrium | None) -> float:
-    """How long [s] a signal must be seen settled before the run ends: the period of the slowest
-    oscillating mode at the final equilibrium (0 if none, or no final equilibrium)."""
-    if end is None:
-        return 0.0
-    im = np.abs(np.imag(end.eigenvalues))
-    im = im[im > 1e-6]
-    return float(2 * math.pi / im.min()) if im.size else 0.0
 
 
 def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, float] | None = None) -> Response:

@@ -1,0 +1,92 @@
+/* The DOP853 stepping loop: all the fixed steps of a run, the samples they contain (dense output)
+   and the six table signals at those samples, for LANES runs side by side (see lanes.hpp).
+
+   Assembled by isolator/numerics/dop853_driver.py after lanes.hpp and casadi's generated code, which
+   it follows with these definitions:
+     LANES, NX, NU, ST, DEG, END    lanes, states, stage inputs, stages (16), dense-output degree (7),
+                                    the stage at the new state (12)
+     RHS_ARG .. RHS_W, SIG_*        casadi's work sizes of the two generated functions
+     DOP853_NAME                    the exported function; DOP853_RHS, DOP853_SIGNALS: casadi's
+                                    right-hand side (x, u, p) -> dx/dt and signals (x, ref) -> (6,)
+     DOP853_STAGES                  stages 1..15, unrolled with the tableau's nonzero coefficients
+                                    (stage i: xi = x + h sum_j a[i][j] K[j], K[i] = rhs(xi, u_i))
+     DOP853_DENSE                   the dense output's coefficients of s, s^2, ... for state j
+     NROWS, DOP853_ROWS             the states the signals depend on (interpolated at every sample)
+     NOTHERS, DOP853_OTHERS         the other states (their dense output only when poly is asked for)
+
+   Layouts (C order): per-run arrays are interleaved by lane, (values, LANES); shared arrays (stage
+   inputs, step lengths, first-step flags, sample fractions) are plain. */
+
+static inline void rhs(const V* x, const V* u, const V* p, V* out) {
+  const V* arg[RHS_ARG]; V* res[RHS_RES]; casadi_int iw[RHS_IW]; V w[RHS_W];
+  arg[0] = x; arg[1] = u; arg[2] = p; res[0] = out;
+  DOP853_RHS(arg, res, iw, w, 0);
+}
+
+static inline void signals(const V* x, const V* ref, V* out) {
+  const V* arg[SIG_ARG]; V* res[SIG_RES]; casadi_int iw[SIG_IW]; V w[SIG_W];
+  arg[0] = x; arg[1] = ref; res[0] = out;
+  DOP853_SIGNALS(arg, res, iw, w, 0);
+}
+
+/* the dense output's coefficients of s, s^2, ... for state j */
+static inline void dense_row(const V K[ST][NX], double h, int j, V coef[DEG][NX]) {
+  DOP853_DENSE
+}
+
+/* steps: steps of the plan; per: sample slots per step; x0 (NX, LANES); u (steps, ST, NU);
+   hs, first (steps); frac (steps, per), -1 for an unused slot; p (parameters, LANES); ref (NX, LANES).
+   Out: sig (steps * per, 6, LANES) at the used slots; peak (steps, 6, LANES) max |signal| over each
+   step's samples (NaN propagates); poly, unless null, (steps, DEG + 1, NX, LANES): each step's start
+   state and dense-output coefficients. */
+extern "C" int DOP853_NAME(int steps, int per, const double* x0, const double* u, const double* hs,
+                           const double* first, const double* frac, const double* p, const double* ref,
+                           double* sig, double* peak, double* poly) {
+  static const int rows[NROWS + 1] = {DOP853_ROWS};
+  static const int others[NOTHERS + 1] = {DOP853_OTHERS};
+  V x[NX], xi[NX], xn[NX], xs[NX], K[ST][NX], coef[DEG][NX];
+  const V* P = (const V*)p;
+  const V* R = (const V*)ref;
+  for (int j = 0; j < NX; ++j) { x[j] = ((const V*)x0)[j]; xs[j] = 0.0; }
+#if LANES > 1
+  V ub[ST * NU + 1];
+#endif
+  for (int s = 0; s < steps; ++s) {
+    const double* us = u + (long)s * ST * NU;
+#if LANES > 1
+    for (int j = 0; j < ST * NU; ++j) ub[j] = us[j];
+    const V* uv = ub;
+#else
+    const V* uv = us;
+#endif
+    const double h = hs[s];
+    if (first[s] != 0.0) rhs(x, uv, P, K[0]);
+    else for (int j = 0; j < NX; ++j) K[0][j] = K[END][j];
+    DOP853_STAGES
+    for (int r = 0; r < NROWS; ++r) dense_row(K, h, rows[r], coef);
+    V top[6];
+    for (int k = 0; k < 6; ++k) top[k] = 0.0;
+    for (int m = 0; m < per; ++m) {
+      const double f = frac[(long)s * per + m];
+      if (f < 0.0) continue;
+      for (int r = 0; r < NROWS; ++r) {
+        const int j = rows[r];
+        V acc = coef[DEG - 1][j];
+        for (int d = DEG - 2; d >= 0; --d) acc = coef[d][j] + f * acc;
+        xs[j] = x[j] + f * acc;
+      }
+      V* out = (V*)sig + ((long)s * per + m) * 6;
+      signals(xs, R, out);
+      for (int k = 0; k < 6; ++k) top[k] = worst(top[k], fabs(out[k]));
+    }
+    for (int k = 0; k < 6; ++k) ((V*)peak)[(long)s * 6 + k] = top[k];
+    if (poly) {
+      for (int r = 0; r < NOTHERS; ++r) dense_row(K, h, others[r], coef);
+      V* out = (V*)poly + (long)s * (DEG + 1) * NX;
+      for (int j = 0; j < NX; ++j) out[j] = x[j];
+      for (int d = 0; d < DEG; ++d) for (int j = 0; j < NX; ++j) out[(d + 1) * NX + j] = coef[d][j];
+    }
+    for (int j = 0; j < NX; ++j) x[j] = xn[j];
+  }
+  return 0;
+}

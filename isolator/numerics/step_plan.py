@@ -1,0 +1,101 @@
+"""Where the fixed DOP853 steps fall: equal steps between breakpoints, and the samples each one interpolates."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from isolator.numerics.dop853_tableau import STAGES, dop853_tableau
+
+__all__ = ["TAIL", "StepPlan", "step_plan"]
+
+#: the plans' arrays are padded to a whole number of these steps (the shorter call of the casadi-graph form)
+TAIL = 16
+
+
+@dataclass(frozen=True)
+class StepPlan:
+    """Where the steps fall and which samples each one interpolates.
+
+    Attributes
+    ----------
+    start : ndarray (steps,)
+        Step start times [s].
+    length : ndarray (steps,)
+        Step lengths [s].
+    first : ndarray (steps,)
+        1.0 where the step starts a segment (after a breakpoint): its first
+        stage is evaluated afresh rather than taken from the previous step's end.
+    fraction : ndarray (steps, per_step)
+        Fractions of the step at which samples are read; -1 marks an unused slot.
+    sample_slots : ndarray (samples - 1,)
+        Index into the flattened (steps x per_step) outputs of each sample after the first.
+    steps : int
+        Steps that advance time; the arrays are padded with empty steps (length 0)
+        to a whole number of ``TAIL`` steps (for the casadi-graph form of the steps).
+    """
+
+    start: np.ndarray
+    length: np.ndarray
+    first: np.ndarray
+    fraction: np.ndarray
+    sample_slots: np.ndarray
+    steps: int
+
+    @property
+    def per_step(self) -> int:
+        return int(self.fraction.shape[1])
+
+    @property
+    def evaluations(self) -> int:
+        """Right-hand-side evaluations of a run."""
+        return int(self.steps * (STAGES - 1) + np.count_nonzero(self.first[: self.steps]))
+
+    def stage_times(self) -> tuple[np.ndarray, np.ndarray]:
+        """Every step's stage times and its midpoint (which selects the profile piece) [s],
+        each (steps, stages)."""
+        c = dop853_tableau().c
+        times = self.start[:, None] + self.length[:, None] * c[None, :]
+        mid = np.broadcast_to((self.start + self.length / 2)[:, None], times.shape)
+        return times, mid
+
+
+def step_plan(samples: np.ndarray, breakpoints: np.ndarray, max_step: float) -> StepPlan:
+    """Equal steps of at most ``max_step`` [s] in every segment between breakpoints.
+
+    Parameters
+    ----------
+    samples : ndarray
+        Output times [s], increasing, from 0.
+    breakpoints : ndarray
+        Times [s] inside the run where an input is not smooth.
+    max_step : float
+        [s], > 0.
+    """
+    end = float(samples[-1])
+    edges = np.unique(np.concatenate([[0.0], breakpoints[(breakpoints > 0) & (breakpoints < end)], [end]]))
+    counts = np.maximum(1, np.ceil(np.diff(edges) / max_step - 1e-9).astype(int))
+    lengths = np.diff(edges) / counts
+    seg = np.repeat(np.arange(counts.size), counts)
+    index = np.arange(seg.size) - np.repeat(np.cumsum(counts) - counts, counts)
+    start = edges[seg] + index * lengths[seg]
+    length = lengths[seg]
+    first = index == 0
+    stop = np.append(start[1:], end)
+    # a sample belongs to the step it ends or lies inside: start < t <= stop (the first sample is the initial state)
+    owner = np.clip(np.searchsorted(stop, samples[1:] - 1e-12 * max(1.0, end), side="left"), 0, start.size - 1)
+    counts_per = np.bincount(owner, minlength=start.size)
+    per_step = max(1, int(counts_per.max(initial=1)))
+    per_step = 4 * math.ceil(per_step / 4)  # fewer variants of the casadi-graph form
+    rank = np.arange(owner.size) - np.repeat(np.cumsum(counts_per) - counts_per, counts_per)
+    steps = start.size
+    padded = TAIL * math.ceil(steps / TAIL)
+    fraction = np.full((padded, per_step), -1.0)
+    fraction[owner, rank] = np.clip((samples[1:] - start[owner]) / length[owner], 0.0, 1.0)
+    pad = padded - steps
+    start = np.concatenate([start, np.full(pad, end)])
+    length = np.concatenate([length, np.zeros(pad)])
+    first = np.concatenate([first, np.ones(pad, dtype=bool)]).astype(float)
+    return StepPlan(start, length, first, fraction, owner * per_step + rank, steps)
