@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from pneumatic_cases import pneumatic_dict, three_springs_dict
 from scipy.integrate import cumulative_trapezoid
-from scipy.optimize import fsolve
+from scipy.optimize import root
 from scipy.spatial.transform import Rotation
 
 from isolator import scenario_from_dict, simulate
@@ -170,7 +170,9 @@ def _closed_rest(s: Scenario, q: np.ndarray, p_rest: np.ndarray) -> np.ndarray:
             moment += np.cross(mass_point, weight)
         return np.concatenate([force, moment]) / (s.gravity * s.total_mass)
 
-    return fsolve(balance, np.zeros(6), xtol=1e-14)
+    solution = root(balance, np.zeros(6), method="lm", tol=1e-15)
+    assert np.max(np.abs(balance(solution.x))) < 1e-12
+    return np.asarray(solution.x)
 
 
 def test_without_valves_the_table_rests_tilted_by_the_hand_solved_amount():
