@@ -170,8 +170,8 @@ def _closed_rest(s: Scenario, q: np.ndarray, p_rest: np.ndarray) -> np.ndarray:
             moment += np.cross(mass_point, weight)
         return np.concatenate([force, moment]) / (s.gravity * s.total_mass)
 
-    solution = root(balance, np.zeros(6), method="lm", tol=1e-15)
-    assert np.max(np.abs(balance(solution.x))) < 1e-12
+    solution = root(balance, np.zeros(6), method="hybr", tol=1e-13)
+    assert np.max(np.abs(balance(solution.x))) < 1e-9  # of the weight
     return np.asarray(solution.x)
 
 
