@@ -1,4 +1,22 @@
-"""Shared scenario builders for the tests."""
+"""Shared scenario builders for the tests, and how the test modules reach them.
+
+The tests mirror the packages: ``tests/scenario``, ``model``, ``numerics``,
+``simulation``, ``analysis``, ``validation``, ``cli`` for the plant,
+``tests/controllers`` and ``tests/studies``; ``test_style.py`` stays here. No
+folder of tests has an ``__init__.py``, on purpose: in pytest's default
+("prepend") import mode, loading this conftest puts ``tests/`` on
+``sys.path``, and importing a test module puts its own folder there. Hence:
+
+- the builders below are imported as a plain module from any subfolder,
+  ``from conftest import base_dict, make`` (and so are the helper modules
+  next to this file, e.g. ``from pneumatic_cases import ...``); the ``base``
+  fixture gives ``base_dict()``;
+- test modules are imported by their file name alone, so two test files must
+  not share a name, even in different folders (pytest would stop with
+  "import file mismatch"); name a new one after what it tests
+  (``tests/scenario/test_validation.py``, not ``tests/scenario/test_scenario.py``
+  next to a ``tests/model/test_scenario.py``).
+"""
 
 from __future__ import annotations
 
