@@ -47,9 +47,9 @@ def _study(args: argparse.Namespace) -> int:
         from studies.control import run_control_study
 
         scenario = load_scenario(args.scenario or "paper-table-3-2-active")
-        study = run_control_study(args.out, scenario, args.controller, args.feedforward)
+        control = run_control_study(args.out, scenario, args.controller, args.feedforward)
         for run in ("passive", "feedforward", "feedback", "both"):
-            value = study.settling_time_max(run)
+            value = control.settling_time_max(run)
             print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
         print(f"report: {args.out / 'report.md'}")
     elif args.name == "tradeoff":
@@ -57,10 +57,12 @@ def _study(args: argparse.Namespace) -> int:
 
         if not (math.isfinite(args.frequency) and args.frequency > 0):
             raise ParameterError(f"--frequency: must be a finite frequency > 0 Hz, got {args.frequency}")
-        grids = {"stiffness": [0.5, 1.0, 2.0], "damping": [0.5, 1.0, 2.0, 4.0]} if args.quick else {}
-        study = run_tradeoff_study(args.out, load_scenario(args.scenario), reference_hz=args.frequency, **grids)
-        front = study.pareto()
-        print(f"{len(front)} Pareto-optimal designs of {study.stiffness.size * study.damping.size}")
+        stiffness = [0.5, 1.0, 2.0] if args.quick else None
+        damping = [0.5, 1.0, 2.0, 4.0] if args.quick else None
+        tradeoff = run_tradeoff_study(args.out, load_scenario(args.scenario), stiffness, damping,
+                                      reference_hz=args.frequency)
+        front = tradeoff.pareto()
+        print(f"{len(front)} Pareto-optimal designs of {tradeoff.stiffness.size * tradeoff.damping.size}")
         print(f"report: {args.out / 'report.md'}")
     elif args.name == "profiles":
         from controllers.profiles import ROBUSTNESS_VARIANTS, ModelVariant

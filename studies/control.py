@@ -20,7 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -36,6 +36,9 @@ from controllers.feedforward import (
 from isolator import SIGNALS, Response, Scenario, ScenarioError, Simulator
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
+
+from .figures import nan_if_none, save_figure
+from .reporting import fmt, largest, micro_unit, output_folder, progress_printer, table_header, table_row, write_report
 
 __all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
 
@@ -91,8 +94,7 @@ class ControlStudy:
     folder: Path
 
     def settling_time_max(self, run: str) -> float | None:
-        values = list(self.settling[run].values())
-        return None if any(v is None for v in values) else max(values)  # type: ignore[type-var]
+        return largest(self.settling[run].values())
 
     def to_dict(self) -> dict[str, Any]:
         return {
@@ -126,13 +128,8 @@ def run_control_study(
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
     if feedforward not in ("allocation", "optimal"):
         raise ScenarioError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
-    folder = Path(out)
-    folder.mkdir(parents=True, exist_ok=True)
-
-    def say(text: str) -> None:
-        if progress:
-            print(f"  control study: {text}", flush=True)
-
+    folder = output_folder(out)
+    say = progress_printer(progress, "  control study: ")
     lin = linearise(scenario)
     ctrl = design(controller, lin)
     sim = Simulator(scenario)
@@ -158,7 +155,7 @@ def run_control_study(
     loops = _transmissibility_figure(scenario, lin, folder / "transmissibility.png")
     _settling_figure(study, folder / "settling.png")
     _forces_figure(study, folder / "forces.png")
-    _report(study, scenario, loops, band, folder / "report.md")
+    _report(study, scenario, loops, band)
     return study
 
 
@@ -167,10 +164,11 @@ def _time_figure(study: ControlStudy, path: Path) -> None:
     fig, axes = plt.subplots(3, 2, figsize=(12, 8.5), sharex=True, layout="constrained")
     for i, name in enumerate(SIGNALS):
         ax = axes[i % 3, i // 3]
+        scale, unit = micro_unit(name)
         for run, r in study.runs.items():
-            ax.plot(r.t, r.signals[i] * 1e6, color=_COLORS[run], lw=1.0 if run != "passive" else 1.4,
+            ax.plot(r.t, r.signals[i] * scale, color=_COLORS[run], lw=1.0 if run != "passive" else 1.4,
                     ls="--" if run == "both" else "-", label=run)
-        ax.set_ylabel(f"{name} [{'µrad' if name.startswith('r') else 'µm'}]")
+        ax.set_ylabel(f"{name} [{unit}]")
         ax.grid(True, alpha=0.3)
         stop = study.runs["passive"].stop_time
         if math.isfinite(stop):
@@ -180,8 +178,7 @@ def _time_figure(study: ControlStudy, path: Path) -> None:
     axes[-1, 1].set_xlabel("time [s]")
     fig.suptitle(f"Table motion from its initial equilibrium: passive and active ({study.runs['passive'].name}); "
                  "dotted: the carriages stop")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -> dict[str, Any]:
@@ -192,7 +189,9 @@ def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -
             ctrl = design(name, lin)
         except ScenarioError:  # hinf without slycot
             continue
-        loops[ctrl.name] = transmissibility(fb.closed_loop(lin, ctrl, check=False), f)
+        # the closed loop answers what transmissibility asks of a LinearModel (frequency_response, scenario)
+        loop = cast(LinearModel, fb.closed_loop(lin, ctrl, check=False))
+        loops[ctrl.name] = transmissibility(loop, f)
     fig, axes = plt.subplots(2, 3, figsize=(13, 7), sharex=True, layout="constrained")
     for i, axis in enumerate(SIGNALS):
         ax = axes[i // 3, i % 3]
@@ -207,8 +206,7 @@ def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -
             ax.set_xlabel("frequency [Hz]")
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"Transmissibility with and without feedback ({scenario.name}, carriages at their start)")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
     return loops
 
 
@@ -220,7 +218,7 @@ def _settling_figure(study: ControlStudy, path: Path) -> None:
     top = 0.0
     for j, run in enumerate(RUNS):
         values = [study.settling[run][k] for k in SIGNALS] + [study.settling_time_max(run)]
-        heights = [np.nan if v is None else v for v in values]
+        heights = [nan_if_none(v) for v in values]
         top = max(top, np.nanmax(heights, initial=0.0))
         bars = ax.bar(x + (j - 1.5) * width, heights, width, label=run, color=_COLORS[run])
         for bar, v in zip(bars, values, strict=True):
@@ -233,8 +231,7 @@ def _settling_figure(study: ControlStudy, path: Path) -> None:
     ax.set_title("Settling time per signal (band: 5 % of the passive run's peak; n/a: not settled within the run)")
     ax.legend()
     ax.grid(True, axis="y", alpha=0.3)
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _forces_figure(study: ControlStudy, path: Path) -> None:
@@ -250,17 +247,11 @@ def _forces_figure(study: ControlStudy, path: Path) -> None:
     axes[0].legend(fontsize=7, ncol=6)
     axes[-1].set_xlabel("time [s]")
     fig.suptitle("Forces the actuators apply (after saturation and lag)")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 # -- report ---------------------------------------------------------------------------
-def _fmt(value: float | None, unit: str = " s") -> str:
-    return "n/a" if value is None else f"{value:.3g}{unit}"
-
-
-def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any], band: dict[str, float],
-            path: Path) -> None:
+def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any], band: dict[str, float]) -> None:
     ctrl = study.controller
     lines = [
         f"# Active isolation study: {scenario.name}",
@@ -275,23 +266,19 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any], band
         "",
         "## Settling time after the stop and peak deviation from the quasi-static path",
         "",
-        "| run | settling, largest | " + " | ".join(f"settling {k}" for k in SIGNALS)
-        + " | largest force |",
-        "|---|---|" + "---|" * len(SIGNALS) + "---|",
+        *table_header(["run", "settling, largest", *(f"settling {k}" for k in SIGNALS), "largest force"]),
     ]
     for run in RUNS:
         force = float(np.abs(study.runs[run].actuator_forces).max(initial=0.0))
-        lines.append(f"| {run} | {_fmt(study.settling_time_max(run))} | "
-                     + " | ".join(_fmt(study.settling[run][k]) for k in SIGNALS) + f" | {force:.0f} N |")
-    lines += ["", "| run | " + " | ".join(f"dev. {k}" for k in SIGNALS) + " |", "|---|" + "---|" * len(SIGNALS)]
+        lines.append(table_row([run, fmt(study.settling_time_max(run), suffix=" s"),
+                                *(fmt(study.settling[run][k], suffix=" s") for k in SIGNALS), f"{force:.0f} N"]))
+    lines += ["", *table_header(["run", *(f"dev. {k}" for k in SIGNALS)])]
     for run in RUNS:
         dev = study.deviation[run]
-        lines.append(f"| {run} | " + " | ".join(f"{dev[k] * 1e6:.3g} {'µrad' if k[0] == 'r' else 'µm'}"
-                                                 for k in SIGNALS) + " |")
+        lines.append(table_row([run, *(f"{dev[k] * micro_unit(k)[0]:.3g} {micro_unit(k)[1]}" for k in SIGNALS)]))
     lines += ["", "## Transmissibility peaks (same axis, carriages at their start)", "",
-              "| design | " + " | ".join(SIGNALS) + " |", "|---|" + "---|" * len(SIGNALS)]
+              *table_header(["design", *SIGNALS])]
     for name, resp in loops.items():
-        lines.append(f"| {name} | " + " | ".join(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz"
-                                                 for a in SIGNALS) + " |")
-    lines += ["", "Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`.", ""]
-    path.write_text("\n".join(lines))
+        lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
+    lines += ["", "Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`."]
+    write_report(study.folder, lines)

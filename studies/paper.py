@@ -7,7 +7,6 @@ Run it with ``isolator study paper --out DIR``; it writes ``fig_3_3.png``,
 
 from __future__ import annotations
 
-import math
 from pathlib import Path
 
 import matplotlib.pyplot as plt
@@ -16,11 +15,10 @@ import numpy as np
 from isolator import SIGNALS, Response, Scenario, load_scenario, simulate
 from isolator.validation.multibody import MujocoTable, MultibodyRun, mujoco_available
 
+from .figures import save_figure
+from .reporting import fmt, micro_unit, output_folder, progress_printer, table_header, table_row, write_report
+
 __all__ = ["relative_rms", "run_paper_study"]
-
-_SCALE = {"x": (1e6, "µm"), "y": (1e6, "µm"), "z": (1e6, "µm"),
-          "rx": (1e6, "µrad"), "ry": (1e6, "µrad"), "rz": (1e6, "µrad")}
-
 
 def relative_rms(a: np.ndarray, reference: np.ndarray) -> np.ndarray:
     """rms(a - reference) / rms(reference) per row (NaN where the reference is ~0)."""
@@ -41,7 +39,7 @@ def _fig_3_3(exact: Response, paper: Response, check: MultibodyRun | None, path:
                              constrained_layout=True, squeeze=False)
     for r, i in enumerate(rows):
         name = SIGNALS[i]
-        k, unit = _SCALE[name]
+        k, unit = micro_unit(name)
         ax, dx = axes[r]
         ax.plot(exact.t, exact.signals[i] * k, color="tab:blue", lw=1.5, label="exact model (casadi)")
         ax.plot(paper.t, paper.signals[i] * k, color="tab:orange", ls=":", lw=1.5, label="paper model, eq. (11)")
@@ -66,8 +64,7 @@ def _fig_3_3(exact: Response, paper: Response, check: MultibodyRun | None, path:
     for ax in axes[-1]:
         ax.set_xlabel("time [s]")
     fig.suptitle("Fig. 3.3 reproduced: Table 3.1 case, one carriage x(t) = 0.7 sin(2t - π/2) m")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _fig_3_4(scenario: Scenario, path: Path) -> None:
@@ -86,8 +83,7 @@ def _fig_3_4(scenario: Scenario, path: Path) -> None:
         axes[0, j].legend(fontsize=8)
         axes[-1, j].set_xlabel("time [s]")
     fig.suptitle("Fig. 3.4 reproduced: input profiles of the Table 3.2 case")
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    save_figure(fig, path)
 
 
 def _fig_3_5(exact: Response, paper: Response, path: Path) -> None:
@@ -104,12 +100,7 @@ def _fig_3_5(exact: Response, paper: Response, path: Path) -> None:
         f"exact-model 5 % settling {exact.settling_time_max:.3g} s"
         if exact.settling_time_max is not None else "Fig. 3.5 reproduced: Table 3.2 case"
     )
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
-def _fmt(v: float | None, digits: int = 3) -> str:
-    return "n/a" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.{digits}g}"
+    save_figure(fig, path)
 
 
 def _tilt_excess(exact: Response, paper: Response, i: int) -> float:
@@ -134,21 +125,21 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
     Path
         The report.
     """
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(out)
+    say = progress_printer(prefix="study paper: ")
     case1 = load_scenario("paper-table-3-1")
     case2 = load_scenario("paper-table-3-2")
     if quick:
         case1 = case1.with_changes(simulation=type(case1.simulation)(duration=4.0, sample_rate=1000.0))
-    print("study paper: Table 3.1 case (exact, paper, multibody check)", flush=True)
+    say("Table 3.1 case (exact, paper, multibody check)")
     e1, p1 = simulate(case1, "exact"), simulate(case1, "paper")
     check1 = MujocoTable(case1).simulate(rtol=1e-9 if quick else 1e-11) if mujoco_available() else None
     _fig_3_3(e1, p1, check1, out / "fig_3_3.png")
-    print("study paper: Table 3.2 case (exact, paper)", flush=True)
+    say("Table 3.2 case (exact, paper)")
     e2, p2 = simulate(case2, "exact"), simulate(case2, "paper")
     check2 = None
     if mujoco_available() and not quick:
-        print("study paper: Table 3.2 multibody check", flush=True)
+        say("Table 3.2 multibody check")
         check2 = MujocoTable(case2).simulate()
     _fig_3_4(case2, out / "fig_3_4.png")
     _fig_3_5(e2, p2, out / "fig_3_5.png")
@@ -164,17 +155,16 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
         f"The carriages stop at {e2.stop_time:.4g} s. Band: 5 % of each signal's peak displacement from the",
         "initial equilibrium, around the final equilibrium (`docs/scenario-format.md`).",
         "",
-        "| signal | peak (exact) | settling exact [s] | settling paper model [s] |",
-        "|---|---|---|---|",
+        *table_header(["signal", "peak (exact)", "settling exact [s]", "settling paper model [s]"]),
     ]
     for name in SIGNALS:
-        k, unit = _SCALE[name]
+        k, unit = micro_unit(name)
         lines.append(
-            f"| {name} | {e2.peak[name] * k:.4g} {unit} | {_fmt(e2.settling_time[name])} | "
-            f"{_fmt(p2.settling_time[name])} |"
+            f"| {name} | {e2.peak[name] * k:.4g} {unit} | {fmt(e2.settling_time[name])} | "
+            f"{fmt(p2.settling_time[name])} |"
         )
     lines += [
-        f"| **largest** | | **{_fmt(e2.settling_time_max)}** | **{_fmt(p2.settling_time_max)}** |",
+        f"| **largest** | | **{fmt(e2.settling_time_max)}** | **{fmt(p2.settling_time_max)}** |",
         "",
         "The paper suggests about 1.5 s. The figure depends on what the paper leaves open (below); the",
         "exact and small-angle models agree on it to within the band's resolution.",
@@ -183,15 +173,14 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
         "",
         "The paper found about 1e-3 between its equations and ADAMS.",
         "",
-        "| case | signal | exact vs MuJoCo | paper model vs MuJoCo | paper model vs exact |",
-        "|---|---|---|---|---|",
+        *table_header(["case", "signal", "exact vs MuJoCo", "paper model vs MuJoCo", "paper model vs exact"]),
     ]
     for label, ex, pa, ch in (("Table 3.1", e1, p1, check1), ("Table 3.2", e2, p2, check2)):
         pe = relative_rms(pa.signals, ex.signals)
         em = relative_rms(ex.signals, ch.signals) if ch is not None else np.full(6, np.nan)
         pm = relative_rms(pa.signals, ch.signals) if ch is not None else np.full(6, np.nan)
         for i in _moving(ex.signals):
-            lines.append(f"| {label} | {SIGNALS[i]} | {_fmt(em[i], 2)} | {_fmt(pm[i], 2)} | {_fmt(pe[i], 2)} |")
+            lines.append(table_row([label, SIGNALS[i], fmt(em[i], ".2g"), fmt(pm[i], ".2g"), fmt(pe[i], ".2g")]))
     lines += [
         "",
         "The exact model and MuJoCo agree to the integrator's accuracy (about 1e-8). The paper's",
@@ -221,6 +210,4 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
     ]
     if check1 is None:
         lines += ["", "MuJoCo is not installed: the multibody check was skipped (`pip install 'isolator[check]'`)."]
-    report = out / "report.md"
-    report.write_text("\n".join(lines) + "\n")
-    return report
+    return write_report(out, lines)

@@ -15,7 +15,6 @@ judged by the true simulation, with each run's own 5 % band:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -39,11 +38,10 @@ from controllers.profiles import (
 )
 from isolator import SIGNALS, Scenario
 
+from .figures import nan_if_none, save_figure
+from .reporting import fmt, micro_unit, output_folder, progress_printer, table_header, table_row, write_report
+
 __all__ = ["ProfileStudy", "run_profile_study"]
-
-_UNITS = {"x": ("µm", 1e6), "y": ("µm", 1e6), "z": ("µm", 1e6), "rx": ("µrad", 1e6), "ry": ("µrad", 1e6),
-          "rz": ("µrad", 1e6)}
-
 
 @dataclass(frozen=True)
 class ProfileStudy:
@@ -88,8 +86,8 @@ def run_profile_study(
     progress : bool
         Print a line per step.
     """
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
+    out = output_folder(folder)
+    say = progress_printer(progress)
     command = command_time(scenario)
     scenarios: dict[str, Scenario] = {"paper": scenario}
     peaks = list(evaluate_move(scenario, "paper", command).peak.values())
@@ -98,14 +96,12 @@ def run_profile_study(
     scenarios["time-optimal"] = time_optimal_scenario(scenario)
     optimisations = {}
     for objective in ("settling", "cycle"):
-        if progress:
-            print(f"optimising for the {objective} time ...", flush=True)
+        say(f"optimising for the {objective} time ...")
         result = optimise_profiles(scenario, ProfileSettings(objective=objective, variants=variants),
                                    progress=progress)
         optimisations[objective] = result
         scenarios[f"optimised ({objective})"] = result.scenario
-    if progress:
-        print("measuring every method on the model variants ...", flush=True)
+    say("measuring every method on the model variants ...")
     methods = {name: evaluate_move(sc, name, command) for name, sc in scenarios.items()}
     spread = {name: over_variants(sc, name, command, variants) for name, sc in scenarios.items()}
     study = ProfileStudy(methods, scenarios, spread, optimisations, out)
@@ -143,8 +139,7 @@ def _plot_profiles(study: ProfileStudy) -> None:
     axes[0, -1].legend(fontsize=8, loc="lower left")
     fig.suptitle("Carriage profiles: the braking phase that sets the residual vibration")
     fig.tight_layout()
-    fig.savefig(study.folder / "profiles.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, study.folder / "profiles.png")
 
 
 def _plot_response(study: ProfileStudy) -> None:
@@ -152,9 +147,11 @@ def _plot_response(study: ProfileStudy) -> None:
     colours = _colours(list(study.scenarios))
     fig, axes = plt.subplots(2, 3, figsize=(15, 7.5), sharex=True)
     for ax, signal in zip(axes.T.ravel(), SIGNALS, strict=True):
-        unit, scale = _UNITS[signal]
+        scale, unit = micro_unit(signal)
         for name in shown:
             r = study.methods[name].response
+            if r.final is None:  # a move that never stops has no final value to settle about
+                continue
             stop = r.stop_time
             keep = r.t >= stop - 1.0
             i = SIGNALS.index(signal)
@@ -171,12 +168,7 @@ def _plot_response(study: ProfileStudy) -> None:
     axes[0, 0].legend(fontsize=8)
     fig.suptitle("Table response around the stop: paper profile, ZV shaping and the optimised moves")
     fig.tight_layout()
-    fig.savefig(study.folder / "response.png", dpi=120)
-    plt.close(fig)
-
-
-def _num(value: float | None) -> float:
-    return math.nan if value is None else value
+    save_figure(fig, study.folder / "response.png")
 
 
 def _plot_times(study: ProfileStudy) -> None:
@@ -184,22 +176,21 @@ def _plot_times(study: ProfileStudy) -> None:
     x = np.arange(len(names))
     fig, ax = plt.subplots(figsize=(12, 5))
     moves = [study.methods[n].move_time for n in names]
-    settles = [_num(study.methods[n].settling_time_max) for n in names]
+    settles = [nan_if_none(study.methods[n].settling_time_max) for n in names]
     ax.bar(x, moves, color="tab:blue", label="move")
     ax.bar(x, settles, bottom=moves, color="tab:red", label="5 % settling")
     for xi, m, s in zip(x, moves, settles, strict=True):
-        ax.text(xi, m + (0 if math.isnan(s) else s) + 0.05, f"{m + s:.2f} s\n(settle {s:.2f})", ha="center",
+        ax.text(float(xi), m + (0 if np.isnan(s) else s) + 0.05, f"{m + s:.2f} s\n(settle {s:.2f})", ha="center",
                 fontsize=8)
     ax.set_xticks(x, names, rotation=20)
     ax.set_ylabel("time from the move's command [s]")
-    ax.set_ylim(min(moves) * 0.9, max(m + (0 if math.isnan(s) else s) for m, s in zip(moves, settles,
+    ax.set_ylim(min(moves) * 0.9, max(m + (0 if np.isnan(s) else s) for m, s in zip(moves, settles,
                                                                                          strict=True)) * 1.08)
     ax.set_title("Cycle time = move + 5 % settling, per profile method (nominal model)")
     ax.legend()
     ax.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
-    fig.savefig(study.folder / "times.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, study.folder / "times.png")
 
 
 def _plot_robustness(study: ProfileStudy, variants: tuple[ModelVariant, ...]) -> None:
@@ -208,7 +199,7 @@ def _plot_robustness(study: ProfileStudy, variants: tuple[ModelVariant, ...]) ->
     width = 0.8 / len(variants)
     cmap = plt.get_cmap("viridis")
     for k, variant in enumerate(variants):
-        values = [_num(study.variants[n][k].settling_time_max) for n in names]
+        values = [nan_if_none(study.variants[n][k].settling_time_max) for n in names]
         ax.bar(np.arange(len(names)) + (k - (len(variants) - 1) / 2) * width, values, width,
                color=cmap(k / max(1, len(variants) - 1)), label=variant.label)
     ax.set_xticks(np.arange(len(names)), names, rotation=20)
@@ -217,21 +208,20 @@ def _plot_robustness(study: ProfileStudy, variants: tuple[ModelVariant, ...]) ->
     ax.legend(fontsize=8, ncol=4)
     ax.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
-    fig.savefig(study.folder / "robustness.png", dpi=120)
-    plt.close(fig)
+    save_figure(fig, study.folder / "robustness.png")
 
 
 def _write_report(study: ProfileStudy, scenario: Scenario, peaks: list[float],
                   variants: tuple[ModelVariant, ...]) -> None:
     def f(value: float | None) -> str:
-        return "n/a" if value is None else f"{value:.3f}"
+        return fmt(value, ".3f")
 
     lines = [f"# Profile study: {scenario.name}", "",
              "Every method is judged by the exact time-varying simulation; the settling time is the paper's "
              "5 % criterion (band: 5 % of each signal's own peak in that run). Move time counts from the "
              f"move's command (t = {command_time(scenario):g} s); cycle = move + settling.", "",
-             "| method | move [s] | settling [s] | cycle [s] | settling over the model variants [s] |",
-             "|---|---|---|---|---|"]
+             *table_header(["method", "move [s]", "settling [s]", "cycle [s]",
+                            "settling over the model variants [s]"])]
     for name, m in study.methods.items():
         values = [v.settling_time_max for v in study.variants[name] if v.settling_time_max is not None]
         span = f"{min(values):.3f} .. {max(values):.3f}" if values else "n/a"
@@ -249,18 +239,17 @@ def _write_report(study: ProfileStudy, scenario: Scenario, peaks: list[float],
         lines.append(f"- Cycle time of the cycle-optimised move: {cyc.cycle_time:.3f} s against ZV shaping's "
                      f"{zv.cycle_time:.3f} s.")
     lines += ["", "## Peak table motion per method", "",
-              "| method | " + " | ".join(f"{s} [{_UNITS[s][0]}]" for s in SIGNALS) + " |",
-              "|---|" + "---|" * len(SIGNALS)]
+              *table_header(["method", *(f"{s} [{micro_unit(s)[1]}]" for s in SIGNALS)])]
     for name, m in study.methods.items():
-        lines.append(f"| {name} | " + " | ".join(f"{m.peak[s] * _UNITS[s][1]:.3g}" for s in SIGNALS) + " |")
+        lines.append(table_row([name, *(f"{m.peak[s] * micro_unit(s)[0]:.3g}" for s in SIGNALS)]))
     lines += ["", "## Optimised parameters", ""]
     for objective, result in study.optimisations.items():
         lines.append(f"**{objective}** (IPOPT {result.status}, {result.iterations} iterations, "
                      f"{result.build_time + result.solve_time:.1f} s, over {len(variants)} models):")
         lines.append("")
         for d in result.designs:
-            values = ", ".join(f"{n} = {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
-            lines.append(f"- {d.name} ({d.shape}): {values}")
+            text = ", ".join(f"{n} = {float(v):.4g}" for n, v in zip(d.names, d.values, strict=True))
+            lines.append(f"- {d.name} ({d.shape}): {text}")
         lines.append("")
     lines += ["## Dominant modes (input shapers are tuned to the first of each carriage)", ""]
     for i, carriage in enumerate(scenario.carriages):
@@ -277,4 +266,4 @@ def _write_report(study: ProfileStudy, scenario: Scenario, peaks: list[float],
               "objective in each run's own band units over the model variants "
               f"({', '.join(v.label for v in variants)}).",
               "", "Figures: `profiles.png`, `response.png`, `times.png`, `robustness.png`."]
-    (study.folder / "report.md").write_text("\n".join(lines) + "\n")
+    write_report(study.folder, lines)

@@ -30,18 +30,20 @@ from __future__ import annotations
 
 import csv
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import matplotlib.pyplot as plt
 import numpy as np
-from matplotlib.axis import Axis
 from matplotlib.colors import LogNorm
-from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from isolator import Scenario, ScenarioError, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import transmissibility
+
+from .figures import log_mesh_edges, plain_log_axis, save_figure
+from .reporting import output_folder, progress_printer, table_header, write_report
 
 __all__ = ["TradeoffStudy", "pareto_front", "run_tradeoff_study"]
 
@@ -132,8 +134,8 @@ def pareto_front(points: np.ndarray) -> np.ndarray:
 def run_tradeoff_study(
     folder: str | Path,
     scenario: Scenario,
-    stiffness: np.ndarray | None = None,
-    damping: np.ndarray | None = None,
+    stiffness: Sequence[float] | np.ndarray | None = None,
+    damping: Sequence[float] | np.ndarray | None = None,
     reference_hz: float = 10.0,
     progress: bool = True,
 ) -> TradeoffStudy:
@@ -165,13 +167,8 @@ def run_tradeoff_study(
         raise ScenarioError("carriages: none move, so there is no settling time to trade")
     if not math.isfinite(sim.stop_time):
         raise ScenarioError("carriages: the moves never stop (a sine), so there is no settling time to trade")
-    out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
-
-    def say(text: str) -> None:
-        if progress:
-            print(text, flush=True)
-
+    out = output_folder(folder)
+    say = progress_printer(progress)
     say(f"tradeoff: {k.size} x {c.size} designs of {scenario.name}; which stiffnesses tip ...")
     stable = np.array([_stands(sim, scale) for scale in k])
     n_runs = int(stable.sum()) * c.size
@@ -211,7 +208,7 @@ def run_tradeoff_study(
     return study
 
 
-def _grid(values: np.ndarray, name: str) -> np.ndarray:
+def _grid(values: Sequence[float] | np.ndarray, name: str) -> np.ndarray:
     grid = np.atleast_1d(np.asarray(values, dtype=float))
     if grid.ndim != 1 or grid.size < 2:
         raise ScenarioError(f"{name}: give at least two scale factors")
@@ -242,23 +239,6 @@ def _linear_figures(sim: Simulator, stiffness: float, damping: float, reference_
     return float(np.max(np.abs(np.diag(at)))), peaks[worst][0], peaks[worst][1], decay
 
 
-_PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
-
-
-def _plain_log(axis: Axis) -> None:
-    """Log-axis ticks at 1, 2 and 5 per decade, written as plain numbers."""
-    axis.set_major_locator(LogLocator(subs=(1.0, 2.0, 5.0)))
-    axis.set_major_formatter(_PLAIN)
-    axis.set_minor_formatter(NullFormatter())
-
-
-def _mesh_edges(values: np.ndarray) -> np.ndarray:
-    """Cell edges of a log grid, for pcolormesh."""
-    logs = np.log10(values)
-    mids = (logs[1:] + logs[:-1]) / 2
-    return 10 ** np.concatenate([[2 * logs[0] - mids[0]], mids, [2 * logs[-1] - mids[-1]]])
-
-
 def _plot_maps(study: TradeoffStudy) -> None:
     panels = [
         (study.settling_time, "largest 5 % settling time [s]", "viridis", None),
@@ -267,7 +247,7 @@ def _plot_maps(study: TradeoffStudy) -> None:
         (study.peak, "resonance peak of the transmissibility [m/m], worst of x, y, z", "magma", LogNorm()),
     ]
     fig, axes = plt.subplots(1, 3, figsize=(17, 5.2), constrained_layout=True)
-    ke, ce = _mesh_edges(study.stiffness), _mesh_edges(study.damping)
+    ke, ce = log_mesh_edges(study.stiffness), log_mesh_edges(study.damping)
     front = study.pareto()
     nominal = study.nominal()
     for ax, (values, label, cmap, norm) in zip(axes, panels, strict=True):
@@ -276,7 +256,7 @@ def _plot_maps(study: TradeoffStudy) -> None:
             mesh = ax.pcolormesh(ce, ke, np.ma.masked_invalid(values), cmap=cmap, norm=norm, shading="flat")
             bar = fig.colorbar(mesh, ax=ax, label=label)
             if norm is not None:
-                _plain_log(bar.ax.yaxis)
+                plain_log_axis(bar.ax.yaxis)
         for i in np.flatnonzero(~study.stable):
             ax.fill_between([ce[0], ce[-1]], ke[i], ke[i + 1], facecolor="0.85", hatch="//", edgecolor="0.5",
                             linewidth=0, label="table tips" if i == np.flatnonzero(~study.stable)[0] else None)
@@ -287,15 +267,14 @@ def _plot_maps(study: TradeoffStudy) -> None:
             ax.plot(1.0, 1.0, "*", ms=14, mfc="tab:red", mec="white", label="scenario's design")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        _plain_log(ax.xaxis)
-        _plain_log(ax.yaxis)
+        plain_log_axis(ax.xaxis)
+        plain_log_axis(ax.yaxis)
         ax.set_xlabel("damping scale (x the scenario's) [-]")
         ax.set_ylabel("stiffness scale (x the scenario's) [-]")
         ax.set_title(label.split(" [")[0])
         ax.legend(loc="upper left", fontsize=8, framealpha=0.85)
     fig.suptitle(f"{study.scenario.name}: isolator designs, every isolator's stiffness and damping scaled")
-    fig.savefig(study.folder / "maps.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, study.folder / "maps.png", dpi=110)
 
 
 def _plot_tradeoff(study: TradeoffStudy) -> None:
@@ -308,7 +287,7 @@ def _plot_tradeoff(study: TradeoffStudy) -> None:
         points = ax.scatter(study.settling_time[ok], study.transmissibility[ok], c=cc[ok], s=size,
                             cmap="viridis", norm=LogNorm(), label="design (size: stiffness)")
         bar = fig.colorbar(points, ax=ax, label="damping scale (x the scenario's) [-]")
-        _plain_log(bar.ax.yaxis)
+        plain_log_axis(bar.ax.yaxis)
     front = study.pareto()
     if front:
         ax.plot([study.settling_time[p] for p in front], [study.transmissibility[p] for p in front], "-o",
@@ -318,14 +297,13 @@ def _plot_tradeoff(study: TradeoffStudy) -> None:
         ax.plot(study.settling_time[nominal], study.transmissibility[nominal], "*", ms=18, mfc="tab:red",
                 mec="black", label="scenario's design")
     ax.set_yscale("log")
-    _plain_log(ax.yaxis)
+    plain_log_axis(ax.yaxis)
     ax.set_xlabel("largest 5 % settling time after the carriages stop [s]")
     ax.set_ylabel(f"floor-to-table transmissibility at {study.reference_hz:g} Hz, worst of x, y, z [m/m]")
     ax.set_title(f"{study.scenario.name}: settling against floor isolation (lower left is better)")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend(loc="upper right")
-    fig.savefig(study.folder / "tradeoff.png", dpi=110)
-    plt.close(fig)
+    save_figure(fig, study.folder / "tradeoff.png", dpi=110)
 
 
 def _status(study: TradeoffStudy, i: int, j: int) -> str:
@@ -355,8 +333,8 @@ def _row(study: TradeoffStudy, p: tuple[int, int]) -> str:
 
 
 def _write_report(study: TradeoffStudy) -> None:
-    header = ["| stiffness x | damping x | settling [s] | "
-              f"transmissibility at {study.reference_hz:g} Hz | resonance peak |", "|---|---|---|---|---|"]
+    header = table_header(["stiffness x", "damping x", "settling [s]",
+                           f"transmissibility at {study.reference_hz:g} Hz", "resonance peak"])
     sc = study.scenario
     lines = [f"# Isolation against settling: {sc.name}", "",
              f"{study.stiffness.size} stiffness scales ({study.stiffness[0]:.3g} to {study.stiffness[-1]:.3g}) x "
@@ -407,4 +385,4 @@ def _write_report(study: TradeoffStudy) -> None:
               "- The settling band is the scenario's `[settling]` rule (default: 5 % of each signal's peak in "
               "that run), so each design is judged against its own peak, as in the paper.",
               f"- Full numbers: `designs.csv`; re-run: `isolator study tradeoff {sc.name} --out DIR`."]
-    (study.folder / "report.md").write_text("\n".join(lines) + "\n")
+    write_report(study.folder, lines)

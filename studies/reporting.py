@@ -1,0 +1,80 @@
+"""What the studies share in writing their reports: the output folder, progress lines, numbers,
+units and Markdown tables, and ``report.md`` itself."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from pathlib import Path
+
+from isolator import SIGNALS
+
+__all__ = [
+    "fmt",
+    "largest",
+    "micro_unit",
+    "output_folder",
+    "progress_printer",
+    "table_header",
+    "table_row",
+    "write_report",
+]
+
+
+def output_folder(out: str | Path) -> Path:
+    """The study's output folder, created (with its parents) if need be."""
+    folder = Path(out)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def progress_printer(enabled: bool = True, prefix: str = "") -> Callable[[str], None]:
+    """A function printing ``prefix + text`` at once, or nothing when not ``enabled``."""
+
+    def say(text: str) -> None:
+        if enabled:
+            print(f"{prefix}{text}", flush=True)
+
+    return say
+
+
+def fmt(value: float | None, spec: str = ".3g", suffix: str = "") -> str:
+    """``value`` formatted by ``spec`` with ``suffix``, or ``n/a`` for None or NaN."""
+    if value is None or (isinstance(value, float) and math.isnan(value)):
+        return "n/a"
+    return f"{value:{spec}}{suffix}"
+
+
+def largest(values: Iterable[float | None]) -> float | None:
+    """The largest value, or None when any is None (a signal that never settles)."""
+    known: list[float] = []
+    for value in values:
+        if value is None:
+            return None
+        known.append(value)
+    return max(known)
+
+
+def micro_unit(signal: str) -> tuple[float, str]:
+    """Scale and unit a table signal is reported in: micrometres or microradians."""
+    if signal not in SIGNALS:
+        raise ValueError(f"signal: must be one of {', '.join(SIGNALS)}, got '{signal}'")
+    return 1e6, "µrad" if signal.startswith("r") else "µm"
+
+
+def table_row(cells: Iterable[object]) -> str:
+    """One row of a Markdown table."""
+    return "| " + " | ".join(str(c) for c in cells) + " |"
+
+
+def table_header(columns: Iterable[object]) -> list[str]:
+    """A Markdown table's header row and its separator."""
+    names = list(columns)
+    return [table_row(names), "|" + "---|" * len(names)]
+
+
+def write_report(folder: Path, lines: Iterable[str], name: str = "report.md") -> Path:
+    """Write the lines, one per line, to ``folder / name``; return its path."""
+    path = folder / name
+    path.write_text("\n".join(lines) + "\n")
+    return path
