@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import casadi as ca
@@ -9,6 +10,7 @@ import numpy as np
 
 from isolator.errors import UnstableTableError
 from isolator.model.linearisation import build_linearisation
+from isolator.model.pneumatic_statics import air_contents, closed_static_function
 from isolator.model.variants import Model
 from isolator.numerics.native import MappedFunction
 
@@ -16,6 +18,8 @@ __all__ = [
     "DOF_NAMES",
     "Equilibrium",
     "RockingStiffness",
+    "air_in_groups",
+    "closed_rest_states",
     "rocking_stiffness",
     "static_equilibria",
     "static_equilibrium",
@@ -172,33 +176,17 @@ def static_equilibrium(
     return static_equilibria(model, np.asarray(p, dtype=float)[None, :], positions, where, check)[0]
 
 
-def static_equilibria(
-    model: Model, params: np.ndarray, positions: np.ndarray, where: str = "at rest", check: bool = True
-) -> list[Equilibrium]:
-    """:func:`static_equilibrium` for many parameter vectors at once (Newton's method run side by side).
+def _newton(
+    residual: Callable[[np.ndarray, np.ndarray], list[np.ndarray]],
+    params: np.ndarray,
+    size: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Newton's method for many rows side by side: ``residual(rows, z) -> (r, dr/dz)``.
 
-    Parameters
-    ----------
-    model : Model
-    params : ndarray (runs, parameters)
-    positions : ndarray
-        Carriage coordinates [m], the same for every run.
-    where : str
-        Words for messages.
-    check : bool
-        Raise when an equilibrium is unstable.
-
-    Raises
-    ------
-    UnstableTableError
-        For the first run without a stable equilibrium; the message names the
-        run when there are several.
+    Returns the solutions (runs, size), the rows still iterating and the rows that failed.
     """
-    params = np.atleast_2d(np.asarray(params, dtype=float))
     runs = params.shape[0]
-    solver = _solver(model)
-    c = model.layout.rest_inputs(positions)
-    z = np.zeros((runs, model.n_static))
+    z = np.zeros((runs, size))
     tolerance = 1e-11 * (np.abs(params[:, 0]) * params[:, 1] + 1.0)
     active = np.ones(runs, dtype=bool)
     failed = np.zeros(runs, dtype=bool)
@@ -206,7 +194,7 @@ def static_equilibria(
         idx = np.nonzero(active)[0]
         if idx.size == 0:
             break
-        r, jac = solver.residual(z[idx], c, params[idx])
+        r, jac = residual(idx, z[idx])
         bad = ~np.all(np.isfinite(r), axis=1)
         done = ~bad & (np.max(np.abs(r), axis=1) <= tolerance[idx])
         failed[idx[bad]] = True
@@ -220,10 +208,59 @@ def static_equilibria(
         except np.linalg.LinAlgError:  # a free direction (no stiffness along it): least squares
             dz = -np.einsum("nij,nj->ni", np.linalg.pinv(jac[keep]), r[keep])
         z[step] += dz
-        small = np.max(np.abs(dz), axis=1) < 1e-15
+        small = (np.max(np.abs(dz[:, :6]), axis=1) < 1e-15) & (np.max(np.abs(dz[:, 6:]), axis=1, initial=0.0) < 1e-6)
         tipped = np.max(np.abs(z[step, 3:6]), axis=1) > 1.0
         failed[step[tipped & ~small]] = True
         active[step[small | tipped]] = False
+    return z, active, failed
+
+
+def static_equilibria(
+    model: Model,
+    params: np.ndarray,
+    positions: np.ndarray,
+    where: str = "at rest",
+    check: bool = True,
+    air: np.ndarray | None = None,
+    all_closed: bool = False,
+) -> list[Equilibrium]:
+    """:func:`static_equilibrium` for many parameter vectors at once (Newton's method run side by side).
+
+    Parameters
+    ----------
+    model : Model
+    params : ndarray (runs, parameters)
+    positions : ndarray
+        Carriage coordinates [m], the same for every run.
+    where : str
+        Words for messages.
+    check : bool
+        Raise when an equilibrium is unstable.
+    air : ndarray (runs, groups), optional
+        Pneumatic tables: each group's air (:func:`air_in_groups`) for the
+        groups without a valve, which then keep it; groups with a valve hold
+        their sensor at zero. None: every sensor at zero (the initial, level
+        equilibrium).
+    all_closed : bool
+        With ``air``: every group keeps its air, valve or not (the table at
+        rest with the air it has at some instant).
+
+    Raises
+    ------
+    UnstableTableError
+        For the first run without a stable equilibrium; the message names the
+        run when there are several.
+    """
+    params = np.atleast_2d(np.asarray(params, dtype=float))
+    runs = params.shape[0]
+    solver = _solver(model)
+    c = model.layout.rest_inputs(positions)
+    if air is None:
+        z, active, failed = _newton(lambda rows, z: solver.residual(z, c, params[rows]), params, model.n_static)
+    else:
+        closed = solver.closed(all_closed)
+        air = np.atleast_2d(np.asarray(air, dtype=float))
+        z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
     failed |= active  # did not converge
     label = (lambda i: f"run {i}: ") if runs > 1 else (lambda i: "")
     if failed.any():
@@ -253,16 +290,63 @@ def static_equilibria(
     return [Equilibrium(z[i], states[i], q, eigenvalues[i]) for i in range(runs)]
 
 
+def closed_rest_states(
+    model: Model, params: np.ndarray, positions: np.ndarray, air: np.ndarray, all_closed: bool = True
+) -> np.ndarray:
+    """States (runs, n_states) of a pneumatic table at rest with each group's ``air`` kept (groups with a
+    valve level instead unless ``all_closed``); no stability check.
+
+    Raises
+    ------
+    UnstableTableError
+        When a run has no such rest.
+    """
+    params = np.atleast_2d(np.asarray(params, dtype=float))
+    solver = _solver(model)
+    c = model.layout.rest_inputs(positions)
+    closed = solver.closed(all_closed)
+    air = np.atleast_2d(np.asarray(air, dtype=float))
+    z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
+    if (failed | active).any():
+        raise UnstableTableError(f"no rest with the groups' air kept (run {int(np.argmax(failed | active))})")
+    return np.asarray(solver.pose(z, params)[0])
+
+
+def air_in_groups(model: Model, states: np.ndarray, params: np.ndarray) -> np.ndarray:
+    """Each leveling group's air ``sum p^(1/n) V`` of exact-model states (N, n_states) [Pa^(1/n) m^3]."""
+    return np.asarray(_solver(model).air(np.atleast_2d(states), params)[0])
+
+
 class _Solver:
     """A model's static residual and rest linearisation, compiled for blocks of runs."""
 
     def __init__(self, model: Model) -> None:
+        self.model = model
         self.residual = MappedFunction(model.static_residual, f"isolator_static_{model.tag}")
+        self._closed: dict[bool, MappedFunction] = {}
         z, c = ca.SX.sym("z", model.n_static), ca.SX.sym("c", model.layout.input_size)
         p = ca.SX.sym("p", model.layout.size)
         x = model.pose_state(z, p)
         rest = ca.Function("rest_linear", [z, c, p], [x, model.state_jacobian(x, c, p)])
+        self.pose = MappedFunction(ca.Function("rest_state", [z, p], [x]), f"isolator_pose_{model.tag}")
         self.linear = MappedFunction(rest, f"isolator_rest_{model.tag}", optimisation="-O1")
+        structure = model.layout.pneumatic
+        if structure is not None:
+            x, p = ca.SX.sym("x", model.n_states), ca.SX.sym("p", model.layout.size)
+            self.air = MappedFunction(
+                ca.Function("air", [x, p], [air_contents(structure, model.layout.unpack(p), x)]),
+                f"isolator_air_{model.tag}",
+            )
+
+    def closed(self, all_closed: bool) -> MappedFunction:
+        """The final (or, ``all_closed``, the quasi-static) pneumatic residual ``(z, c, p, air)``."""
+        if all_closed not in self._closed:
+            self._closed[all_closed] = MappedFunction(
+                closed_static_function(self.model.layout, all_closed),
+                f"isolator_closed{int(all_closed)}_{self.model.tag}",
+            )
+        return self._closed[all_closed]
+
 
 
 _SOLVERS: dict[tuple, _Solver] = {}

@@ -112,11 +112,12 @@ def air_contents(structure: PneumaticStructure, prm: dict[str, ca.SX], x: ca.SX)
 
 
 @lru_cache(maxsize=16)
-def closed_static_function(layout: ParameterLayout) -> ca.Function:
+def closed_static_function(layout: ParameterLayout, all_closed: bool = False) -> ca.Function:
     """The final static residual of a pneumatic table: ``(z, c, p, air) -> (r, dr/dz)``.
 
     ``z`` = (pose, group gauge pressures); groups with a valve hold their
-    sensor at zero, the others keep ``air`` (their :func:`air_contents`).
+    sensor at zero, the others keep ``air`` (their :func:`air_contents`);
+    ``all_closed``: every group keeps its air, valve or not.
     """
     structure = layout.pneumatic
     if structure is None:
@@ -143,7 +144,7 @@ def closed_static_function(layout: ParameterLayout) -> ca.Function:
     scale = _weight_scale(prm)
     extra = []
     for j, members in enumerate(structure.groups):
-        if structure.valves[j]:
+        if structure.valves[j] and not all_closed:
             extra.append(heights[j] * scale)
             continue
         volume = sum((v1[k] + (v2[slot[k]] if k in slot else 0) for k in members), ca.SX(0))

@@ -95,7 +95,7 @@ def newton_euler_residual(
     w_body: ca.SX,
     acc_body: ca.SX,
     alpha_body: ca.SX,
-    c: ca.SX,
+    c: ca.SX | None,
     prm: dict[str, ca.SX],
     parents: tuple[int, ...],
     preload: bool = True,
@@ -153,6 +153,8 @@ def newton_euler_residual(
         mass matrix [[m I, -[S]x], [[S]x, J + Jc]].
     """
     if kin is None:
+        if c is None:
+            raise ValueError("newton_euler_residual: give the carriage inputs c or their moments kin")
         kin = carriage_kinematics(c, prm, parents)
     m_tot = prm["table_mass"] + kin["m"]
     g_world = ca.vertcat(0, 0, -prm["gravity"])

@@ -60,7 +60,9 @@ def cardan_matrix(th: ca.SX) -> ca.SX:
 
 def pose_rotation(angles: np.ndarray) -> np.ndarray:
     """Numeric Rz Ry Rx of Cardan angles (rx, ry, rz) [rad], e.g. of an equilibrium pose, (3, 3)."""
-    return np.asarray(cardan_matrix(ca.DM(np.asarray(angles, dtype=float))), dtype=float)
+    angles_sym = ca.SX.sym("a", 3)
+    numeric = ca.Function("pose_rotation", [angles_sym], [cardan_matrix(angles_sym)])
+    return np.asarray(numeric(np.asarray(angles, dtype=float)), dtype=float)
 
 
 

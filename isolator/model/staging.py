@@ -79,7 +79,8 @@ def staged_functions(
     element = element_of(layout)
     states = inner if inner.shape[0] else None
     res = newton_euler_residual(
-        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin, **moved,
+        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=kin,
+        ground=moved["ground"], actuator_forces=moved["actuator_forces"],
         element=element, element_states=states,
     )
     bias = ca.substitute(res, acc_vars, ca.SX.zeros(6, 1))
@@ -88,7 +89,8 @@ def staged_functions(
     xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:], inner_rates)
     moments = carriage_kinematics(c[: 3 * n], prm, layout.parents)
     mass = ca.jacobian(newton_euler_residual(
-        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=moments, **extra,
+        pos, rot, vel, w, acc_vars[:3], acc_vars[3:], None, prm, layout.parents, kin=moments,
+        ground=extra["ground"], actuator_forces=extra["actuator_forces"],
         element=element, element_states=states,
     ), acc_vars)
     inputs = ca.vertcat(_pack_time_only(moments, solve_blocks(mass, ca.SX.eye(6))), rest)

@@ -220,7 +220,8 @@ class ExactModel(ModelVariant):
         rot = quaternion_to_matrix(qt)
         acc_vars = ca.SX.sym("a", 6)
         res = newton_euler_residual(
-            pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c[: 3 * n], prm, parents, **extra,
+            pos, rot, vel, w, acc_vars[:3], acc_vars[3:], c[: 3 * n], prm, parents,
+            ground=extra["ground"], actuator_forces=extra["actuator_forces"],
             element=element, element_states=states,
         )
         mass = ca.jacobian(res, acc_vars)
@@ -233,7 +234,8 @@ class ExactModel(ModelVariant):
         rest_states = rest_element_states(layout, prm, z[6:]) if states is not None else None
         static = newton_euler_residual(
             pose_z[:3], cardan_matrix(pose_z[3:]), zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents,
-            **rest_extra, element=element, element_states=rest_states,
+            ground=rest_extra["ground"], actuator_forces=rest_extra["actuator_forces"],
+            element=element, element_states=rest_states,
         )
         if layout.pneumatic is not None:
             static = ca.vertcat(static, level_residual(layout, prm, pose_z))
@@ -272,7 +274,7 @@ class PaperModel(ModelVariant):
         rot = cardan_matrix(th)
         body = newton_euler_residual(
             pos, rot, gen[6:9], gen[9:12], rot.T @ gen[12:15], gen[15:18], c[: 3 * n], prm, parents,
-            preload=False, **extra,
+            preload=False, ground=extra["ground"], actuator_forces=extra["actuator_forces"],
         )
         res = ca.vertcat(rot @ body[:3], rot @ body[3:])  # world frame, as the paper writes it
         at_zero = {"x": ca.SX.zeros(18, 1)}

@@ -337,10 +337,11 @@ class Scenario:
         """Vertical static force of each isolator at the reference pose [N].
 
         All isolators have the same free height, so together they carry the
-        whole weight: ``k_z * g * total_mass / sum(k_z)`` (``docs/scenario-format.md``;
+        whole weight: ``k_z * g * total_mass / sum(k_z)`` (zeros for pneumatic isolators, whose load is
+        their chamber pressure) (``docs/scenario-format.md``;
         :func:`isolator.model.elements.spring_damper.isolator_preloads` is the symbolic form).
         """
-        kz = np.array([iso.stiffness[2] for iso in self.isolators])
+        kz = np.array([iso.stiffness[2] if isinstance(iso, Isolator) else 0.0 for iso in self.isolators])
         total = kz.sum()
         return kz * (self.gravity * self.total_mass / total) if total > 0 else np.zeros_like(kz)
 

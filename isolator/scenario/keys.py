@@ -50,24 +50,24 @@ class KeyReader:
         value = self.raw(name, default)
         return number(value, self.key(name), positive=positive, nonnegative=nonnegative, below=below)
 
-    def vector(self, name: str, default: Any = ..., *, positive: bool = False, nonnegative: bool = False):
+    def vector(
+        self, name: str, default: Any = ..., *, positive: bool = False, nonnegative: bool = False
+    ) -> tuple[float, float, float]:
         value = self.raw(name, default)
         key = self.key(name)
         if not isinstance(value, list | tuple) or len(value) != 3:
             raise ScenarioError(f"{key}: must be a list of three numbers")
-        return tuple(
-            number(v, f"{key}[{i}]", positive=positive, nonnegative=nonnegative)
-            for i, v in enumerate(value)
-        )
+        a, b, c = (number(v, f"{key}[{i}]", positive=positive, nonnegative=nonnegative) for i, v in enumerate(value))
+        return a, b, c
 
-    def unit_vector(self, name: str):
+    def unit_vector(self, name: str) -> tuple[float, float, float]:
         vec = self.vector(name)
         norm = math.sqrt(sum(v * v for v in vec))
         if norm == 0.0:
             raise ScenarioError(f"{self.key(name)}: must be a unit vector, got zero length")
         if abs(norm - 1.0) > _UNIT_TOL:
             raise ScenarioError(f"{self.key(name)}: must be a unit vector, got length {norm:.6g}")
-        return tuple(v / norm for v in vec)
+        return vec[0] / norm, vec[1] / norm, vec[2] / norm
 
     def string(self, name: str, default: Any = ...) -> str:
         value = self.raw(name, default)

@@ -128,13 +128,14 @@ def scenario_from_dict(
     name = top.string("name", default_name)
     gravity = top.number("gravity", 9.81, nonnegative=True)
     table = _read_table(KeyReader(top.raw("table"), "table"))
-    isolators = tuple(
+    read = tuple(
         _read_isolator(KeyReader(item, f"isolators[{i}]"))
         for i, item in enumerate(table_of_tables(data, "isolators"))
     )
     top.used.add("isolators")
+    air, leveling = read_pneumatics(top, data, read)
+    isolators = _one_kind(read)
     check_isolator_layout(isolators)
-    air, leveling = read_pneumatics(top, data, isolators)
     sim_reader = KeyReader(top.raw("simulation", {}), "simulation")
     simulation = SimulationSettings(
         duration=sim_reader.number("duration", 10.0, positive=True),
@@ -201,6 +202,16 @@ def _read_table(r: KeyReader) -> Table:
         raise ScenarioError("table: needs size (box inertia) or inertia")
     r.finish()
     return Table(mass=mass, inertia=inertia, size=size)
+
+
+def _one_kind(
+    isolators: tuple[Isolator | PneumaticIsolator, ...],
+) -> tuple[Isolator, ...] | tuple[PneumaticIsolator, ...]:
+    """The isolators as a tuple of one kind (``read_pneumatics`` has refused mixtures)."""
+    springs = tuple(iso for iso in isolators if isinstance(iso, Isolator))
+    return springs if len(springs) == len(isolators) else tuple(
+        iso for iso in isolators if isinstance(iso, PneumaticIsolator)
+    )
 
 
 def _read_isolator(r: KeyReader) -> Isolator | PneumaticIsolator:

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
+from isolator.simulation.leveling import PneumaticResult, leveling_summary
 from isolator.simulation.settling import SettlingResult
 
 __all__ = ["Response"]
@@ -65,6 +66,28 @@ class Response:
     state_history: np.ndarray | Callable[[], np.ndarray] = field(repr=False)
     actuator_names: tuple[str, ...] = ()
     actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
+    pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
+
+    @property
+    def pneumatic(self) -> PneumaticResult | None:
+        """Pneumatic runs: pressures, sensor heights, leveling and the settling about the leveling table
+        (:mod:`isolator.simulation.leveling`); computed on first use. None for spring-damper tables."""
+        result = self.pneumatic_result
+        if callable(result):
+            result = result()
+            object.__setattr__(self, "pneumatic_result", result)
+        return result
+
+    @property
+    def leveling_time(self) -> dict[str, float | None]:
+        """Pneumatic runs: per group with a valve, when it stays level after the stop [s] (else empty)."""
+        return {} if self.pneumatic is None else dict(self.pneumatic.leveling_time)
+
+    @property
+    def dynamic_settling_time_max(self) -> float | None:
+        """Pneumatic runs: settling of the motion about the slowly leveling table [s]
+        (:mod:`isolator.simulation.leveling`); otherwise the ordinary settling time."""
+        return self.settling_time_max if self.pneumatic is None else self.pneumatic.dynamic_settling_time_max
 
     @property
     def states(self) -> np.ndarray:
@@ -119,17 +142,23 @@ class Response:
             "settling_time": {k: num(v) for k, v in self.settling_time.items()},
             "settling_time_max": num(self.settling_time_max),
             "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
+            **({} if self.pneumatic is None else self.pneumatic.to_dict()),
         }
 
     def to_csv(self, path: str | Path) -> Path:
         """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``f:<actuator>...`` [N]
-        when actuators applied forces, to ``path``."""
+        when actuators applied forces, then for pneumatic runs ``p:<isolator>...`` [Pa] and
+        ``h:<group>...`` [m], to ``path``."""
         path = Path(path)
         header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names]]
         columns = [self.t, self.signals.T, self.q.T]
         if self.actuator_forces.size and np.any(self.actuator_forces):
             header += [f"f:{n}" for n in self.actuator_names]
             columns.append(self.actuator_forces.T)
+        if self.pneumatic is not None:
+            extra = self.pneumatic.columns
+            header += list(extra)
+            columns.append(np.array(list(extra.values())).T)
         data = np.column_stack(columns)
         with open(path, "w", newline="") as handle:
             writer = csv.writer(handle)
@@ -160,6 +189,8 @@ class Response:
         for k, r in self.settling.items():
             if r.reason and r.reason != "does not move":
                 lines.append(f"  {k}: {r.reason}")
+        if self.pneumatic is not None:
+            lines += leveling_summary(self.pneumatic)
         return "\n".join(lines)
 
     def plot(self, fig: Any = None, label: str | None = None) -> Any:

@@ -10,14 +10,15 @@ import numpy as np
 
 from isolator.errors import ScenarioError, SimulationError
 from isolator.model.cache import get_model
-from isolator.model.equilibrium import Equilibrium, static_equilibria
+from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
-from isolator.scenario.definitions import Scenario
+from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.simulation.actuation import ForceHistory, applied_forces
 from isolator.simulation.batch import BatchResult, run_batch
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
+from isolator.simulation.leveling import PneumaticResult, pneumatic_result
 from isolator.simulation.response import Response
 from isolator.simulation.settling import SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
@@ -107,7 +108,12 @@ class Simulator:
         start = static_equilibria(self.model, params, first, "with the carriages at their start")
         if last is None:
             return start, [None] * len(start)
-        return start, list(static_equilibria(self.model, params, last, "with the carriages at their final positions"))
+        # pneumatic: groups without a valve keep the air they start with (docs/scenario-format.md)
+        air = None if self.layout.pneumatic is None else air_in_groups(
+            self.model, np.array([e.state for e in start]), params
+        )
+        where = "with the carriages at their final positions"
+        return start, list(static_equilibria(self.model, params, last, where, air=air))
 
     def substeps_for(self, omega_max: float) -> int:
         """RK4 steps per grid interval for a fastest eigenvalue ``omega_max`` [rad/s]."""
@@ -276,6 +282,15 @@ class Simulator:
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
         metrics = self._metrics(signals, final, end, peaks)
+        pneumatic = None
+        if self.scenario.is_pneumatic:
+            run_states = history if states is None else (lambda: states)
+            peaks_all = np.array([metrics[k].peak for k in SIGNALS])
+
+            def pneumatic() -> PneumaticResult:
+                return pneumatic_result(self.scenario, self.model, p, t, run_states(), signals, start, peaks_all,
+                                        hold_time(end))
+
         return Response(
             name=self.scenario.name,
             model=self.model.kind,
@@ -289,6 +304,7 @@ class Simulator:
             state_history=history if states is None else states,
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
+            pneumatic_result=pneumatic,
         )
 
     def _metrics(

@@ -33,7 +33,9 @@ def test_bundled_pneumatic_scenarios_read():
 
 def test_defaults_and_groups():
     s = scenario_from_dict(three_springs_dict())
-    assert s.air is not None and s.air.atmosphere == 101325.0 and s.air.polytropic == 1.4
+    assert s.air is not None
+    assert s.air.atmosphere == 101325.0
+    assert s.air.polytropic == 1.4
     # three isolators without [[leveling]]: each its own group, sensor at the isolator, no valve
     assert [g.isolators for g in s.leveling] == [(0,), (1,), (2,)]
     assert [g.sensor for g in s.leveling] == [(1.0, 0.0), (-1.0, 0.5), (-1.0, -0.5)]
@@ -96,7 +98,8 @@ BAD = [
     ("leveling.0.valve.deadband", -1.0, r"^leveling\[0\]\.valve\.deadband: must be >= 0"),
     ("leveling.0.valve.max_flow", 0.0, r"^leveling\[0\]\.valve\.max_flow: must be > 0"),
     ("leveling.0.line.length", 0.0, r"^leveling\[0\]\.line\.length: must be > 0"),
-    ("leveling.0.supply", 1.0e5, r"^leveling\[0\]\.supply: group 'front' needs a rest gauge pressure of 3\.\d+e\+05 Pa"),
+    ("leveling.0.supply", 1.0e5,
+     r"^leveling\[0\]\.supply: group 'front' needs a rest gauge pressure of 3\.\d+e\+05 Pa"),
     ("air.polytropic", 0.9, r"^air\.polytropic: must be in \[1, 1\.67\], got 0\.9"),
     ("air.polytropic", 1.8, r"^air\.polytropic: must be in \[1, 1\.67\], got 1\.8"),
     ("air.viscosity", 0.0, r"^air\.viscosity: must be > 0"),

@@ -1,0 +1,203 @@
+"""What a pneumatic run reports besides the table's motion: pressures, sensor heights, leveling.
+
+``docs/scenario-format.md`` ("Pneumatic isolators and leveling", Results)
+fixes the columns ``p:<isolator>`` (spring chamber gauge pressure [Pa]) and
+``h:<group>`` (sensor height [m], groups with a valve) and each group's
+leveling time: after the stop, from when ``|h|`` stays within 1.1 x the
+group's dead band.
+
+The table's *dynamic* settling is measured about the slowly leveling table:
+at each sample after the stop, the quasi-static pose is the static
+equilibrium of the table with the carriages parked and every group holding
+the air it has at that instant (``sum p^(1/n) V`` over its chambers, the air
+mass times ``R T`` when isothermal), valves shut. The dynamic signals are the
+table signals minus that pose; their settling time uses the run's 5 % bands
+(a fraction of each signal's peak, or the absolute band) around zero. While
+the valves move air the quasi-static pose drifts with the leveling, and the
+dynamic motion is what oscillates about it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from isolator.model.equilibrium import Equilibrium, air_in_groups, closed_rest_states
+from isolator.model.variants import Model
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.simulation.settling import SettlingResult, settling_metrics
+
+__all__ = ["LEVEL_BAND", "PneumaticResult", "leveling_summary", "leveling_time", "pneumatic_result", "sensor_heights"]
+
+#: a group is level once |h| stays within this many dead bands
+LEVEL_BAND = 1.1
+#: interval [s] at which the quasi-static pose is solved (a cubic spline between)
+QUASI_STATIC_STEP = 0.01
+
+
+@dataclass(frozen=True)
+class PneumaticResult:
+    """Pressures, sensor heights and leveling of a pneumatic run.
+
+    Attributes
+    ----------
+    isolator_names : tuple of str
+    pressures : ndarray (isolators, N)
+        Spring chamber gauge pressure ``p1 - p_atm`` [Pa].
+    group_names : tuple of str
+        Groups with a valve.
+    heights : ndarray (groups with a valve, N)
+        Sensor height from the initial equilibrium [m].
+    leveling_time : dict of str to float or None
+        Per group with a valve: time after the stop from which ``|h|`` stays
+        within 1.1 dead bands [s]; None when not level by the end of the run.
+    quasi_static : ndarray (6, N)
+        The slowly leveling table's pose as table signals (NaN before the stop).
+    dynamic : dict of str to SettlingResult
+        Settling of the motion about the quasi-static pose, per signal.
+    supply_exhausted : dict of str to float
+        Per group that wanted air while a chamber was at ``p_atm + supply``:
+        the first such time [s].
+    """
+
+    isolator_names: tuple[str, ...]
+    pressures: np.ndarray
+    group_names: tuple[str, ...]
+    heights: np.ndarray
+    leveling_time: dict[str, float | None]
+    quasi_static: np.ndarray
+    dynamic: dict[str, SettlingResult]
+    supply_exhausted: dict[str, float]
+
+    @property
+    def dynamic_settling_time_max(self) -> float | None:
+        """The largest dynamic settling time over the six signals [s] (None if one cannot be shown)."""
+        times = [r.time for r in self.dynamic.values()]
+        return None if any(v is None for v in times) else max(v for v in times if v is not None)
+
+    @property
+    def columns(self) -> dict[str, np.ndarray]:
+        """``p:<isolator>`` [Pa] and ``h:<group>`` [m] columns, in order."""
+        out = {f"p:{n}": self.pressures[k] for k, n in enumerate(self.isolator_names)}
+        out.update({f"h:{n}": self.heights[j] for j, n in enumerate(self.group_names)})
+        return out
+
+    def to_dict(self) -> dict[str, object]:
+        """JSON-ready summary: leveling times, dynamic settling, pressures at start and end, heights' peaks."""
+
+        def num(v: float | None) -> float | None:
+            return None if v is None or not math.isfinite(v) else float(v)
+
+        return {
+            "leveling_time": {k: num(v) for k, v in self.leveling_time.items()},
+            "dynamic_settling_time": {k: num(r.time) for k, r in self.dynamic.items()},
+            "dynamic_settling_time_max": num(self.dynamic_settling_time_max),
+            "pressure": {f"p:{n}": {"start": float(self.pressures[k, 0]), "end": float(self.pressures[k, -1])}
+                         for k, n in enumerate(self.isolator_names)},
+            "height_peak": {f"h:{n}": float(np.max(np.abs(self.heights[j])))
+                            for j, n in enumerate(self.group_names)},
+            "supply_exhausted": dict(self.supply_exhausted),
+        }
+
+
+def leveling_summary(result: PneumaticResult) -> list[str]:
+    """Lines for a run's text summary: dynamic settling, leveling per group, supply trouble."""
+    dyn = result.dynamic_settling_time_max
+    lines = ["settling about the leveling table (largest): " + ("not available" if dyn is None else f"{dyn:.4g} s")]
+    for name, value in result.leveling_time.items():
+        lines.append(f"  group {name}: " + ("not level by the end of the run" if value is None
+                                             else f"level {value:.4g} s after the stop"))
+    for name, when in result.supply_exhausted.items():
+        lines.append(f"  group {name}: air supply exhausted at t = {when:.4g} s (it needs more than its supply)")
+    return lines
+
+
+def sensor_heights(scenario: Scenario, states: np.ndarray) -> np.ndarray:
+    """Each group's sensor height (groups, N) [m]: world z displacement of the table point ``(x, y, 0)``
+    from the reference pose, which is the initial equilibrium of a pneumatic table."""
+    q = states[:, 3:7] / np.linalg.norm(states[:, 3:7], axis=1, keepdims=True)
+    w, x, y, z = q.T
+    row_z = np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)  # R[2, :]
+    points = np.array([[g.sensor[0], g.sensor[1], 0.0] for g in scenario.leveling])
+    return np.asarray((states[:, 2:3] + row_z @ points.T - points[:, 2]).T)
+
+
+def leveling_time(t: np.ndarray, height: np.ndarray, stop_time: float, deadband: float) -> float | None:
+    """Time after ``stop_time`` from which ``|height|`` stays within 1.1 ``deadband`` [s]; None if it does
+    not by the end (or the run ends before the stop)."""
+    after = t >= stop_time - 1e-12
+    if not np.any(after) or not math.isfinite(stop_time):
+        return None
+    outside = np.abs(height[after]) > LEVEL_BAND * deadband
+    if outside[-1]:
+        return None
+    if not outside.any():
+        return 0.0
+    last = int(np.flatnonzero(outside)[-1])
+    return float(t[after][last + 1] - stop_time)
+
+
+def pneumatic_result(
+    scenario: Scenario,
+    model: Model,
+    p: np.ndarray,
+    t: np.ndarray,
+    states: np.ndarray,
+    signals: np.ndarray,
+    start: Equilibrium,
+    peaks: np.ndarray,
+    hold: float,
+) -> PneumaticResult:
+    """Pressures, heights, leveling times and the dynamic settling of a pneumatic run's samples."""
+    air = scenario.air
+    if air is None:
+        raise ValueError("pneumatic_result: not a pneumatic scenario")
+    m = len(scenario.isolators)
+    pressures = states[:, 13 : 13 + m].T - air.atmosphere
+    heights = sensor_heights(scenario, states)
+    stop = scenario.stop_time
+    with_valve = [j for j, g in enumerate(scenario.leveling) if g.valve is not None]
+    levels: dict[str, float | None] = {}
+    exhausted: dict[str, float] = {}
+    for j in with_valve:
+        group = scenario.leveling[j]
+        valve = group.valve
+        if valve is None:
+            continue
+        levels[group.name] = leveling_time(t, heights[j], stop, valve.deadband)
+        wants_air = -heights[j] > valve.deadband
+        full = np.max(pressures[list(group.isolators)], axis=0) >= group.supply
+        starved = np.flatnonzero(wants_air & full)
+        if starved.size:
+            exhausted[group.name] = float(t[starved[0]])
+    quasi = np.full_like(signals, np.nan)
+    after = np.flatnonzero(t >= stop - 1e-12) if math.isfinite(stop) else np.zeros(0, dtype=int)
+    final_q = scenario.final_positions()
+    if after.size and final_q is not None:
+        # the quasi-static pose follows the slowly changing air: solved every QUASI_STATIC_STEP, splined
+        stride = max(1, round(QUASI_STATIC_STEP / max(float(np.min(np.diff(t))), 1e-12))) if t.size > 1 else 1
+        picked = np.unique(np.append(after[::stride], after[-1]))
+        contents = air_in_groups(model, states[picked], p)
+        rest = closed_rest_states(model, np.broadcast_to(p, (picked.size, p.size)), final_q, contents)
+        solved = model.variant.signals(rest, start.state)
+        if picked.size >= 4:
+            quasi[:, after] = CubicSpline(t[picked], solved, axis=1)(t[after])
+        else:
+            quasi[:, after] = np.array([np.interp(t[after], t[picked], row) for row in solved])
+    dynamic = settling_metrics(t, np.where(np.isnan(quasi), signals, signals - quasi), np.zeros(6), stop,
+                               scenario.settling, hold, peaks)
+    names = tuple(iso.name for iso in scenario.isolators if isinstance(iso, PneumaticIsolator))
+    return PneumaticResult(
+        isolator_names=names,
+        pressures=pressures,
+        group_names=tuple(scenario.leveling[j].name for j in with_valve),
+        heights=heights[with_valve],
+        leveling_time=levels,
+        quasi_static=quasi,
+        dynamic=dynamic,
+        supply_exhausted=exhausted,
+    )
