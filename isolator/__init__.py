@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.modes import Modes, modes, modes_over_travel
+from isolator.analysis.pneumatic import EquivalentSpringDamper, equivalent_spring_damper
 from isolator.analysis.stability import StabilityReport, stability
 from isolator.analysis.transmissibility import FrequencyResponse, compliance, transmissibility
 from isolator.analysis.vibration import VC_CLASSES, VibrationCriteria, vibration_criteria
@@ -46,11 +47,13 @@ from isolator.scenario.definitions import (
     SimulationSettings,
     Table,
 )
+from isolator.scenario.pneumatic import Air, Capillary, LevelingGroup, PneumaticIsolator, Valve
 from isolator.scenario.profile_shapes import samples, scurve, segments, shaped, trapezoid
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 from isolator.scenario.reader import bundled_scenarios, load_scenario, scenario_from_dict
 from isolator.scenario.tables import load_spectrum
 from isolator.simulation.batch import BatchResult
+from isolator.simulation.leveling import PneumaticResult
 from isolator.simulation.response import Response
 from isolator.simulation.settling import SettlingResult, settling_time
 from isolator.simulation.simulator import Simulator, simulate
@@ -62,14 +65,18 @@ __all__ = [
     "SIGNALS",
     "VC_CLASSES",
     "Actuator",
+    "Air",
     "BatchResult",
+    "Capillary",
     "Carriage",
     "Equilibrium",
+    "EquivalentSpringDamper",
     "FloorSpectrum",
     "FrequencyResponse",
     "Ground",
     "Isolator",
     "IsolatorError",
+    "LevelingGroup",
     "LinearModel",
     "Model",
     "ModelVariant",
@@ -79,6 +86,8 @@ __all__ = [
     "ParameterError",
     "ParameterLayout",
     "PiecewisePolynomialProfile",
+    "PneumaticIsolator",
+    "PneumaticResult",
     "Point",
     "Profile",
     "Response",
@@ -95,10 +104,12 @@ __all__ = [
     "Table",
     "UnstableClosedLoopError",
     "UnstableTableError",
+    "Valve",
     "VibrationCriteria",
     "build_model",
     "bundled_scenarios",
     "compliance",
+    "equivalent_spring_damper",
     "get_model",
     "linearise",
     "load_scenario",

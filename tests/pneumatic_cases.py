@@ -10,7 +10,7 @@ NAMES = ("front-left", "rear-left", "rear-right", "front-right")
 
 
 def air_spring(name: str, x: float, y: float, *, area: float = 0.03, volume: float = 6.4e-4,
-               damping_volume: float = 1.28e-3, diameter: float = 5.8e-4, hs: float = 0.15) -> dict[str, Any]:
+               damping_volume: float = 1.28e-3, diameter: float = 5.4e-4, hs: float = 0.15) -> dict[str, Any]:
     """One pneumatic isolator at (x, y, -hs)."""
     out: dict[str, Any] = {
         "name": name, "model": "pneumatic", "position": [x, y, -hs], "area": area, "volume": volume,

@@ -7,6 +7,10 @@ equilibrium, and expands the one symbolic model
 
 ``M d'' + C d' + K d = -(G0 g + G1 g' + Bw w + Ba f)``
 
+(pneumatic tables add the chamber pressures' deviations ``e`` as states, with
+``+ Kp e`` on the left and ``e' = Pd d + Pv d' + Pp e + Pg g + Pgd g'``, valves
+closed)
+
 with ``d`` the table's displacement and small rotation (world axes, from the
 equilibrium), ``g`` the floor's translations and rotations (about the world
 origin), ``w`` a force and moment at the table's mass centre and ``f`` the
@@ -32,11 +36,13 @@ from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation, skew
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.pneumatic import PneumaticIsolator
 
 __all__ = [
     "FORCE_INPUTS",
     "GROUND_INPUTS",
     "STATE_NAMES",
+    "AirMatrices",
     "LinearModel",
     "is_stable",
     "linearise",
@@ -141,6 +147,9 @@ class LinearModel:
     parameters : ndarray
         The model's parameter vector it was linearised with (the scenario's own
         unless another was given; ``Simulator.layout`` names its entries).
+    air : AirMatrices or None
+        Pneumatic tables: how the chamber pressures (states ``p:<isolator>``,
+        then ``p2:<isolator>`` for damping chambers, deviations [Pa]) enter.
     """
 
     scenario: Scenario
@@ -154,6 +163,7 @@ class LinearModel:
     force_input: np.ndarray
     system: control.StateSpace
     parameters: np.ndarray
+    air: AirMatrices | None = None
 
     # -- names -------------------------------------------------------------------
     @property
@@ -194,7 +204,7 @@ class LinearModel:
         Non-zero only in the velocity rows of the floor inputs: what the floor's
         velocity adds through the isolators' dampers at once (``-M^-1 G1``).
         """
-        return _feedthrough(self.mass, self.ground_damping, len(self.input_names))
+        return _feedthrough(self.mass, self.ground_damping, len(self.input_names), self.air)
 
     def rocking_stiffness(self) -> RockingStiffness:
         """The static rocking stiffness and its margin at this rest configuration."""
@@ -203,7 +213,7 @@ class LinearModel:
 
     @property
     def eigenvalues(self) -> np.ndarray:
-        """Of the 12-state system [1/s]."""
+        """Of the system [1/s] (12 states, plus the chamber pressures of pneumatic tables)."""
         return np.linalg.eigvals(np.asarray(self.system.A))
 
     @property
@@ -218,11 +228,42 @@ def is_stable(eigenvalues: np.ndarray) -> bool:
     return bool(np.all(eig.real < 1e-9 * max(1.0, float(np.abs(eig).max(initial=0.0)))))
 
 
-def _feedthrough(mass: np.ndarray, ground_damping: np.ndarray, n_inputs: int) -> np.ndarray:
-    """``B1`` (12, n_inputs): the velocity the floor's velocity adds at once through the dampers."""
-    out = np.zeros((12, n_inputs))
-    out[6:, :6] = -np.linalg.solve(mass, ground_damping)
+@dataclass(frozen=True)
+class AirMatrices:
+    """The chamber pressures' part of a pneumatic table's linear model (valves closed).
+
+    ``M d'' + C d' + K d + Kp e + ... = 0`` and ``e' = Pd d + Pv d' + Pp e + Pg g + Pgd g'``
+    for the pressure deviations ``e`` [Pa]; ``Kair`` is the stiffness the air adds when squeezed
+    slowly (each group's chambers at one pressure), so ``K + Kair`` is the static stiffness.
+    """
+
+    names: tuple[str, ...]
+    kp: np.ndarray
+    pd: np.ndarray
+    pv: np.ndarray
+    pp: np.ndarray
+    pg: np.ndarray
+    pgd: np.ndarray
+    kair: np.ndarray
+
+
+def _feedthrough(mass: np.ndarray, ground_damping: np.ndarray, n_inputs: int, air: AirMatrices | None = None
+                 ) -> np.ndarray:
+    """``B1`` (states, n_inputs): what the floor's velocity adds at once to the states, through the dampers
+    to the velocities and through the chambers' volumes to the pressures."""
+    n_air = 0 if air is None else len(air.names)
+    out = np.zeros((12 + n_air, n_inputs))
+    out[6:12, :6] = -np.linalg.solve(mass, ground_damping)
+    if air is not None:
+        out[12:, :6] = air.pgd
     return out
+
+
+def _air_names(scenario: Scenario) -> tuple[str, ...]:
+    """State names of the chamber pressures: ``p:<isolator>``, then ``p2:<isolator>`` per damping chamber."""
+    names = tuple(f"p:{iso.name}" for iso in scenario.isolators if isinstance(iso, PneumaticIsolator))
+    return names + tuple(f"p2:{iso.name}" for iso in scenario.isolators
+                         if isinstance(iso, PneumaticIsolator) and iso.has_damping_chamber)
 
 
 def _index(names: Sequence[str] | None, labels: list[str], what: str) -> list[int]:
@@ -306,10 +347,11 @@ def linearise(
     eq = static_equilibrium(model, p, q, "in this rest configuration", check=check)
     c = np.concatenate([q, np.zeros(2 * q.size)])
     mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]
-    mass, damping, stiffness, g0, g1, bw, ba = mats
+    mass, damping, stiffness, g0, g1, bw, ba = mats[:7]
+    air = None if layout.pneumatic is None else AirMatrices(_air_names(scenario), *mats[7:])
     force_input = np.hstack([bw, ba.reshape(6, -1)])
-    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input)
-    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p)
+    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air)
+    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p, air)
 
 
 def _state_space(
@@ -321,15 +363,21 @@ def _state_space(
     g0: np.ndarray,
     g1: np.ndarray,
     force_input: np.ndarray,
+    air: AirMatrices | None = None,
 ) -> control.StateSpace:
     inv_m = np.linalg.inv(mass)
     zero, eye = np.zeros((6, 6)), np.eye(6)
     a = np.block([[zero, eye], [-inv_m @ stiffness, -inv_m @ damping]])
     n_in = 6 + force_input.shape[1]
     b0 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g0, force_input])])
-    b1 = _feedthrough(mass, g1, n_in)
+    n_air = 0 if air is None else len(air.names)
+    if air is not None:
+        a = np.block([[a, np.vstack([np.zeros((6, n_air)), -inv_m @ air.kp])],
+                      [air.pd, air.pv, air.pp]])
+        b0 = np.vstack([b0, np.hstack([air.pg, np.zeros((n_air, n_in - 6))])])
+    b1 = _feedthrough(mass, g1, n_in, air)
     # x' = A x + B0 u + B1 u'  ->  xi = x - B1 u:  xi' = A xi + (A B1 + B0) u
-    rot0 = pose_rotation(eq.pose[3:])
+    rot0 = pose_rotation(eq.pose[3:6])
     rows = [np.hstack([eye, zero])]
     out_names = list(DOF_NAMES)
     for point in scenario.points:
@@ -337,9 +385,10 @@ def _state_space(
         cross = ca.evalf(skew(ca.SX(arm))).full()
         rows.append(np.hstack([np.eye(3), -cross, np.zeros((3, 6))]))
         out_names += [f"{point.name}:{a}" for a in "xyz"]
-    c = np.vstack(rows)
+    c = np.hstack([np.vstack(rows), np.zeros((sum(r.shape[0] for r in rows), n_air))])
     inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators)]
+    states = [*STATE_NAMES, *(air.names if air is not None else ())]
     return control.ss(
         a, a @ b1 + b0, c, c @ b1,
-        inputs=inputs, outputs=out_names, states=list(STATE_NAMES), name=scenario.name,
+        inputs=inputs, outputs=out_names, states=states, name=scenario.name,
     )

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -34,6 +34,13 @@ class Modes:
     energy_share : ndarray (6, 6)
         Row k: the share of mode k's kinetic energy in each direction
         (``M_ii |shape_i|^2``, normalised to sum 1).
+    relaxation_rates : ndarray
+        Pneumatic tables: the real poles ``-lambda`` [1/s], ascending: the
+        chambers' relaxation through orifices and lines, and any table motion
+        they damp past oscillating (the oscillating modes are the others).
+    integrators : int
+        Pneumatic tables: poles at zero, one per leveling group (with the valves
+        closed, the air in a group stays, and any such amount is at rest).
     """
 
     frequencies_hz: np.ndarray
@@ -41,6 +48,13 @@ class Modes:
     eigenvalues: np.ndarray
     shapes: np.ndarray
     energy_share: np.ndarray
+    relaxation_rates: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    integrators: int = 0
+
+    @property
+    def relaxation_times(self) -> np.ndarray:
+        """``1 / rate`` of each relaxation pole [s]."""
+        return 1.0 / self.relaxation_rates
 
     @property
     def dominant(self) -> tuple[str, ...]:
@@ -54,6 +68,8 @@ class Modes:
             "damping_ratios": [float(z) for z in self.damping_ratios],
             "shapes": [{d: float(v) for d, v in zip(DOF_NAMES, row, strict=True)} for row in self.shapes],
             "dominant": list(self.dominant),
+            "relaxation_rates": [float(r) for r in self.relaxation_rates],
+            "integrators": self.integrators,
         }
 
     def summary(self) -> str:
@@ -64,6 +80,11 @@ class Modes:
                 f"{n} {100 * e:.0f}%" for n, e in zip(DOF_NAMES, self.energy_share[k], strict=True) if e >= 0.05
             )
             lines.append(f"{k + 1:>4}  {f:>14.4g}  {z:>13.4g}  {d:>8}  {share}")
+        if self.relaxation_rates.size or self.integrators:
+            rates = ", ".join(f"{r:.4g}" for r in self.relaxation_rates)
+            lines.append(f"relaxation poles [1/s]: {rates or 'none'}; time constants "
+                         + ", ".join(f"{1e3 / r:.3g} ms" for r in self.relaxation_rates))
+            lines.append(f"air-mass integrators (valves closed): {self.integrators}")
         return "\n".join(lines)
 
     def plot(self, title: str = "") -> Any:
@@ -104,7 +125,15 @@ def modes(lin: LinearModel) -> Modes:
     a = np.asarray(lin.system.A)
     eig, vec = np.linalg.eig(a)
     omega, zeta, lam, shapes = [], [], [], []
-    for idx in _one_per_mode(eig):
+    scale = max(1.0, float(np.abs(eig).max()))
+    relaxation, integrators = np.zeros(0), 0
+    groups = _one_per_mode(eig)
+    if lin.air is not None:  # real poles are the chambers' relaxation (and integrators), not modes
+        real = eig.real[np.abs(eig.imag) <= 1e-9 * scale]
+        integrators = int(np.sum(np.abs(real) <= 1e-9 * scale))
+        relaxation = np.sort(-real[np.abs(real) > 1e-9 * scale])
+        groups = [g for g in groups if len(g) == 1]
+    for idx in groups:
         if len(idx) == 1:  # an oscillating mode
             value = complex(eig[idx[0]])
             omega.append(abs(value))
@@ -126,7 +155,7 @@ def modes(lin: LinearModel) -> Modes:
     dominant = np.argmax(energy, axis=1)
     ref = shape_arr[np.arange(len(shape_arr)), dominant]
     real = (shape_arr / ref[:, None]).real
-    return Modes(omega_arr / (2 * np.pi), zeta_arr, lam_arr, real, energy)
+    return Modes(omega_arr / (2 * np.pi), zeta_arr, lam_arr, real, energy, relaxation, integrators)
 
 
 def _one_per_mode(eig: np.ndarray) -> list[tuple[int, ...]]:

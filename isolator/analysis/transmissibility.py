@@ -19,7 +19,7 @@ def default_frequencies(lin: LinearModel, count: int = 1000) -> np.ndarray:
     """Log-spaced frequencies [Hz] from a decade below the slowest mode (at most 0.1 Hz)
     to a decade above the fastest (at least 100 Hz)."""
     f_modes = np.abs(lin.eigenvalues) / (2 * np.pi)
-    f_modes = f_modes[f_modes > 0]
+    f_modes = f_modes[f_modes > 1e-9 * max(1.0, float(f_modes.max(initial=0.0)))]  # not the air-mass integrators
     lo = min(0.1, float(f_modes.min()) / 10) if f_modes.size else 0.1
     hi = max(100.0, float(f_modes.max()) * 10) if f_modes.size else 100.0
     return np.logspace(np.log10(lo), np.log10(hi), count)

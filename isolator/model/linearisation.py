@@ -82,7 +82,8 @@ def build_linearisation(layout: ParameterLayout) -> ca.Function:
         pg = jac(rates, g)
         kp = jac(res, e)
         outs += [kp, jac(rates, d), jac(rates, v), jac(rates, e), pg[:, :6], pg[:, 6:],
-                 kp @ quasi_static_pressures(structure, prm, motion, states, d)]
+                 kp @ ca.substitute(quasi_static_pressures(structure, prm, motion, states, d), deviations,
+                                    ca.SX.zeros(deviations.shape))]
         names += ["Kp", "Pd", "Pv", "Pp", "Pg", "Pgd", "Kair"]
     return ca.Function("linearise", [z0, c, p], outs, ["z0", "c", "p"], names)
 
