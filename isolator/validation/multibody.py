@@ -24,9 +24,9 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
-from isolator.errors import IsolatorError
+from isolator.errors import IsolatorError, ScenarioError
 from isolator.model.signals import table_signals
-from isolator.scenario.definitions import Scenario
+from isolator.scenario.definitions import Isolator, Scenario
 
 __all__ = ["MujocoTable", "MultibodyRun", "mujoco_available", "solve_piecewise"]
 
@@ -65,6 +65,14 @@ def _vec(v: Iterable[float]) -> str:
     return " ".join(f"{float(x):.17g}" for x in v)
 
 
+def _spring_dampers(scenario: Scenario) -> tuple[Isolator, ...]:
+    """The scenario's isolators, which the check models as linear spring-dampers (pneumatic ones it cannot)."""
+    isolators = tuple(iso for iso in scenario.isolators if isinstance(iso, Isolator))
+    if len(isolators) != len(scenario.isolators):
+        raise ScenarioError("isolators: the MuJoCo check models spring-damper isolators only, not pneumatic ones")
+    return isolators
+
+
 class MujocoTable:
     """The scenario as a MuJoCo model with prescribed carriage joints.
 
@@ -87,6 +95,7 @@ class MujocoTable:
             ) from exc
         self.mj = mujoco
         self.scenario = scenario
+        self.isolators = _spring_dampers(scenario)
         self.forces = forces
         self.model = mujoco.MjModel.from_xml_string(self._xml())
         self.data = mujoco.MjData(self.model)
@@ -124,7 +133,7 @@ class MujocoTable:
             )
 
         sites = "".join(
-            f'<site name="iso{k}" pos="{_vec(iso.position)}"/>' for k, iso in enumerate(sc.isolators)
+            f'<site name="iso{k}" pos="{_vec(iso.position)}"/>' for k, iso in enumerate(self.isolators)
         )
         carriages = "".join(body(i) for i in children.get("table", []))
         return (
@@ -179,7 +188,7 @@ class MujocoTable:
         mj.mj_fwdVelocity(m, d)
         d.qfrc_applied[:] = 0.0
         vel6 = np.zeros(6)
-        for k, iso in enumerate(self.scenario.isolators):
+        for k, iso in enumerate(self.isolators):
             sid = self.site_ids[k]
             point = d.site_xpos[sid].copy()
             mj.mj_objectVelocity(m, d, mj.mjtObj.mjOBJ_SITE, sid, vel6, 0)
