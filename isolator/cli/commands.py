@@ -184,8 +184,13 @@ def _simulate(args: argparse.Namespace) -> int:
     plot = args.plot
     if plot is None and not args.json:
         plot = Path(f"{scenario.name}.png")
+    leveling = None
     if plot is not None:
         use_agg()
         fig = response.plot()
         fig.savefig(plot, dpi=120)
-    return report(args.json, response.to_dict(), response.summary(), [("response table", args.out), ("figure", plot)])
+        if response.pneumatic is not None:
+            leveling = plot.with_name(f"{plot.stem}-leveling{plot.suffix or '.png'}")
+            response.plot_leveling().savefig(leveling, dpi=120)
+    outputs = [("response table", args.out), ("figure", plot), ("pressures and heights", leveling)]
+    return report(args.json, response.to_dict(), response.summary(), outputs)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from scipy.interpolate import CubicSpline
@@ -31,7 +32,15 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.simulation.settling import SettlingResult, settling_metrics
 
-__all__ = ["LEVEL_BAND", "PneumaticResult", "leveling_summary", "leveling_time", "pneumatic_result", "sensor_heights"]
+__all__ = [
+    "LEVEL_BAND",
+    "PneumaticResult",
+    "leveling_summary",
+    "leveling_time",
+    "plot_leveling",
+    "pneumatic_result",
+    "sensor_heights",
+]
 
 #: a group is level once |h| stays within this many dead bands
 LEVEL_BAND = 1.1
@@ -102,6 +111,58 @@ class PneumaticResult:
                             for j, n in enumerate(self.group_names)},
             "supply_exhausted": dict(self.supply_exhausted),
         }
+
+
+def plot_leveling(result: PneumaticResult, t: np.ndarray, stop_time: float, deadbands: dict[str, float],
+                  title: str = "") -> Any:
+    """Chamber pressures (top) and sensor heights (bottom) through the move and the leveling.
+
+    Parameters
+    ----------
+    result : PneumaticResult
+    t : ndarray
+        Sample times [s].
+    stop_time : float
+        When the carriages stop [s].
+    deadbands : dict of str to float
+        Each valve group's dead band [m], drawn around zero height.
+    title : str
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    import matplotlib.pyplot as plt
+
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True, constrained_layout=True)
+    for k, name in enumerate(result.isolator_names):
+        top.plot(t, result.pressures[k] / 1e5, lw=1.2, label=f"p:{name}")
+    top.set_ylabel("spring chamber gauge pressure [bar]")
+    top.legend(loc="best", fontsize=8, ncol=2)
+    top.set_title("air spring pressures")
+    colours = plt.rcParams["axes.prop_cycle"].by_key()["color"]
+    for j, name in enumerate(result.group_names):
+        colour = colours[j % len(colours)]
+        bottom.plot(t, result.heights[j] * 1e6, lw=1.2, color=colour, label=f"h:{name}")
+        level = result.leveling_time.get(name)
+        if level is not None and math.isfinite(stop_time):
+            bottom.axvline(stop_time + level, color=colour, ls="--", lw=1,
+                           label=f"{name} level after {level:.3g} s")
+    band = max(deadbands.values(), default=0.0) * 1e6
+    if band > 0:
+        bottom.axhspan(-LEVEL_BAND * band, LEVEL_BAND * band, color="tab:green", alpha=0.15, lw=0,
+                       label=f"{LEVEL_BAND:g} x dead band")
+    bottom.set_ylabel("sensor height [µm]")
+    bottom.set_xlabel("time [s]")
+    bottom.set_title("leveling-valve sensors")
+    for ax in (top, bottom):
+        if math.isfinite(stop_time):
+            ax.axvline(stop_time, color="0.5", ls=":", lw=1)
+        ax.grid(True, alpha=0.3)
+    bottom.plot([], [], color="0.5", ls=":", label="carriages stop")
+    bottom.legend(loc="lower right", fontsize=8, ncol=2)
+    fig.suptitle(title or "pressures and sensor heights")
+    return fig
 
 
 def leveling_summary(result: PneumaticResult) -> list[str]:

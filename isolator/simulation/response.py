@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
-from isolator.simulation.leveling import PneumaticResult, leveling_summary
+from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.settling import SettlingResult
 
 __all__ = ["Response"]
@@ -67,6 +67,7 @@ class Response:
     actuator_names: tuple[str, ...] = ()
     actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
+    deadbands: dict[str, float] = field(default_factory=dict, repr=False)
 
     @property
     def pneumatic(self) -> PneumaticResult | None:
@@ -192,6 +193,24 @@ class Response:
         if self.pneumatic is not None:
             lines += leveling_summary(self.pneumatic)
         return "\n".join(lines)
+
+    def plot_leveling(self, title: str = "") -> Any:
+        """Pneumatic runs: chamber pressures and sensor heights through the move and the leveling.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        ValueError
+            For a spring-damper run.
+        """
+        result = self.pneumatic
+        if result is None:
+            raise ValueError("plot_leveling: not a pneumatic run")
+        return plot_leveling(result, self.t, self.stop_time, self.deadbands,
+                             title or f"{self.name}: air springs and leveling")
 
     def plot(self, fig: Any = None, label: str | None = None) -> Any:
         """Rotations (left) and translations (right) over time, as in the paper's Fig. 3.5.

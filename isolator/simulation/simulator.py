@@ -20,6 +20,7 @@ from isolator.simulation.batch import BatchResult, run_batch
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
 from isolator.simulation.leveling import PneumaticResult, pneumatic_result
 from isolator.simulation.response import Response
+from isolator.simulation.scaling import scaled_parameter_sets
 from isolator.simulation.settling import SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
@@ -94,8 +95,15 @@ class Simulator:
         return p
 
     def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
-        """Parameter vector with all isolator stiffness and damping scaled."""
+        """Parameter vector with all isolator stiffness and damping scaled (:func:`scaled_parameter_sets`)."""
         return self.scaled_parameter_sets(stiffness, damping)[0]
+
+    def scaled_parameter_sets(
+        self, stiffness: float | Sequence[float], damping: float | Sequence[float]
+    ) -> np.ndarray:
+        """Parameter vectors (runs, parameters) with every isolator's stiffness and damping scaled per run
+        (:func:`~isolator.simulation.scaling.scaled_parameter_sets`, pneumatic isolators included)."""
+        return scaled_parameter_sets(self.layout, self.parameters, stiffness, damping)
 
     # -- pieces ----------------------------------------------------------------
     def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
@@ -305,6 +313,7 @@ class Simulator:
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
             pneumatic_result=pneumatic,
+            deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
         )
 
     def _metrics(
@@ -350,35 +359,6 @@ class Simulator:
             Stop at a diverging run, or give it NaN metrics and its reason in ``failures``.
         """
         return run_batch(self, stiffness, damping, workers, progress, diverged)
-
-    def scaled_parameter_sets(
-        self, stiffness: float | Sequence[float], damping: float | Sequence[float]
-    ) -> np.ndarray:
-        """Parameter vectors (runs, parameters) with all isolator stiffness and damping scaled per run.
-
-        A bad scale is named by its index (``stiffness[3]: ...``) when the scales are sequences.
-        """
-        k = _scales(stiffness, "stiffness", positive=True)
-        c = _scales(damping, "damping", positive=False)
-        if k.size != c.size:
-            raise ScenarioError("damping: needs one scale per stiffness scale")
-        names = self.layout.names
-        stiff = np.array([".stiffness." in n for n in names])
-        damp = np.array([".damping." in n for n in names])
-        scale = np.where(stiff, k[:, None], np.where(damp, c[:, None], 1.0))
-        return self.parameters[None, :] * scale
-
-
-def _scales(values: float | Sequence[float], key: str, positive: bool) -> np.ndarray:
-    """Scale factors as an array, each finite and > 0 (``positive``) or >= 0; one clear error naming ``key``."""
-    array = np.asarray(values, dtype=float)
-    flat = array.reshape(-1)
-    bad = ~(np.isfinite(flat) & ((flat > 0) if positive else (flat >= 0)))
-    if bad.any():
-        i = int(np.argmax(bad))
-        where = key if array.ndim == 0 else f"{key}[{i}]"
-        raise ScenarioError(f"{where}: scale must be a finite number {'>' if positive else '>='} 0, got {flat[i]}")
-    return flat
 
 
 def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, float] | None = None) -> Response:
