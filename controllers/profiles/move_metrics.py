@@ -15,6 +15,7 @@ from typing import Any
 
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
+from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.simulation.response import Response
 from isolator.simulation.simulator import Simulator
 
@@ -61,16 +62,19 @@ class ModelVariant:
 
     def apply(self, scenario: Scenario) -> Scenario:
         """The scenario with this variant's isolators and table."""
-        isolators = []
-        for iso in scenario.isolators:
-            if not isinstance(iso, Isolator):
-                kind = type(iso).__name__
-                raise ScenarioError(f"isolators: model variants scale spring-damper isolators, not {kind}")
-            isolators.append(replace(iso, stiffness=_scaled(iso.stiffness, self.stiffness),
-                                     damping=_scaled(iso.damping, self.damping)))
         table = replace(scenario.table, mass=self.mass * scenario.table.mass,
                         inertia=_scaled(scenario.table.inertia, self.mass))
-        return scenario.with_changes(isolators=tuple(isolators), table=table)
+        springs = tuple(iso for iso in scenario.isolators if isinstance(iso, Isolator))
+        if len(springs) == len(scenario.isolators):
+            isolators: tuple[Isolator, ...] | tuple[PneumaticIsolator, ...] = tuple(
+                replace(iso, stiffness=_scaled(iso.stiffness, self.stiffness),
+                        damping=_scaled(iso.damping, self.damping))
+                for iso in springs
+            )
+        else:  # pneumatic: volumes and orifice (PneumaticIsolator.scaled)
+            isolators = tuple(iso.scaled(self.stiffness, self.damping) for iso in scenario.isolators
+                              if isinstance(iso, PneumaticIsolator))
+        return scenario.with_changes(isolators=isolators, table=table)
 
 
 
@@ -100,7 +104,8 @@ class MoveMetrics:
         From the move's command to the last carriage's stop [s].
     settling_time_max : float or None
         Largest 5 % settling time over the six signals [s] (None: the run is
-        too short to show it).
+        too short to show it); for pneumatic tables, of the motion about the
+        slowly leveling table (``Response.dynamic_settling_time_max``).
     cycle_time : float or None
         Move plus settling [s].
     peak : dict
@@ -154,7 +159,7 @@ def evaluate_move(
         run_scenario = run_scenario.with_changes(simulation=replace(run_scenario.simulation, duration=duration))
     response = Simulator(run_scenario).run()
     moved = move_time(run_scenario, command)
-    settle = response.settling_time_max
+    settle = response.dynamic_settling_time_max  # pneumatic: about the leveling table
     return MoveMetrics(
         label=label, move_time=moved, settling_time_max=settle,
         cycle_time=None if settle is None else moved + settle,

@@ -3,7 +3,8 @@
 Smooth, in units of the 5 % band of each signal:
 
 * ``R``: the residual vibration at the stop, ``z' P z`` with ``z`` the table's
-  deviation from its final equilibrium (six signals and rates, each divided by
+  deviation from its final equilibrium (pneumatic tables: from the quasi-static pose of the air
+  the table holds, so the slow re-leveling is not counted) (six signals and rates, each divided by
   its band) and ``P`` from the Lyapunov equation of the model linearised at the
   final configuration, so ``R`` is the integral of the squared normalised
   deviation of the free response, divided by the slowest decay time;
@@ -83,6 +84,6 @@ def residual(run: Transcription, vd: VariantData, factors: np.ndarray, nlp: Nlp 
     rest = ca.vertcat(*[ca.horzcat(st[-1][0], 0, 0, 0) for st in run.states])
     xs = advance(run.step_fn, n_window, x, ca.DM.zeros(n, n_window), window / n_window, rest, vd.parameters)
     zs = run.sense.map(n_window)(xs, ca.repmat(ca.DM(vd.start_state), 1, n_window))
-    e = (zs[:6, :] - ca.repmat(ca.DM(vd.final), 1, n_window)) / ca.repmat(band, 1, n_window)
+    e = (zs[:6, :] - vd.reference(xs)) / ca.repmat(band, 1, n_window)
     over = ca.fmax(0, e**2 - band_margin**2)
     return ca.sum1(ca.sum2(e**2 + over**2)) / n_window

@@ -15,14 +15,16 @@ from __future__ import annotations
 import itertools
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import casadi as ca
 import numpy as np
 
 from isolator.errors import ScenarioError
+from isolator.model.equilibrium import air_in_groups, quasi_static_sensitivity
 from isolator.model.parameters import ParameterLayout
+from isolator.model.pneumatic_statics import air_function
 from isolator.model.variants import Model
 from isolator.numerics.native import NativeFunction
 from isolator.scenario.definitions import Scenario
@@ -62,6 +64,21 @@ class VariantData:
     final: np.ndarray  # (6,) final equilibrium signals
     omega_max: float  # fastest mode [rad/s]
     slowest_period: float  # [s]
+    # pneumatic tables: the leveling table's quasi-static pose moves with each group's air,
+    # final + air_sensitivity @ (air(x, p) - air_final) (isolator.model.equilibrium.quasi_static_sensitivity)
+    air: ca.Function | None = None
+    air_final: np.ndarray | None = None
+    air_sensitivity: np.ndarray | None = None
+
+    def reference(self, states: Any) -> Any:
+        """The signals the table settles about, one column per state column (casadi): the final
+        equilibrium, or for pneumatic tables the quasi-static pose of the air the state holds."""
+        n = states.shape[1]
+        final = ca.repmat(ca.DM(self.final), 1, n)
+        if self.air is None or self.air_final is None or self.air_sensitivity is None:
+            return final
+        air = self.air.map(n)(states, ca.DM(self.parameters))
+        return final + ca.DM(self.air_sensitivity) @ (air - ca.repmat(ca.DM(self.air_final), 1, n))
 
 
 def variant_data(scenario: Scenario) -> VariantData:
@@ -77,7 +94,13 @@ def variant_data(scenario: Scenario) -> VariantData:
         raise ScenarioError("isolators: the table is not damped at rest; nothing settles")
     oscillating = np.abs(eig.imag)[np.abs(eig.imag) > 1e-6]
     slowest = float(2 * math.pi / oscillating.min()) if oscillating.size else float(1.0 / np.min(-eig.real))
-    return VariantData(sim.parameters, start.state, final, float(np.max(np.abs(eig))), slowest)
+    data = VariantData(sim.parameters, start.state, final, float(np.max(np.abs(eig))), slowest)
+    positions = scenario.final_positions()
+    if sim.layout.pneumatic is None or positions is None:
+        return data
+    air = air_in_groups(sim.model, end.state[None, :], sim.parameters)[0]
+    _, sensitivity = quasi_static_sensitivity(sim.model, sim.parameters, positions, air)
+    return replace(data, air=air_function(sim.layout), air_final=air, air_sensitivity=sensitivity)
 
 
 # -- phases ------------------------------------------------------------------------------------

@@ -20,6 +20,7 @@ __all__ = [
     "RockingStiffness",
     "air_in_groups",
     "closed_rest_states",
+    "quasi_static_sensitivity",
     "rocking_stiffness",
     "static_equilibria",
     "static_equilibrium",
@@ -194,7 +195,7 @@ def _newton(
         idx = np.nonzero(active)[0]
         if idx.size == 0:
             break
-        r, jac = residual(idx, z[idx])
+        r, jac = residual(idx, z[idx])[:2]
         bad = ~np.all(np.isfinite(r), axis=1)
         done = ~bad & (np.max(np.abs(r), axis=1) <= tolerance[idx])
         failed[idx[bad]] = True
@@ -302,14 +303,41 @@ def closed_rest_states(
         When a run has no such rest.
     """
     params = np.atleast_2d(np.asarray(params, dtype=float))
-    solver = _solver(model)
-    c = model.layout.rest_inputs(positions)
-    closed = solver.closed(all_closed)
+    z = _closed_pose(model, params, positions, np.atleast_2d(np.asarray(air, dtype=float)), all_closed)
+    return np.asarray(_solver(model).pose(z, params)[0])
+
+
+def quasi_static_sensitivity(
+    model: Model, p: np.ndarray, positions: np.ndarray, air: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """A pneumatic table at rest with every group's ``air`` kept, and how its pose moves with the air.
+
+    Returns
+    -------
+    state : ndarray (n_states,)
+        The rest state.
+    sensitivity : ndarray (6, groups)
+        ``d(pose)/d(air)``: position [m] and Cardan angles [rad] per unit of each group's
+        ``sum p^(1/n) V`` (:func:`air_in_groups`).
+    """
+    params = np.asarray(p, dtype=float)[None, :]
     air = np.atleast_2d(np.asarray(air, dtype=float))
+    z = _closed_pose(model, params, positions, air, True)
+    _, jz, ja = _solver(model).closed(True)(z, model.layout.rest_inputs(positions), params, air)
+    state = np.asarray(_solver(model).pose(z, params)[0])[0]
+    return state, -np.linalg.solve(jz[0], ja[0])[:6]
+
+
+def _closed_pose(
+    model: Model, params: np.ndarray, positions: np.ndarray, air: np.ndarray, all_closed: bool
+) -> np.ndarray:
+    """The static unknowns (pose, group gauge pressures) with the groups' air kept, one row per run."""
+    closed = _solver(model).closed(all_closed)
+    c = model.layout.rest_inputs(positions)
     z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
     if (failed | active).any():
         raise UnstableTableError(f"no rest with the groups' air kept (run {int(np.argmax(failed | active))})")
-    return np.asarray(solver.pose(z, params)[0])
+    return z
 
 
 def air_in_groups(model: Model, states: np.ndarray, params: np.ndarray) -> np.ndarray:

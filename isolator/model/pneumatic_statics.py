@@ -25,6 +25,7 @@ from isolator.model.rotations import cardan_matrix, quaternion_to_matrix
 
 __all__ = [
     "air_contents",
+    "air_function",
     "closed_static_function",
     "element_of",
     "element_rates",
@@ -151,5 +152,16 @@ def closed_static_function(layout: ParameterLayout, all_closed: bool = False) ->
         content = (prm["air.atmosphere"] + z[6 + j]) ** inv_n * volume
         extra.append((content / air[j] - 1.0) * prm["gravity"] * (prm["table_mass"] + 1.0))
     r = ca.vertcat(force, *extra)
-    return ca.Function("closed_static", [z, c, p, air], [r, ca.jacobian(r, z)], ["z", "c", "p", "air"],
-                       ["r", "drdz"])
+    return ca.Function("closed_static", [z, c, p, air], [r, ca.jacobian(r, z), ca.jacobian(r, air)],
+                       ["z", "c", "p", "air"], ["r", "drdz", "drdair"])
+
+
+@lru_cache(maxsize=16)
+def air_function(layout: ParameterLayout) -> ca.Function:
+    """``(x, p) -> air``: each group's :func:`air_contents` of an exact-model state."""
+    structure = layout.pneumatic
+    if structure is None:
+        raise ValueError("air_function: not a pneumatic structure")
+    n_states = 13 + structure.n_states
+    x, p = ca.SX.sym("x", n_states), ca.SX.sym("p", layout.size)
+    return ca.Function("air", [x, p], [air_contents(structure, layout.unpack(p), x)], ["x", "p"], ["air"])

@@ -10,7 +10,7 @@ leveling valve and a connecting line.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -102,6 +102,24 @@ class PneumaticIsolator:
     @property
     def has_damping_chamber(self) -> bool:
         return self.damping_volume > 0.0
+
+    def scaled(self, stiffness: float, damping: float) -> PneumaticIsolator:
+        """The isolator with its springs scaled by ``stiffness`` and its dampers by ``damping``.
+
+        As a three-parameter element (the spring ``k_0`` in parallel with the spring ``k_b`` in series with
+        the orifice's dashpot ``c_b = A^2 V2^2 / (V1r (V1r + V2) G)``): both volumes divided by ``stiffness``,
+        the orifice's conductance ``G ~ d^4`` divided by ``stiffness * damping``; the horizontal spring and
+        damper scaled directly. :func:`isolator.simulation.scaling.scaled_parameter_sets` does the same to
+        parameter vectors.
+        """
+        orifice = self.orifice
+        if orifice is not None:
+            orifice = Capillary(orifice.diameter * (stiffness * damping) ** -0.25, orifice.length)
+        kx, ky = self.horizontal_stiffness
+        cx, cy = self.horizontal_damping
+        return replace(self, volume=self.volume / stiffness, damping_volume=self.damping_volume / stiffness,
+                       orifice=orifice, horizontal_stiffness=(stiffness * kx, stiffness * ky),
+                       horizontal_damping=(damping * cx, damping * cy))
 
     def vertical_stiffness(self, gauge_pressure: float, air: Air) -> float:
         """Small-amplitude stiffness of the air spring alone (orifice closed) [N/m]: ``n p0 A^2 / V1r``."""
