@@ -1,4 +1,13 @@
-"""Errors the toolkit raises for bad input and numerical trouble."""
+"""Errors the toolkit raises for bad input and numerical trouble.
+
+Which one: a bad function argument or command-line option (including a value
+that does not fit the scenario, such as a carriage name, a forces file or a
+controller designed for another plant) is a :class:`ParameterError` naming the
+argument; only a scenario whose own content makes the request impossible (no
+``[[actuators]]`` to control with, moves that never stop, an undamped table) is
+a :class:`ScenarioError` naming the scenario key; an optimiser or synthesis
+that finds no answer is an :class:`OptimisationError`.
+"""
 
 from __future__ import annotations
 

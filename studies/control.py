@@ -33,7 +33,7 @@ from controllers.feedforward import (
     path_deviation,
     settling_in_band,
 )
-from isolator import SIGNALS, Response, Scenario, ScenarioError, Simulator
+from isolator import SIGNALS, OptimisationError, ParameterError, Response, Scenario, ScenarioError, Simulator
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
 
@@ -52,8 +52,10 @@ def design(name: str, lin: LinearModel) -> fb.Controller:
 
     Raises
     ------
-    ScenarioError
+    ParameterError
         Unknown name, or ``hinf`` without slycot.
+    OptimisationError
+        ``hinf`` finds no controller.
     """
     if name == "skyhook":
         return fb.skyhook(lin, 5e4)
@@ -63,7 +65,7 @@ def design(name: str, lin: LinearModel) -> fb.Controller:
         return fb.lqr(lin)
     if name == "hinf":
         return fb.hinf(lin)
-    raise ScenarioError(f"controller: must be one of {', '.join(CONTROLLERS)}, got '{name}'")
+    raise ParameterError(f"controller: must be one of {', '.join(CONTROLLERS)}, got '{name}'")
 
 
 @dataclass(frozen=True)
@@ -127,7 +129,7 @@ def run_control_study(
     if not scenario.actuators:
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
     if feedforward not in ("allocation", "optimal"):
-        raise ScenarioError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
+        raise ParameterError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
     folder = output_folder(out)
     say = progress_printer(progress, "  control study: ")
     lin = linearise(scenario)
@@ -187,7 +189,9 @@ def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -
     for name in CONTROLLERS:
         try:
             ctrl = design(name, lin)
-        except ScenarioError:  # hinf without slycot
+        except (ParameterError, OptimisationError):  # hinf without slycot, or no H-infinity design
+            if name != "hinf":
+                raise
             continue
         # the closed loop answers what transmissibility asks of a LinearModel (frequency_response, scenario)
         loop = cast(LinearModel, fb.closed_loop(lin, ctrl, check=False))

@@ -38,7 +38,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
 
-from isolator import Scenario, ScenarioError, Simulator, UnstableTableError
+from isolator import ParameterError, Scenario, ScenarioError, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import transmissibility
 
@@ -155,13 +155,15 @@ def run_tradeoff_study(
 
     Raises
     ------
+    ParameterError
+        Bad scales or frequency.
     ScenarioError
-        Bad scales or frequency, no carriages, or carriages that never stop.
+        No carriages, or carriages that never stop.
     """
     k = _grid(STIFFNESS_SCALES if stiffness is None else stiffness, "stiffness")
     c = _grid(DAMPING_SCALES if damping is None else damping, "damping")
     if not (math.isfinite(reference_hz) and reference_hz > 0):
-        raise ScenarioError(f"reference_hz: must be a finite frequency > 0, got {reference_hz}")
+        raise ParameterError(f"reference_hz: must be a finite frequency > 0, got {reference_hz}")
     sim = Simulator(scenario)
     if not scenario.carriages:
         raise ScenarioError("carriages: none move, so there is no settling time to trade")
@@ -211,9 +213,9 @@ def run_tradeoff_study(
 def _grid(values: Sequence[float] | np.ndarray, name: str) -> np.ndarray:
     grid = np.atleast_1d(np.asarray(values, dtype=float))
     if grid.ndim != 1 or grid.size < 2:
-        raise ScenarioError(f"{name}: give at least two scale factors")
+        raise ParameterError(f"{name}: give at least two scale factors")
     if not np.all(np.isfinite(grid)) or np.any(grid <= 0) or np.any(np.diff(grid) <= 0):
-        raise ScenarioError(f"{name}: scale factors must be finite, > 0 and increasing")
+        raise ParameterError(f"{name}: scale factors must be finite, > 0 and increasing")
     return grid
 
 

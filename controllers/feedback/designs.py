@@ -24,7 +24,7 @@ import numpy as np
 
 from controllers.feedforward.wrench import allocation_matrix
 from isolator.analysis.linear import FORCE_INPUTS, STATE_NAMES, LinearModel
-from isolator.errors import ScenarioError
+from isolator.errors import OptimisationError, ParameterError, ScenarioError
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.definitions import Scenario
 
@@ -60,7 +60,7 @@ class Controller:
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.sample_rate) and self.sample_rate > 0):
-            raise ScenarioError(f"sample_rate: must be a finite rate > 0 Hz, got {self.sample_rate}")
+            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {self.sample_rate}")
 
     def discrete(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(A, B, C, D)`` of the controller discretised by Tustin's method at :attr:`sample_rate`."""
@@ -114,14 +114,14 @@ def decentralised(
     name : str
     """
     if measure not in ("displacement", "velocity"):
-        raise ScenarioError(f"measure: must be 'displacement' or 'velocity', got '{measure}'")
+        raise ParameterError(f"measure: must be 'displacement' or 'velocity', got '{measure}'")
     j = _collocation(lin)
     n_a = j.shape[0]
     pick = np.hstack([j, np.zeros_like(j)]) if measure == "displacement" else np.hstack([np.zeros_like(j), j])
     g = control.ss(transfer)
     a, b, c, d = (np.asarray(m, dtype=float) for m in (g.A, g.B, g.C, g.D))
     if b.shape[1] != 1 or c.shape[0] != 1:
-        raise ScenarioError("transfer: must be a single-input single-output transfer function")
+        raise ParameterError("transfer: must be a single-input single-output transfer function")
     eye = np.eye(n_a)
     system = control.ss(
         np.kron(eye, a), np.kron(eye, b) @ pick, -np.kron(eye, c), -np.kron(eye, d) @ pick,
@@ -133,7 +133,7 @@ def decentralised(
 def _positive(value: float, key: str, allow_zero: bool = False) -> float:
     v = float(value)
     if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        raise ScenarioError(f"{key}: must be a finite number {'>=' if allow_zero else '>'} 0, got {value}")
+        raise ParameterError(f"{key}: must be a finite number {'>=' if allow_zero else '>'} 0, got {value}")
     return v
 
 
@@ -203,7 +203,7 @@ def lead(
     k = _positive(gain, "gain")
     fz, fp = _positive(zero_hz, "zero_hz"), _positive(pole_hz, "pole_hz")
     if fp <= fz:
-        raise ScenarioError(f"pole_hz: must be above zero_hz ({fz:.4g} Hz) for a lead, got {fp}")
+        raise ParameterError(f"pole_hz: must be above zero_hz ({fz:.4g} Hz) for a lead, got {fp}")
     wz, wp = 2 * math.pi * fz, 2 * math.pi * fp
     g = control.tf([k / wz, k], [1 / wp, 1.0])
     return decentralised(lin, g, "displacement", "lead", sample_rate,
@@ -281,13 +281,15 @@ def hinf(
 
     Raises
     ------
-    ScenarioError
-        slycot is missing, or no controller achieves a finite norm.
+    ParameterError
+        slycot is missing, or a weight is not a finite positive number.
+    OptimisationError
+        No controller achieves a finite norm.
     """
     try:
         import slycot
     except ImportError:
-        raise ScenarioError("hinf: needs slycot (pip install slycot)") from None
+        raise ParameterError("controller: hinf needs slycot (pip install slycot)") from None
     a, b2 = actuated(lin)
     labels = list(lin.system.input_labels)
     bw = np.asarray(lin.system.B, dtype=float)[:, [labels.index(n) for n in FORCE_INPUTS]]
@@ -305,13 +307,13 @@ def hinf(
                        np.block([[np.zeros((n + m, 6 + n)), d12], [d21, np.zeros((n, m))]]))
     factor = _positive(relax, "relax")
     if factor < 1:
-        raise ScenarioError(f"relax: must be >= 1 (a factor on the optimal norm), got {relax}")
+        raise ParameterError(f"relax: must be >= 1 (a factor on the optimal norm), got {relax}")
     try:
         _, _, optimal, _ = control.hinfsyn(plant, n, m)
         out = slycot.sb10ad(n, 6 + n + m, 2 * n + m, m, n, factor * optimal, plant.A, plant.B, plant.C,
                             plant.D, job=4)
     except Exception as exc:  # slycot reports failures as its own exception types
-        raise ScenarioError(f"hinf: no H-infinity controller for these weights ({exc})") from None
+        raise OptimisationError(f"hinf: no H-infinity controller for these weights ({exc})") from None
     gamma = factor * optimal
     k = control.ss(*out[1:5])
     # scaled measurement x / sx in, scaled force u / su out

@@ -19,7 +19,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel, is_stable, state_space_response
-from isolator.errors import ScenarioError, UnstableClosedLoopError
+from isolator.errors import ParameterError, UnstableClosedLoopError
 from isolator.scenario.definitions import SIGNALS, Scenario
 
 from .designs import MEASUREMENTS, Controller, actuator_labels
@@ -128,7 +128,7 @@ def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) ->
     p = _plant(lin)
     k = controller.system
     if list(k.output_labels) != actuator_labels(lin.scenario) or list(k.input_labels) != list(MEASUREMENTS):
-        raise ScenarioError("controller: was designed for other actuators or measurements than this plant's")
+        raise ParameterError("controller: was designed for other actuators or measurements than this plant's")
     _, bk, _, dk = (np.asarray(m, dtype=float) for m in (k.A, k.B, k.C, k.D))
     nk = bk.shape[0]
     # m = Cm x + Dmw w - [ref; 0];  u = Ck xc + Dk m

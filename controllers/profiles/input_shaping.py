@@ -19,7 +19,7 @@ import numpy as np
 
 from controllers.feedforward.wrench import carriage_inertia_wrench
 from isolator.analysis.linear import linearise
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import shaped
 from isolator.scenario.profiles import PiecewisePolynomialProfile
@@ -83,11 +83,11 @@ def shaper(kind: str, frequency: float, damping: float) -> Shaper:
         Damping ratio, in [0, 1).
     """
     if kind not in SHAPERS:
-        raise ScenarioError(f"shaper: must be one of {', '.join(SHAPERS)}, got '{kind}'")
+        raise ParameterError(f"kind: must be one of {', '.join(SHAPERS)}, got '{kind}'")
     if not (math.isfinite(frequency) and frequency > 0):
-        raise ScenarioError(f"frequency: must be a finite number > 0, got {frequency}")
+        raise ParameterError(f"frequency: must be a finite number > 0, got {frequency}")
     if not (math.isfinite(damping) and 0 <= damping < 1):
-        raise ScenarioError(f"damping: must be in [0, 1), got {damping}")
+        raise ParameterError(f"damping: must be in [0, 1), got {damping}")
     root = math.sqrt(1 - damping**2)
     period = 1.0 / (frequency * root)  # damped period
     k = math.exp(-damping * math.pi / root)

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Carriage, Scenario
 from isolator.scenario.profile_shapes import scurve, trapezoid
 from isolator.scenario.profiles import PiecewisePolynomialProfile
@@ -227,10 +227,12 @@ def move_designs(scenario: Scenario, shape: str | None = None) -> tuple[MoveDesi
     Raises
     ------
     ScenarioError
-        No carriages, a carriage that is not a trapezoid or an scurve, an unknown shape.
+        No carriages, a carriage that is not a trapezoid or an scurve.
+    ParameterError
+        An unknown shape.
     """
     if shape is not None and shape not in SHAPES:
-        raise ScenarioError(f"shape: must be one of {', '.join(SHAPES)}, got '{shape}'")
+        raise ParameterError(f"shape: must be one of {', '.join(SHAPES)}, got '{shape}'")
     if not scenario.carriages:
         raise ScenarioError("carriages: profile design needs at least one carriage")
     designs = []

@@ -13,7 +13,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.simulation.response import Response
@@ -51,7 +51,7 @@ class ModelVariant:
         for name in ("stiffness", "damping", "mass"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ScenarioError(f"variant.{name}: must be a finite factor > 0, got {value}")
+                raise ParameterError(f"variant.{name}: must be a finite factor > 0, got {value}")
 
     @property
     def label(self) -> str:
@@ -129,7 +129,7 @@ class MoveMetrics:
 def with_moves(scenario: Scenario, profiles: Sequence[Any]) -> Scenario:
     """The scenario with each carriage's profile replaced (one profile or MoveDesign per carriage)."""
     if len(profiles) != len(scenario.carriages):
-        raise ScenarioError(f"profiles: need one per carriage ({len(scenario.carriages)}), got {len(profiles)}")
+        raise ParameterError(f"profiles: need one per carriage ({len(scenario.carriages)}), got {len(profiles)}")
     carriages: list[Carriage] = []
     for carriage, prof in zip(scenario.carriages, profiles, strict=True):
         made = prof.profile() if isinstance(prof, MoveDesign) else prof

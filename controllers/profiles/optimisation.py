@@ -81,8 +81,10 @@ def optimise_profiles(
 
     Raises
     ------
+    ParameterError
+        Bad settings.
     ScenarioError
-        Bad settings; carriages that are not trapezoids or S-curves; floor motion.
+        Carriages that are not trapezoids or S-curves; floor motion.
     OptimisationError
         IPOPT failed. The message gives its status; ``.result`` holds the best
         feasible point it reached (measured by simulation), or None.

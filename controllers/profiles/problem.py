@@ -22,7 +22,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError
 from isolator.scenario.definitions import Scenario
 
 from .move_design import MoveDesign
@@ -97,26 +97,26 @@ class ProfileSettings:
     tolerance: float = 1e-6
 
     def check(self) -> None:
-        """Raise :class:`ScenarioError` naming a bad setting."""
+        """Raise :class:`ParameterError` naming a bad setting."""
         if self.objective not in OBJECTIVES:
-            raise ScenarioError(f"objective: must be one of {', '.join(OBJECTIVES)}, got '{self.objective}'")
+            raise ParameterError(f"objective: must be one of {', '.join(OBJECTIVES)}, got '{self.objective}'")
         if self.transcription not in TRANSCRIPTIONS:
-            raise ScenarioError(
+            raise ParameterError(
                 f"transcription: must be one of {', '.join(TRANSCRIPTIONS)}, got '{self.transcription}'"
             )
         if not (math.isfinite(self.max_move_time_increase) and self.max_move_time_increase >= 0):
-            raise ScenarioError(
+            raise ParameterError(
                 f"max_move_time_increase: must be a finite fraction >= 0, got {self.max_move_time_increase}"
             )
         if not self.variants:
-            raise ScenarioError("variants: need at least one model")
+            raise ParameterError("variants: need at least one model")
         for name in ("step_angle", "window_periods", "band_margin", "residual_limit", "tolerance"):
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
-                raise ScenarioError(f"{name}: must be a finite number > 0, got {value}")
+                raise ParameterError(f"{name}: must be a finite number > 0, got {value}")
         for name in ("shooting_steps", "max_iterations"):
             if int(getattr(self, name)) < 1:
-                raise ScenarioError(f"{name}: must be at least 1, got {getattr(self, name)}")
+                raise ParameterError(f"{name}: must be at least 1, got {getattr(self, name)}")
 
 
 class Problem:

@@ -8,7 +8,7 @@ constant-jerk phases; they become an exact piecewise-cubic profile.
 
 from __future__ import annotations
 
-from isolator.errors import ScenarioError
+from isolator.errors import OptimisationError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import segments
 from isolator.scenario.profiles import PiecewisePolynomialProfile
@@ -43,7 +43,7 @@ def time_optimal_profile(start: float, stroke: float, t0: float, velocity: float
     trajectory = Trajectory(1)
     result = Ruckig(1).calculate(inp, trajectory)
     if result not in (Result.Working, Result.Finished):
-        raise ScenarioError(f"limits: ruckig found no move ({result})")
+        raise OptimisationError(f"limits: ruckig found no move ({result})")
     phase = trajectory.profiles[0][0]
     return segments(start, t0, list(phase.t), list(phase.a[:7]), list(phase.j), kind="time-optimal")
 

@@ -29,7 +29,7 @@ import casadi as ca
 import control
 import numpy as np
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
 from isolator.model.linearisation import build_linearisation
@@ -72,27 +72,27 @@ def rest_positions(
 
     Raises
     ------
-    ScenarioError
+    ParameterError
         Both ``positions`` and ``time``; an unknown name; a wrong count; a
         non-finite value; a carriage whose mass would leave the table's footprint.
     """
     if positions is not None and time is not None:
-        raise ScenarioError("positions: give carriage positions or a time, not both")
+        raise ParameterError("positions: give carriage positions or a time, not both")
     q = scenario.initial_positions()
     names = [c.name for c in scenario.carriages]
     if time is not None:
         if not math.isfinite(time) or time < 0:
-            raise ScenarioError(f"time: must be a finite time >= 0 s, got {time}")
+            raise ParameterError(f"time: must be a finite time >= 0 s, got {time}")
         q = np.array([c.profile.position(time) for c in scenario.carriages], dtype=float)
     elif isinstance(positions, Mapping):
         for name, value in positions.items():
             if name not in names:
-                raise ScenarioError(f"positions.{name}: no such carriage (carriages: {', '.join(names) or 'none'})")
+                raise ParameterError(f"positions.{name}: no such carriage (carriages: {', '.join(names) or 'none'})")
             q[names.index(name)] = _finite(value, f"positions.{name}")
     elif positions is not None:
         values = np.asarray(positions, dtype=float).ravel()
         if values.size != len(names):
-            raise ScenarioError(f"positions: needs {len(names)} values (one per carriage), got {values.size}")
+            raise ParameterError(f"positions: needs {len(names)} values (one per carriage), got {values.size}")
         q = np.array([_finite(v, f"positions[{i}]") for i, v in enumerate(values)])
     _check_footprint(scenario, q)
     return q
@@ -102,9 +102,9 @@ def _finite(value: object, key: str) -> float:
     try:
         x = float(value)  # type: ignore[arg-type]
     except (TypeError, ValueError):
-        raise ScenarioError(f"{key}: must be a number, got {value!r}") from None
+        raise ParameterError(f"{key}: must be a number, got {value!r}") from None
     if not math.isfinite(x):
-        raise ScenarioError(f"{key}: must be finite, got {x}")
+        raise ParameterError(f"{key}: must be finite, got {x}")
     return x
 
 
@@ -113,7 +113,7 @@ def _check_footprint(scenario: Scenario, q: np.ndarray) -> None:
     if excess is not None:
         i, axis, _, coordinate = excess
         half = scenario.table.size[axis] / 2.0  # type: ignore[index]
-        raise ScenarioError(
+        raise ParameterError(
             f"positions.{scenario.carriages[i].name}: puts the carriage's mass at {'xy'[axis]} = {coordinate:.4g} m, "
             f"beyond the table's footprint (+-{half:.4g} m, table.size)"
         )
@@ -272,7 +272,7 @@ def _index(names: Sequence[str] | None, labels: list[str], what: str) -> list[in
     out = []
     for name in names:
         if name not in labels:
-            raise ScenarioError(f"{what}: no {what[:-1]} named '{name}' (have: {', '.join(labels)})")
+            raise ParameterError(f"{what}: no {what[:-1]} named '{name}' (have: {', '.join(labels)})")
         out.append(labels.index(name))
     return out
 
@@ -291,7 +291,7 @@ def state_space_response(
     """
     f = np.asarray(frequency_hz, dtype=float).ravel()
     if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
-        raise ScenarioError("frequency_hz: must be finite frequencies >= 0 Hz")
+        raise ParameterError("frequency_hz: must be finite frequencies >= 0 Hz")
     iu = _index(inputs, list(system.input_labels), "inputs")
     iy = _index(outputs, list(system.output_labels), "outputs")
     a, b = np.asarray(system.A), np.asarray(system.B)[:, iu]
@@ -343,7 +343,7 @@ def linearise(
     model = get_model(layout, "exact")
     p = layout.pack(scenario) if parameters is None else np.asarray(parameters, dtype=float)
     if p.shape != (layout.size,) or not np.all(np.isfinite(p)):
-        raise ScenarioError(f"parameters: must be {layout.size} finite numbers (Simulator.layout), got shape {p.shape}")
+        raise ParameterError(f"parameters: must be {layout.size} finite numbers (Simulator.layout), got {p.shape}")
     eq = static_equilibrium(model, p, q, "in this rest configuration", check=check)
     c = np.concatenate([q, np.zeros(2 * q.size)])
     mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from isolator.analysis.linear import LinearModel
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import FloorSpectrum
 
 __all__ = ["VC_CLASSES", "VibrationCriteria", "third_octave_bands", "vibration_criteria"]
@@ -169,7 +169,9 @@ def vibration_criteria(
     Raises
     ------
     ScenarioError
-        No spectrum, or an unknown point.
+        No spectrum given and none in the scenario.
+    ParameterError
+        An unknown point.
     """
     if spectrum is None:
         ground = lin.scenario.ground
@@ -181,7 +183,7 @@ def vibration_criteria(
     else:
         names = [p.name for p in lin.scenario.points]
         if point not in names:
-            raise ScenarioError(f"point: no point named '{point}' in [[points]] (have: {', '.join(names) or 'none'})")
+            raise ParameterError(f"point: no point named '{point}' in [[points]] (have: {', '.join(names) or 'none'})")
         outputs, label = [f"{point}:{a}" for a in "xyz"], point
     centres, lower, upper = third_octave_bands(low, high)
     # midpoint rule on log-spaced cells that tile each band exactly

@@ -20,7 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.tables import read_csv_columns
 
@@ -50,12 +50,12 @@ class ForceHistory:
         t = np.asarray(self.t, dtype=float)
         f = np.asarray(self.forces, dtype=float).reshape(len(self.names), -1)
         if t.ndim != 1 or t.size != f.shape[1]:
-            raise ScenarioError(f"forces: {t.size} times for {f.shape[1]} force samples")
+            raise ParameterError(f"forces: {t.size} times for {f.shape[1]} force samples")
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
-            raise ScenarioError("forces: times and forces must be finite (found NaN or infinity)")
+            raise ParameterError("forces: times and forces must be finite (found NaN or infinity)")
         steps = np.diff(t)
         if t.size and (np.any(steps < 0) or np.any((steps[1:] == 0) & (steps[:-1] == 0))):
-            raise ScenarioError("forces.t: times must be increasing (a time at most twice, for a step)")
+            raise ParameterError("forces.t: times must be increasing (a time at most twice, for a step)")
         object.__setattr__(self, "t", t)
         object.__setattr__(self, "forces", f)
 
@@ -99,13 +99,18 @@ def load_forces(path: str | Path, scenario: Scenario, key: str = "forces") -> Fo
     Raises
     ------
     ScenarioError
-        No actuators in the scenario; an unreadable file; a column that names
-        no actuator; non-numeric, non-finite or non-increasing values.
+        No actuators in the scenario.
+    ParameterError
+        An unreadable file; a column that names no actuator; non-numeric,
+        non-finite or non-increasing values (the message starts with ``key``).
     """
     names = tuple(a.name for a in scenario.actuators)
     if not names:
-        raise ScenarioError(f"{key}: the scenario has no [[actuators]] to apply forces with")
-    columns = read_csv_columns(Path(path), key, ("t",), names)
+        raise ScenarioError(f"actuators: the scenario has no [[actuators]] to apply {key} with")
+    try:
+        columns = read_csv_columns(Path(path), key, ("t",), names)
+    except ScenarioError as exc:  # the file is an argument, not scenario content
+        raise ParameterError(str(exc)) from None
     t = columns.pop("t")
     forces = np.array([columns.get(n, np.zeros_like(t)) for n in names])
     return ForceHistory(t, forces, names)

@@ -18,7 +18,7 @@ from typing import Literal, Protocol
 
 import numpy as np
 
-from isolator.errors import ScenarioError, SimulationError
+from isolator.errors import ParameterError, SimulationError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
@@ -114,7 +114,7 @@ def run_batch(
 
     Raises
     ------
-    ScenarioError
+    ParameterError
         A scale is not a finite positive number (named by index), or ``diverged`` is unknown.
     UnstableTableError
         A run's table has no stable equilibrium (the message names the run).
@@ -122,7 +122,7 @@ def run_batch(
         A run diverged (the message names the run), with ``diverged="raise"``.
     """
     if diverged not in ("raise", "record"):
-        raise ScenarioError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
+        raise ParameterError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
     params = sim.scaled_parameter_sets(stiffness, damping)
     n = params.shape[0]
     if n == 0:

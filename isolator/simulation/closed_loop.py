@@ -7,7 +7,7 @@ from typing import Protocol
 
 import numpy as np
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
@@ -47,9 +47,9 @@ def controller_period(scenario: Scenario, feedback: FeedbackLaw) -> int:
     ratio = scenario.simulation.sample_rate / float(feedback.sample_rate)
     period = round(ratio)
     if not (math.isfinite(ratio) and period >= 1 and abs(ratio - period) <= 1e-9 * ratio):
-        raise ScenarioError(
-            f"simulation.sample_rate: the controller's {feedback.sample_rate:.6g} Hz must divide it "
-            f"({scenario.simulation.sample_rate:.6g} Hz)"
+        raise ParameterError(
+            f"feedback: the controller's sample rate {feedback.sample_rate:.6g} Hz must divide the "
+            f"scenario's simulation.sample_rate ({scenario.simulation.sample_rate:.6g} Hz)"
         )
     return period
 

@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from isolator.errors import ScenarioError, SimulationError
+from isolator.errors import ParameterError, SimulationError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
@@ -88,9 +88,9 @@ class Simulator:
         p = self.parameters.copy()
         for name, value in (changes or {}).items():
             if name not in self.layout.names:
-                raise ScenarioError(f"{name}: not a parameter of this scenario")
+                raise ParameterError(f"changes: '{name}' is not a parameter of this scenario (Simulator.layout.names)")
             if not math.isfinite(float(value)):
-                raise ScenarioError(f"{name}: must be finite, got {value}")
+                raise ParameterError(f"changes.{name}: must be finite, got {value}")
             p[self.layout.names.index(name)] = float(value)
         return p
 
@@ -229,7 +229,7 @@ class Simulator:
             return inputs
         names = tuple(a.name for a in self.scenario.actuators)
         if forces.names != names:
-            raise ScenarioError(f"forces: are for actuators {forces.names}, the scenario has {names}")
+            raise ParameterError(f"forces: are for actuators {forces.names}, the scenario has {names}")
         times, mid = stage_times(self.grid, substeps)
         flat = times.ravel()
         applied = applied_forces(self.scenario, forces.command(flat, mid.ravel()), flat)

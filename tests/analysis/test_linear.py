@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 from conftest import asymmetric_3d_dict, base_dict, make
-from isolator import ScenarioError, Simulator, UnstableTableError
+from isolator import ParameterError, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes, modes_over_travel
 from isolator.analysis.stability import stability
@@ -150,7 +150,7 @@ def test_scaled_isolators_give_the_scaled_spring_damper():
         cc = 0.4 * sum(iso.damping[k] for iso in scenario.isolators)
         np.testing.assert_allclose(trans.response[:, k, k], (cc * s + kk) / (m * s**2 + cc * s + kk), rtol=1e-9)
     assert np.array_equal(linearise(scenario).parameters, sim.parameters)
-    with pytest.raises(ScenarioError, match="parameters: must be"):
+    with pytest.raises(ParameterError, match="parameters: must be"):
         linearise(scenario, parameters=scaled[:-1])
 
 
@@ -260,7 +260,7 @@ def test_rest_configurations_and_named_signals():
     ],
 )
 def test_bad_rest_configurations_are_named(kwargs, message):
-    with pytest.raises(ScenarioError, match=message):
+    with pytest.raises(ParameterError, match=message):
         linearise(make(asymmetric_3d_dict()), **kwargs)
 
 

@@ -10,7 +10,7 @@ import pytest
 from scipy.integrate import quad
 
 from conftest import base_dict, make
-from isolator import ScenarioError
+from isolator import ParameterError, ScenarioError
 from isolator.analysis.linear import linearise
 from isolator.analysis.vibration import VC_CLASSES, third_octave_bands, vibration_criteria
 from isolator.scenario.definitions import FloorSpectrum
@@ -79,7 +79,7 @@ def test_psd_spectrum_and_points(tmp_path: Path):
     np.testing.assert_allclose(vc.floor["z"], np.sqrt(1e-12 * (hi - lo)), rtol=1e-9)
     # at 1 Hz, below the 3.4 Hz modes, the table follows the floor, a little amplified
     assert 1.0 < vc.table["z"][0] / vc.floor["z"][0] < 1.15
-    with pytest.raises(ScenarioError, match="point: no point named 'nope'"):
+    with pytest.raises(ParameterError, match="point: no point named 'nope'"):
         vibration_criteria(lin, spectrum, point="nope")
     with pytest.raises(ScenarioError, match=r"ground\.spectrum: no floor spectrum"):
         vibration_criteria(lin)

@@ -11,7 +11,7 @@ import pytest
 
 from conftest import active_dict, base_dict, make
 from controllers.feedforward import compare_feedforward, feedforward_allocation
-from isolator import ScenarioError, Simulator, load_scenario
+from isolator import ParameterError, ScenarioError, Simulator, load_scenario
 from isolator.cli.app import main
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.actuation import ForceHistory, applied_forces, load_forces
@@ -88,10 +88,10 @@ def test_forces_files(tmp_path: Path):
     assert np.all(cmd[:, forces.names.index("y2")] == 0.0)  # not named: zero
     bad = tmp_path / "bad.csv"
     bad.write_text("t,nope\n0,1\n")
-    with pytest.raises(ScenarioError, match=r"forces: .* must be a CSV whose header has t"):
+    with pytest.raises(ParameterError, match=r"forces: .* must be a CSV whose header has t"):
         load_forces(bad, scenario)
     bad.write_text("t,z0\n1,0\n0,1\n")
-    with pytest.raises(ScenarioError, match=r"forces\.t: times must be increasing"):
+    with pytest.raises(ParameterError, match=r"forces\.t: times must be increasing"):
         load_forces(bad, scenario)
     with pytest.raises(ScenarioError, match="no \\[\\[actuators\\]\\]"):
         load_forces(path, make(base_dict()))

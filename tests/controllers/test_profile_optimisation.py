@@ -13,7 +13,7 @@ from controllers.profiles import ModelVariant, evaluate_move, move_designs, shap
 from controllers.profiles.objective import peak_floor
 from controllers.profiles.problem import Problem
 from controllers.profiles.transcription import variant_data
-from isolator import OptimisationError, ScenarioError, Simulator, load_scenario
+from isolator import OptimisationError, ParameterError, Simulator, load_scenario
 from isolator.cli.app import main
 
 NOMINAL = (ModelVariant(),)
@@ -90,9 +90,9 @@ def test_a_solver_failure_says_so_and_keeps_the_best_feasible_point(paper):
 
 
 def test_bad_settings_are_named(paper):
-    with pytest.raises(ScenarioError, match="objective: must be one of settling, cycle"):
+    with pytest.raises(ParameterError, match="objective: must be one of settling, cycle"):
         po.optimise_profiles(paper, po.ProfileSettings(objective="fast"))
-    with pytest.raises(ScenarioError, match="max_move_time_increase: must be a finite fraction >= 0"):
+    with pytest.raises(ParameterError, match="max_move_time_increase: must be a finite fraction >= 0"):
         po.optimise_profiles(paper, po.ProfileSettings(max_move_time_increase=float("nan")))
 
 

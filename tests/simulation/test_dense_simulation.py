@@ -12,7 +12,7 @@ import pytest
 
 from conftest import asymmetric_3d_dict, base_dict
 from isolator import (
-    ScenarioError,
+    ParameterError,
     SimulationError,
     Simulator,
     load_scenario,
@@ -108,7 +108,7 @@ def test_a_batch_names_the_run_that_turns_too_far_or_records_it():
     expected = [np.nan if v is None else v for v in single.settling_time.values()]
     assert np.allclose(batch.settling_time[3], expected, rtol=0, atol=1e-12, equal_nan=True)
     assert np.allclose(batch.peak[3], list(single.peak.values()), rtol=1e-9)
-    with pytest.raises(ScenarioError, match="diverged: must be"):
+    with pytest.raises(ParameterError, match="diverged: must be"):
         sim.run_batch([1.0], [1.0], diverged="ignore")
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import base_dict, make
-from isolator import ScenarioError, Simulator, load_scenario
+from isolator import ParameterError, ScenarioError, Simulator, load_scenario
 from isolator.analysis.linear import linearise
 from isolator.cli.app import main
 from studies.tradeoff import pareto_front, run_tradeoff_study
@@ -102,11 +102,11 @@ def test_tipping_designs_are_marked_not_run(tmp_path):
 
 def test_bad_study_input_is_named(tmp_path):
     sc = make(base_dict())
-    with pytest.raises(ScenarioError, match="reference_hz"):
+    with pytest.raises(ParameterError, match="reference_hz"):
         run_tradeoff_study(tmp_path, sc, reference_hz=0.0, progress=False)
-    with pytest.raises(ScenarioError, match="stiffness: scale factors must be"):
+    with pytest.raises(ParameterError, match="stiffness: scale factors must be"):
         run_tradeoff_study(tmp_path, sc, stiffness=[1.0, 0.5], progress=False)
-    with pytest.raises(ScenarioError, match="damping: give at least two"):
+    with pytest.raises(ParameterError, match="damping: give at least two"):
         run_tradeoff_study(tmp_path, sc, damping=[1.0], progress=False)
     data = base_dict()
     data["carriages"][0]["profile"] = {"type": "sine", "amplitude": 0.1, "omega": 3.0}
