@@ -6,27 +6,36 @@ carriages' joint motion is prescribed: at every instant MuJoCo gives the joint
 space mass matrix and bias forces, and the table's accelerations follow from
 the partition ``M_tt a_t = f_t - b_t - M_tc a_c`` with the carriages'
 prescribed accelerations ``a_c``. The states are integrated with scipy's
-DOP853 at tight tolerance, restarted at the profiles' breakpoints. MuJoCo also
-finds its own static equilibria (a root of its accelerations), so that nothing
-but the scenario is shared with the casadi model.
+DOP853 at tight tolerance, restarted at the profiles' breakpoints
+(:func:`solve_piecewise`). MuJoCo also finds its own static equilibria (a
+root of its accelerations), so that nothing but the scenario is shared with
+the casadi model.
+
+Pneumatic scenarios: the chamber pressures (:class:`AirChambers`, the
+contract's equations in numpy) are integrated in the same right-hand side as
+the table; each air spring pushes along world +z at its site, each group's
+valve reads the height of a sensor site. The run starts at the reference
+pose (every chamber at its rest volume) with the group pressures that MuJoCo's
+own generalized forces balance there.
 
 Needs the optional dependency ``mujoco`` (``pip install isolator[check]``).
 """
 
 from __future__ import annotations
 
-import itertools
 import math
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.integrate import solve_ivp
 from scipy.optimize import root
 
 from isolator.errors import IsolatorError, ScenarioError
 from isolator.model.signals import table_signals
 from isolator.scenario.definitions import Isolator, Scenario
+from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.validation.piecewise import solve_piecewise
+from isolator.validation.pneumatic_chambers import AirChambers
 
 __all__ = ["MujocoTable", "MultibodyRun", "mujoco_available", "solve_piecewise"]
 
@@ -54,23 +63,25 @@ class MultibodyRun:
     states : ndarray (N, 13)
         Position, quaternion (w, x, y, z), velocity (world) and angular
         velocity (table frame) of the table.
+    chambers : ndarray (N, chambers) or None
+        Pneumatic runs: absolute chamber pressures [Pa], every spring chamber
+        then every damping chamber (the layout of ``Response.states[:, 13:]``).
+    pressures : ndarray (isolators, N) or None
+        Pneumatic runs: spring chamber gauge pressures ``p1 - p_atm`` [Pa].
+    heights : ndarray (groups, N) or None
+        Pneumatic runs: each leveling group's sensor height [m].
     """
 
     t: np.ndarray
     signals: np.ndarray
     states: np.ndarray
+    chambers: np.ndarray | None = None
+    pressures: np.ndarray | None = None
+    heights: np.ndarray | None = None
 
 
 def _vec(v: Iterable[float]) -> str:
     return " ".join(f"{float(x):.17g}" for x in v)
-
-
-def _spring_dampers(scenario: Scenario) -> tuple[Isolator, ...]:
-    """The scenario's isolators, which the check models as linear spring-dampers (pneumatic ones it cannot)."""
-    isolators = tuple(iso for iso in scenario.isolators if isinstance(iso, Isolator))
-    if len(isolators) != len(scenario.isolators):
-        raise ScenarioError("isolators: the MuJoCo check models spring-damper isolators only, not pneumatic ones")
-    return isolators
 
 
 class MujocoTable:
@@ -95,7 +106,8 @@ class MujocoTable:
             ) from exc
         self.mj = mujoco
         self.scenario = scenario
-        self.isolators = _spring_dampers(scenario)
+        self.isolators: tuple[Isolator | PneumaticIsolator, ...] = tuple(scenario.isolators)
+        self.air = AirChambers(scenario) if scenario.is_pneumatic else None
         self.forces = forces
         self.model = mujoco.MjModel.from_xml_string(self._xml())
         self.data = mujoco.MjData(self.model)
@@ -103,6 +115,9 @@ class MujocoTable:
         self.site_ids = [
             mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, f"iso{k}")
             for k in range(len(scenario.isolators))
+        ]
+        self.sensor_ids = [
+            mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_SITE, f"sensor{j}") for j in range(len(scenario.leveling))
         ]
         self.table_id = mujoco.mj_name2id(self.model, mujoco.mjtObj.mjOBJ_BODY, "table")
         self.joint_dofs = [
@@ -134,7 +149,7 @@ class MujocoTable:
 
         sites = "".join(
             f'<site name="iso{k}" pos="{_vec(iso.position)}"/>' for k, iso in enumerate(self.isolators)
-        )
+        ) + "".join(f'<site name="sensor{j}" pos="{_vec(g.sensor)} 0"/>' for j, g in enumerate(sc.leveling))
         carriages = "".join(body(i) for i in children.get("table", []))
         return (
             '<mujoco model="isolation-table">'
@@ -166,8 +181,9 @@ class MujocoTable:
 
         Parameters
         ----------
-        y : ndarray (13,)
-            Position, quaternion (w, x, y, z), world velocity, table-frame angular velocity.
+        y : ndarray (13,) or (13 + chambers,)
+            Position, quaternion (w, x, y, z), world velocity, table-frame angular
+            velocity; pneumatic tables: then the chamber pressures [Pa] (absolute).
         carriages : ndarray (3, n)
             Carriage coordinates, velocities, accelerations.
         t : float
@@ -178,6 +194,17 @@ class MujocoTable:
         piece_time : float, optional
             A time inside the current integration segment (for the forces).
         """
+        return self._dynamics(y, carriages, t, ground, piece_time)[0]
+
+    def _dynamics(
+        self,
+        y: np.ndarray,
+        carriages: np.ndarray,
+        t: float = 0.0,
+        ground: np.ndarray | None = None,
+        piece_time: float | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Table accelerations (6,), and each isolator's vertical stroke and its rate [m], [m/s]."""
         mj, m, d = self.mj, self.model, self.data
         d.qpos[0:7] = y[0:7] / np.r_[1.0, 1.0, 1.0, np.full(4, np.linalg.norm(y[3:7]))]
         d.qvel[0:6] = y[7:13]
@@ -188,6 +215,9 @@ class MujocoTable:
         mj.mj_fwdVelocity(m, d)
         d.qfrc_applied[:] = 0.0
         vel6 = np.zeros(6)
+        n_iso = len(self.scenario.isolators)
+        stroke, stroke_rate = np.zeros(n_iso), np.zeros(n_iso)
+        lift = self.air.vertical_forces(y[13:]) if self.air is not None else self.preload
         for k, iso in enumerate(self.isolators):
             sid = self.site_ids[k]
             point = d.site_xpos[sid].copy()
@@ -197,8 +227,13 @@ class MujocoTable:
             if ground is not None:
                 disp -= ground[0:3] + np.cross(ground[3:6], anchor)
                 rate -= ground[6:9] + np.cross(ground[9:12], anchor)
-            f = -np.asarray(iso.stiffness) * disp - np.asarray(iso.damping) * rate
-            f[2] += self.preload[k]
+            stroke[k], stroke_rate[k] = disp[2], rate[2]
+            if isinstance(iso, PneumaticIsolator):
+                stiffness, damping = np.r_[iso.horizontal_stiffness, 0.0], np.r_[iso.horizontal_damping, 0.0]
+            else:
+                stiffness, damping = np.asarray(iso.stiffness), np.asarray(iso.damping)
+            f = -stiffness * disp - damping * rate
+            f[2] += lift[k]
             mj.mj_applyFT(m, d, f, np.zeros(3), point, self.table_id, d.qfrc_applied)
         if self.forces is not None and self.scenario.actuators:
             rot = d.xmat[self.table_id].reshape(3, 3)
@@ -213,7 +248,12 @@ class MujocoTable:
         a_c = np.zeros(m.nv)
         for i in range(self.n_c):
             a_c[self.joint_dofs[i]] = carriages[2, i]
-        return np.linalg.solve(self._full_m[free, free], rhs[free] - self._full_m[free, :] @ a_c)
+        acc = np.linalg.solve(self._full_m[free, free], rhs[free] - self._full_m[free, :] @ a_c)
+        return acc, stroke, stroke_rate
+
+    def sensor_heights(self) -> np.ndarray:
+        """Each group's sensor height [m]: world z of its site at MuJoCo's current positions."""
+        return np.array([self.data.site_xpos[sid][2] for sid in self.sensor_ids])
 
     def _fill_mass_matrix(self) -> None:
         """Dense joint-space mass matrix (MuJoCo 3 and 4 spell the call differently)."""
@@ -224,17 +264,22 @@ class MujocoTable:
             mj.mj_fullM(m, d, self._full_m)
 
     def _derivative(self, t: float, y: np.ndarray, piece_time: float) -> np.ndarray:
-        acc = self.accelerations(y, self._carriages(t, piece_time), t, piece_time=piece_time)
+        acc, stroke, stroke_rate = self._dynamics(y, self._carriages(t, piece_time), t, piece_time=piece_time)
         qw, qx, qy, qz = y[3:7]
         p, q, r = y[10:13]
         qdot = 0.5 * np.array(
             [-qx * p - qy * q - qz * r, qw * p + qy * r - qz * q, qw * q + qz * p - qx * r, qw * r + qx * q - qy * p]
         )
-        return np.concatenate([y[7:10], qdot, acc])
+        if self.air is None:
+            return np.concatenate([y[7:10], qdot, acc])
+        chambers = self.air.rates(y[13:], stroke, stroke_rate, self.sensor_heights())
+        return np.concatenate([y[7:10], qdot, acc, chambers])
 
     # -- statics and runs --------------------------------------------------------
     def equilibrium(self, positions: np.ndarray) -> np.ndarray:
-        """The table's rest state (13,) with carriages parked at ``positions`` [m]."""
+        """The table's rest state (13,) with carriages parked at ``positions`` [m] (spring-damper isolators)."""
+        if self.air is not None:
+            raise ScenarioError("isolators: a pneumatic table rests at its reference pose (see initial_state)")
         rest = np.zeros((3, self.n_c))
         rest[0] = positions
 
@@ -251,54 +296,67 @@ class MujocoTable:
             raise IsolatorError(f"MuJoCo check: no static equilibrium ({sol.message})")
         return state(sol.x)
 
-    def simulate(self, rtol: float = 1e-11, atol: float = 1e-14) -> MultibodyRun:
-        """Run the scenario from its initial equilibrium at the scenario's samples."""
+    def rest_pressures(self, positions: np.ndarray) -> np.ndarray:
+        """Gauge pressure of each leveling group [Pa] holding the table at the reference pose.
+
+        MuJoCo's generalized forces at the reference pose (carriages parked at
+        ``positions`` [m]): the table dofs' gravity and bias against each
+        group's air springs at unit gauge pressure; vertical force and the
+        two tilting moments give three equations in the three pressures.
+        """
+        if self.air is None:
+            raise ScenarioError("isolators: rest pressures need a pneumatic scenario")
+        mj, m, d = self.mj, self.model, self.data
+        d.qpos[:], d.qvel[:] = 0.0, 0.0
+        d.qpos[3] = 1.0
+        for i in range(self.n_c):
+            d.qpos[self.joint_qpos[i]] = positions[i]
+        mj.mj_fwdPosition(m, d)
+        mj.mj_fwdVelocity(m, d)
+        unit = np.zeros((6, len(self.scenario.leveling)))
+        per_group = self.air.group_areas()
+        for k in range(len(self.scenario.isolators)):
+            d.qfrc_applied[:] = 0.0
+            point = d.site_xpos[self.site_ids[k]].copy()
+            mj.mj_applyFT(m, d, np.array([0.0, 0.0, 1.0]), np.zeros(3), point, self.table_id, d.qfrc_applied)
+            unit += np.outer(d.qfrc_applied[0:6], per_group[k])
+        rows = [2, 3, 4]  # force along z, moments about x and y (world = table frame here)
+        return np.asarray(np.linalg.solve(unit[rows], d.qfrc_bias[rows]), dtype=float)
+
+    def initial_state(self) -> np.ndarray:
+        """The run's initial state: the rest state, and for pneumatic tables the chamber pressures [Pa]."""
+        positions = self.scenario.initial_positions()
+        if self.air is None:
+            return self.equilibrium(positions)
+        pose = np.r_[np.zeros(3), 1.0, np.zeros(9)]
+        return np.r_[pose, self.air.initial(self.rest_pressures(positions))]
+
+    def simulate(self, rtol: float = 1e-11, atol: float = 1e-14, max_step: float = np.inf) -> MultibodyRun:
+        """Run the scenario from its initial equilibrium at the scenario's samples.
+
+        Parameters
+        ----------
+        rtol, atol : float
+            DOP853 tolerances; ``atol`` applies to the table's states [m, rad, m/s,
+            rad/s]; the chamber pressures get ``atol`` times the atmosphere [Pa].
+        max_step : float
+            Longest integration step [s].
+        """
         sc = self.scenario
         t_eval = sc.simulation.sample_times()
-        y0 = self.equilibrium(sc.initial_positions())
-        states = solve_piecewise(self._derivative, y0, t_eval, sc.breakpoints, rtol=rtol, atol=atol)
-        return MultibodyRun(t_eval, table_signals(states, y0), states)
-
-
-def solve_piecewise(
-    rhs: Callable[[float, np.ndarray, float], np.ndarray],
-    y0: np.ndarray,
-    t_eval: np.ndarray,
-    breakpoints: Sequence[float],
-    rtol: float,
-    atol: float,
-) -> np.ndarray:
-    """Integrate with DOP853, restarting at every breakpoint, states at ``t_eval``.
-
-    Parameters
-    ----------
-    rhs : callable
-        ``rhs(t, y, piece_time)``; ``piece_time`` is the middle of the current
-        segment, for one-sided profile evaluation.
-    y0 : ndarray
-        State at ``t_eval[0]``.
-    t_eval : ndarray
-        Increasing output times [s].
-    breakpoints : sequence of float
-        Times [s] where the right-hand side may jump.
-
-    Returns
-    -------
-    ndarray (len(t_eval), len(y0))
-    """
-    cuts = [float(t_eval[0]), *[b for b in breakpoints if t_eval[0] < b < t_eval[-1]], float(t_eval[-1])]
-    states = np.empty((t_eval.size, np.size(y0)))
-    filled = np.zeros(t_eval.size, bool)
-    y = np.asarray(y0, dtype=float)
-    for a, b in itertools.pairwise(cuts):
-        if b - a <= 0:
-            continue
-        mask = (t_eval >= a) & (t_eval <= b) & ~filled
-        times = np.union1d(t_eval[mask], [b])
-        sol = solve_ivp(rhs, (a, b), y, method="DOP853", t_eval=times, rtol=rtol, atol=atol, args=(0.5 * (a + b),))
-        if not sol.success:
-            raise IsolatorError(f"integration failed between {a:g} s and {b:g} s ({sol.message})")
-        states[mask] = sol.y.T[np.isin(times, t_eval[mask])]
-        filled |= mask
-        y = sol.y[:, -1]
-    return states
+        y0 = self.initial_state()
+        tolerance = np.full(y0.size, atol)
+        if self.air is not None:
+            tolerance[13:] = atol * self.air.p_atm
+        states = solve_piecewise(self._derivative, y0, t_eval, sc.breakpoints, rtol=rtol, atol=tolerance,
+                                 max_step=max_step)
+        if self.air is None:
+            return MultibodyRun(t_eval, table_signals(states, y0), states)
+        heights = np.empty((len(sc.leveling), t_eval.size))
+        for i, y in enumerate(states):
+            self.data.qpos[0:7] = y[0:7] / np.r_[1.0, 1.0, 1.0, np.full(4, np.linalg.norm(y[3:7]))]
+            self.mj.mj_kinematics(self.model, self.data)
+            heights[:, i] = self.sensor_heights()
+        table = states[:, :13]
+        return MultibodyRun(t_eval, table_signals(table, y0[:13]), table, states[:, 13:],
+                            self.air.gauge(states[:, 13:]), heights)

@@ -1,4 +1,7 @@
-"""The exact model against an independent multibody engine (MuJoCo), as the paper did with ADAMS."""
+"""The exact model against an independent multibody engine (MuJoCo), as the paper did with ADAMS.
+
+Pneumatic tables: ``test_multibody_pneumatic.py``.
+"""
 
 from __future__ import annotations
 
@@ -6,7 +9,7 @@ import numpy as np
 import pytest
 
 from conftest import asymmetric_3d_dict, make
-from isolator import ScenarioError, load_scenario, simulate
+from isolator import load_scenario, simulate
 from studies.paper import relative_rms
 
 mujoco = pytest.importorskip("mujoco")
@@ -47,7 +50,3 @@ def test_paper_model_discrepancy_is_reported_size(table_3_1):
     assert np.all(rel > 1e-4), rel  # visibly different from the exact model ...
     assert np.all(rel < 0.1), rel  # ... but the same physics to first order
 
-
-def test_pneumatic_isolators_are_refused_by_name():
-    with pytest.raises(ScenarioError, match=r"^isolators: the MuJoCo check models spring-damper isolators only"):
-        MujocoTable(load_scenario("paper-table-3-2-pneumatic"))
