@@ -84,7 +84,7 @@ def _collocation(lin: LinearModel) -> np.ndarray:
     """``J`` (n_a, 6): each actuator's displacement along its line per table displacement and rotation."""
     if not lin.scenario.actuators:
         raise ScenarioError("actuators: the scenario has no [[actuators]] to control with")
-    return allocation_matrix(lin.scenario, pose_rotation(lin.equilibrium.pose[3:])).T
+    return allocation_matrix(lin.scenario, pose_rotation(lin.equilibrium.pose[3:6])).T
 
 
 def actuator_labels(scenario: Scenario) -> list[str]:

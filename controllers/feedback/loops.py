@@ -63,19 +63,21 @@ def _plant(lin: LinearModel) -> _Plant:
     # lag states f_k' = (u_k - f_k) / tau_k drive the table through the actuator columns
     tau = np.array([1.0 / (2 * math.pi * acts[k].bandwidth) for k in lagged])  # type: ignore[operator]
     bu_table = b[:, iu]
-    a_full = np.zeros((12 + nl, 12 + nl))
-    a_full[:12, :12] = a
-    a_full[:12, 12:] = bu_table[:, lagged]
-    a_full[12:, 12:] = -np.diag(1.0 / tau)
-    bu = np.zeros((12 + nl, n_a))
+    n = a.shape[0]  # 12 table states, then any chamber pressures of pneumatic isolators
+    a_full = np.zeros((n + nl, n + nl))
+    a_full[:n, :n] = a
+    a_full[:n, n:] = bu_table[:, lagged]
+    a_full[n:, n:] = -np.diag(1.0 / tau)
+    bu = np.zeros((n + nl, n_a))
     direct = [k for k in range(n_a) if k not in lagged]
-    bu[:12, direct] = bu_table[:, direct]
-    bu[12 + np.arange(nl), lagged] = 1.0 / tau
+    bu[:n, direct] = bu_table[:, direct]
+    bu[n + np.arange(nl), lagged] = 1.0 / tau
     bw = np.vstack([b[:, iw], np.zeros((nl, len(iw)))])
     cy = np.hstack([c, np.zeros((c.shape[0], nl))])
-    # the sensors see the true velocity, the state plus the floor's damper feedthrough: x = xi + B1 g
-    cm = np.hstack([np.eye(12), np.zeros((12, nl))])
-    dmw = lin.feedthrough[:, iw]
+    # the sensors see the table's 12 states, the true velocity: the state plus the floor's damper
+    # feedthrough, x = xi + B1 g
+    cm = np.hstack([np.eye(12), np.zeros((12, n - 12 + nl))])
+    dmw = lin.feedthrough[:12, iw]
     return _Plant(a_full, bw, bu, cy, d[:, iw], cm, dmw, w_names, list(sys.output_labels))
 
 
@@ -224,5 +226,17 @@ def _stability(lin: LinearModel, p: _Plant, controller: Controller, a_cont: np.n
     # u_k = Ckd xc_k + Dkd m_k held over the period; x_{k+1} = Phi x_k + Gamma u_k; xc_{k+1} = Akd xc + Bkd m_k
     a_disc = np.block([[phi + gam @ kdd @ p.cm, gam @ kcd], [kbd @ p.cm, kad]])
     where = where or f"with the carriages at {', '.join(f'{q:.4g}' for q in lin.positions)} m"
-    return LoopStability(np.linalg.eigvals(a_cont), np.linalg.eigvals(a_disc), controller.sample_rate,
-                         controller.name, where)
+    continuous, sampled = np.linalg.eigvals(a_cont), np.linalg.eigvals(a_disc)
+    neutral = _air_integrators(lin)
+    if neutral:  # the air each leveling group holds: no input or sensor reaches it, it stays where it is
+        continuous = np.delete(continuous, np.argsort(np.abs(continuous))[:neutral])
+        sampled = np.delete(sampled, np.argsort(np.abs(sampled - 1.0))[:neutral])
+    return LoopStability(continuous, sampled, controller.sample_rate, controller.name, where)
+
+
+def _air_integrators(lin: LinearModel) -> int:
+    """Pneumatic plants: the open loop's poles at zero, one per leveling group with its valve closed."""
+    if lin.air is None:
+        return 0
+    eig = lin.eigenvalues
+    return int(np.sum(np.abs(eig) <= 1e-9 * max(1.0, float(np.abs(eig).max()))))

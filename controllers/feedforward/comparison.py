@@ -9,13 +9,14 @@ from typing import Any
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS, Scenario
+from isolator.simulation.leveling import quasi_static_signals
 from isolator.simulation.response import Response
 from isolator.simulation.settling import settling_time
 from isolator.simulation.simulator import Simulator
 
 from .allocation import Feedforward, feedforward_allocation
 
-__all__ = ["FeedforwardComparison", "compare_feedforward", "path_deviation", "settling_in_band"]
+__all__ = ["FeedforwardComparison", "compare_feedforward", "path_deviation", "run_quasi_static", "settling_in_band"]
 
 
 def path_deviation(run: Response, quasi_static: np.ndarray) -> dict[str, float]:
@@ -41,7 +42,9 @@ class FeedforwardComparison:
     ----------
     passive, controlled : Response
     quasi_static : ndarray (6, N)
-        The quasi-static path at the samples [m, rad].
+        The quasi-static path at the samples [m, rad]. Pneumatic tables: the
+        rest with the air the passive run's groups hold at each sample (the
+        valves move air, so each run has its own).
     band : dict of str to float
         Per signal: 5 % of the passive run's peak [m or rad].
     settling : dict of str to dict
@@ -56,10 +59,15 @@ class FeedforwardComparison:
     band: dict[str, float]
     settling: dict[str, dict[str, float | None]]
     feedforward: Feedforward
+    controlled_quasi_static: np.ndarray | None = None
 
     def deviation_peak(self, which: str) -> dict[str, float]:
         """Largest |signal - quasi-static path| per signal [m or rad] of ``passive`` or ``controlled``."""
-        return path_deviation(self.passive if which == "passive" else self.controlled, self.quasi_static)
+        if which == "passive" or self.controlled_quasi_static is None:
+            reference = self.quasi_static
+        else:
+            reference = self.controlled_quasi_static
+        return path_deviation(self.passive if which == "passive" else self.controlled, reference)
 
     def reduction_db(self) -> dict[str, float]:
         """Peak deviation from the quasi-static path, controlled over passive [dB] per signal."""
@@ -120,7 +128,16 @@ def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = No
     sim = Simulator(scenario)
     passive = sim.run()
     controlled = sim.run(forces=ff.forces)
-    qs = ff.path(passive.t).T
     band = {k: 0.05 * v for k, v in passive.peak.items()}
     settling = {"passive": settling_in_band(passive, band), "controlled": settling_in_band(controlled, band)}
-    return FeedforwardComparison(passive, controlled, qs, band, settling, ff)
+    if not scenario.is_pneumatic:
+        return FeedforwardComparison(passive, controlled, ff.path(passive.t).T, band, settling, ff)
+    return FeedforwardComparison(passive, controlled, run_quasi_static(sim, passive), band, settling, ff,
+                                 run_quasi_static(sim, controlled))
+
+
+def run_quasi_static(sim: Simulator, run: Response) -> np.ndarray:
+    """Pneumatic runs: the table signals (6, N) of the rest with the air each sample's groups hold,
+    the carriages where they are (:func:`isolator.simulation.leveling.quasi_static_signals`)."""
+    start, _ = sim.equilibria(sim.parameters)
+    return quasi_static_signals(sim.model, sim.parameters, run.t, run.states, run.q.T, start.state)

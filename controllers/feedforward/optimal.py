@@ -296,6 +296,11 @@ def feedforward_optimal(
     settings = settings or OptimalSettings()
     if not scenario.actuators:
         raise ScenarioError("actuators: the scenario has no [[actuators]] for feedforward")
+    if scenario.is_pneumatic:
+        raise ScenarioError(
+            "isolators: optimal feedforward models spring-damper isolators (its QP has no chamber pressures "
+            "yet); use the allocation method for pneumatic tables"
+        )
     began = time.perf_counter()
     acts = scenario.actuators
     n_a = len(acts)

@@ -18,7 +18,7 @@ from scipy.interpolate import CubicSpline
 from scipy.spatial.transform import Rotation
 
 from isolator.analysis.linear import LinearModel
-from isolator.model.equilibrium import static_equilibrium
+from isolator.model.equilibrium import air_in_groups, closed_rest_states, static_equilibrium
 from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation
@@ -76,10 +76,13 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
     Static equilibria (Newton, exact model) every ``spacing`` seconds within
     each stretch between profile breakpoints, splined per stretch (the path
     is smooth within a stretch; its acceleration may jump at a breakpoint).
+    Pneumatic tables: the rest with each group's air as at the start (the
+    valves re-level more slowly than the stage moves).
     """
     sim = Simulator(scenario)
     model, p = sim.model, sim.parameters
     start = static_equilibrium(model, p, scenario.initial_positions(), check=False)
+    air = None if sim.layout.pneumatic is None else air_in_groups(model, start.state[None, :], p)
     t_end = scenario.simulation.duration
     stop = scenario.stop_time if math.isfinite(scenario.stop_time) else t_end
     cuts = sorted({0.0, *[b for b in scenario.breakpoints if 0 < b < min(stop, t_end)], min(stop, t_end)})
@@ -91,7 +94,10 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
         knots = np.linspace(a, b, count)
         mid = np.full(count, 0.5 * (a + b))
         q = np.array([c.profile.evaluate(knots, mid)[0] for c in scenario.carriages]).T
-        states = np.array([static_equilibrium(model, p, qk, check=False).state for qk in q])
+        if air is None:
+            states = np.array([static_equilibrium(model, p, qk, check=False).state for qk in q])
+        else:  # pneumatic: the air each group holds at the start stays; the valves level later
+            states = np.array([closed_rest_states(model, p, qk, air)[0] for qk in q])
         signals = table_signals(states, start.state).T
         segments.append((a, b, CubicSpline(knots, signals, axis=0)))
     if not segments:  # nothing moves
@@ -136,14 +142,15 @@ def path_demand(
     """
     layout = ParameterLayout.of(scenario)
     signals = path(times, sides)
-    rot = _orientations(pose_rotation(lin.equilibrium.pose[3:]), signals[:, 3:])
+    rot = _orientations(pose_rotation(lin.equilibrium.pose[3:6]), signals[:, 3:])
     n = len(scenario.carriages)
     c = np.zeros((3 * n, times.size))
     for i, carriage in enumerate(scenario.carriages):
         q, v, _ = carriage.profile.evaluate(times, sides)
         c[i], c[n + i] = q, v
     pose = np.vstack([lin.equilibrium.pose[:3, None] + signals[:, :3].T,
-                      Rotation.from_matrix(rot).as_euler("ZYX")[:, ::-1].T])
+                      Rotation.from_matrix(rot).as_euler("ZYX")[:, ::-1].T,
+                      np.repeat(lin.equilibrium.pose[6:, None], times.size, axis=1)])  # pneumatic: rest pressures
     mapped = build_linearisation(layout).map(times.size, "serial")
     mass, damping, stiffness = (
         np.asarray(m, dtype=float).reshape(6, times.size, 6).transpose(1, 0, 2)

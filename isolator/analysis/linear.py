@@ -29,6 +29,7 @@ import casadi as ca
 import control
 import numpy as np
 
+from isolator.analysis.frequency_response import state_space_response
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
@@ -264,43 +265,6 @@ def _air_names(scenario: Scenario) -> tuple[str, ...]:
     names = tuple(f"p:{iso.name}" for iso in scenario.isolators if isinstance(iso, PneumaticIsolator))
     return names + tuple(f"p2:{iso.name}" for iso in scenario.isolators
                          if isinstance(iso, PneumaticIsolator) and iso.has_damping_chamber)
-
-
-def _index(names: Sequence[str] | None, labels: list[str], what: str) -> list[int]:
-    if names is None:
-        return list(range(len(labels)))
-    out = []
-    for name in names:
-        if name not in labels:
-            raise ParameterError(f"{what}: no {what[:-1]} named '{name}' (have: {', '.join(labels)})")
-        out.append(labels.index(name))
-    return out
-
-
-def state_space_response(
-    system: control.StateSpace,
-    frequency_hz: np.ndarray,
-    inputs: Sequence[str] | None = None,
-    outputs: Sequence[str] | None = None,
-) -> np.ndarray:
-    """Complex ``H(j 2 pi f)`` of a named state-space system, one batched solve.
-
-    Returns
-    -------
-    ndarray (nf, n_outputs, n_inputs)
-    """
-    f = np.asarray(frequency_hz, dtype=float).ravel()
-    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
-        raise ParameterError("frequency_hz: must be finite frequencies >= 0 Hz")
-    iu = _index(inputs, list(system.input_labels), "inputs")
-    iy = _index(outputs, list(system.output_labels), "outputs")
-    a, b = np.asarray(system.A), np.asarray(system.B)[:, iu]
-    c, d = np.asarray(system.C)[iy], np.asarray(system.D)[np.ix_(iy, iu)]
-    s = 2j * np.pi * f
-    n = a.shape[0]
-    resolvent = s[:, None, None] * np.eye(n) - a[None]
-    x = np.linalg.solve(resolvent, np.broadcast_to(b.astype(complex), (f.size, *b.shape)))
-    return c[None] @ x + d[None]
 
 
 def linearise(

@@ -295,7 +295,8 @@ def closed_rest_states(
     model: Model, params: np.ndarray, positions: np.ndarray, air: np.ndarray, all_closed: bool = True
 ) -> np.ndarray:
     """States (runs, n_states) of a pneumatic table at rest with each group's ``air`` kept (groups with a
-    valve level instead unless ``all_closed``); no stability check.
+    valve level instead unless ``all_closed``), the carriages at ``positions`` (one configuration, or one
+    row per run); no stability check.
 
     Raises
     ------
@@ -331,10 +332,17 @@ def quasi_static_sensitivity(
 def _closed_pose(
     model: Model, params: np.ndarray, positions: np.ndarray, air: np.ndarray, all_closed: bool
 ) -> np.ndarray:
-    """The static unknowns (pose, group gauge pressures) with the groups' air kept, one row per run."""
+    """The static unknowns (pose, group gauge pressures) with the groups' air kept, one row per run;
+    ``positions`` one configuration for all runs, or one row per run."""
     closed = _solver(model).closed(all_closed)
-    c = model.layout.rest_inputs(positions)
-    z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
+    q = np.asarray(positions, dtype=float)
+    if q.ndim == 2:
+        inputs = np.array([model.layout.rest_inputs(row) for row in q])
+        z, active, failed = _newton(lambda rows, z: closed(z, inputs[rows], params[rows], air[rows]), params,
+                                    model.n_static)
+    else:
+        c = model.layout.rest_inputs(q)
+        z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
     if (failed | active).any():
         raise UnstableTableError(f"no rest with the groups' air kept (run {int(np.argmax(failed | active))})")
     return z

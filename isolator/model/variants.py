@@ -25,6 +25,7 @@ from __future__ import annotations
 
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import casadi as ca
@@ -101,7 +102,7 @@ class Model:
     staged_inputs: ca.Function | None = None
     staged_rhs: ca.Function | None = None
 
-    @property
+    @cached_property
     def n_static(self) -> int:
         """Unknowns of the static residual: 6 (pose), plus 3 group pressures for pneumatic tables."""
         return int(self.static_residual.size1_in(0))

@@ -39,6 +39,7 @@ __all__ = [
     "leveling_time",
     "plot_leveling",
     "pneumatic_result",
+    "quasi_static_signals",
     "sensor_heights",
 ]
 
@@ -202,6 +203,41 @@ def leveling_time(t: np.ndarray, height: np.ndarray, stop_time: float, deadband:
     return float(t[after][last + 1] - stop_time)
 
 
+def quasi_static_signals(
+    model: Model, p: np.ndarray, t: np.ndarray, states: np.ndarray, positions: np.ndarray, reference: np.ndarray
+) -> np.ndarray:
+    """The table signals (6, N) of the rest a pneumatic table would take with the air each state holds.
+
+    Parameters
+    ----------
+    model : Model
+    p : ndarray
+        Parameter vector.
+    t : ndarray (N,)
+        Sample times [s] (increasing).
+    states : ndarray (N, n_states)
+        The run's states there.
+    positions : ndarray
+        Carriage coordinates [m]: one configuration, or (N, n_carriages), one per sample.
+    reference : ndarray
+        The state the signals are measured from (the initial equilibrium's).
+
+    Notes
+    -----
+    Solved every ``QUASI_STATIC_STEP`` and splined between: the air changes slowly.
+    """
+    stride = max(1, round(QUASI_STATIC_STEP / max(float(np.min(np.diff(t))), 1e-12))) if t.size > 1 else 1
+    picked = np.unique(np.append(np.arange(0, t.size, stride), t.size - 1))
+    q = np.asarray(positions, dtype=float)
+    contents = air_in_groups(model, states[picked], p)
+    rest = closed_rest_states(model, np.broadcast_to(p, (picked.size, p.size)), q[picked] if q.ndim == 2 else q,
+                              contents)
+    solved = model.variant.signals(rest, reference)
+    if picked.size >= 4:
+        return np.asarray(CubicSpline(t[picked], solved, axis=1)(t))
+    return np.array([np.interp(t, t[picked], row) for row in solved])
+
+
 def pneumatic_result(
     scenario: Scenario,
     model: Model,
@@ -239,16 +275,7 @@ def pneumatic_result(
     after = np.flatnonzero(t >= stop - 1e-12) if math.isfinite(stop) else np.zeros(0, dtype=int)
     final_q = scenario.final_positions()
     if after.size and final_q is not None:
-        # the quasi-static pose follows the slowly changing air: solved every QUASI_STATIC_STEP, splined
-        stride = max(1, round(QUASI_STATIC_STEP / max(float(np.min(np.diff(t))), 1e-12))) if t.size > 1 else 1
-        picked = np.unique(np.append(after[::stride], after[-1]))
-        contents = air_in_groups(model, states[picked], p)
-        rest = closed_rest_states(model, np.broadcast_to(p, (picked.size, p.size)), final_q, contents)
-        solved = model.variant.signals(rest, start.state)
-        if picked.size >= 4:
-            quasi[:, after] = CubicSpline(t[picked], solved, axis=1)(t[after])
-        else:
-            quasi[:, after] = np.array([np.interp(t[after], t[picked], row) for row in solved])
+        quasi[:, after] = quasi_static_signals(model, p, t[after], states[after], final_q, start.state)
     dynamic = settling_metrics(t, np.where(np.isnan(quasi), signals, signals - quasi), np.zeros(6), stop,
                                scenario.settling, hold, peaks)
     names = tuple(iso.name for iso in scenario.isolators if isinstance(iso, PneumaticIsolator))
