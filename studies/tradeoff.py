@@ -44,6 +44,7 @@ from isolator.analysis.transmissibility import transmissibility
 
 from .figures import log_mesh_edges, plain_log_axis, save_figure
 from .reporting import output_folder, progress_printer, table_header, write_report
+from .tradeoff_pneumatic import pneumatic_note, pneumatic_settling
 
 __all__ = ["TradeoffStudy", "pareto_front", "run_tradeoff_study"]
 
@@ -198,10 +199,14 @@ def run_tradeoff_study(
     if n_runs:
         say(f"transient runs of the {n_runs} designs that stand ...")
         kk, cc = np.meshgrid(k[stable], c, indexing="ij")
-        batch = sim.run_batch(kk.ravel(), cc.ravel(), progress=progress, diverged="record")
-        settling[stable] = batch.settling_time_max.reshape(kk.shape)
+        if scenario.is_pneumatic:  # one run each, settling about the leveling table
+            values, failed = pneumatic_settling(sim, kk.ravel(), cc.ravel(), say)
+        else:
+            batch = sim.run_batch(kk.ravel(), cc.ravel(), progress=progress, diverged="record")
+            values, failed = batch.settling_time_max, dict(batch.failures)
+        settling[stable] = values.reshape(kk.shape)
         rows = np.flatnonzero(stable)
-        failures = {(int(rows[r // c.size]), r % c.size): why for r, why in batch.failures.items()}
+        failures = {(int(rows[r // c.size]), r % c.size): why for r, why in failed.items()}
     study = TradeoffStudy(scenario, k, c, reference_hz, settling, trans, peak, peak_hz, stable, duration, failures, out)
     _plot_maps(study)
     _plot_tradeoff(study)
@@ -346,7 +351,7 @@ def _write_report(study: TradeoffStudy) -> None:
              "scenario's settling rule. Transmissibility: floor motion to table motion at the mass centre, "
              "same axis, the worst of x, y and z, of the table linearised with its carriages at their start. "
              f"Transient runs of {study.duration:.3g} s (the scenario's {sc.simulation.duration:.3g} s, lengthened "
-             "when the least damped designs need longer to settle).", "",
+             "when the least damped designs need longer to settle).", *pneumatic_note(sc), "",
              "![maps](maps.png)", "", "![tradeoff](tradeoff.png)", ""]
     nominal = study.nominal()
     if nominal is not None and np.isfinite(study.settling_time[nominal]):

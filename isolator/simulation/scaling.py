@@ -23,7 +23,7 @@ from isolator.model.parameters import ParameterLayout
 __all__ = ["scaled_parameter_sets"]
 
 
-def _scales(values: float | Sequence[float], key: str, positive: bool) -> np.ndarray:
+def _scales(values: float | Sequence[float] | np.ndarray, key: str, positive: bool) -> np.ndarray:
     """Scale factors as an array, each finite and > 0 (``positive``) or >= 0; one clear error naming ``key``."""
     array = np.asarray(values, dtype=float)
     flat = array.reshape(-1)
@@ -38,8 +38,8 @@ def _scales(values: float | Sequence[float], key: str, positive: bool) -> np.nda
 def scaled_parameter_sets(
     layout: ParameterLayout,
     parameters: np.ndarray,
-    stiffness: float | Sequence[float],
-    damping: float | Sequence[float],
+    stiffness: float | Sequence[float] | np.ndarray,
+    damping: float | Sequence[float] | np.ndarray,
 ) -> np.ndarray:
     """Parameter vectors (runs, parameters) with every isolator's stiffness and damping scaled per run.
 

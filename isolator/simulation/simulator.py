@@ -99,7 +99,7 @@ class Simulator:
         return self.scaled_parameter_sets(stiffness, damping)[0]
 
     def scaled_parameter_sets(
-        self, stiffness: float | Sequence[float], damping: float | Sequence[float]
+        self, stiffness: float | Sequence[float] | np.ndarray, damping: float | Sequence[float] | np.ndarray
     ) -> np.ndarray:
         """Parameter vectors (runs, parameters) with every isolator's stiffness and damping scaled per run
         (:func:`~isolator.simulation.scaling.scaled_parameter_sets`, pneumatic isolators included)."""
