@@ -211,7 +211,9 @@ def run_pneumatic_study(
         todo = [(i, j) for (i, j) in params if (i, j) not in tips]
         say(f"pneumatic runs of {len(todo)} designs, {base:.3g} s each ...")
         _run_designs(scenario, base, [params[ij] for ij in todo], todo, transients, say)
-        again = [ij for ij in todo if transients.unfinished(ij)]
+        # a longer run for the slow ones; not for those whose valves ran out of supply (they did not level
+        # in longer runs either, and they are the costly, stiff ones)
+        again = [ij for ij in todo if transients.unfinished(ij) and not transients.exhausted[ij]]
         if again:
             long = scenario.stop_time + LONG_WINDOW
             say(f"{len(again)} designs not settled or not level after {base:.3g} s: run again for {long:.3g} s ...")

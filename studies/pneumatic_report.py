@@ -151,7 +151,8 @@ def _grid_linear(study: PneumaticStudy, ij: tuple[int, int]) -> dict[str, float]
 def _write_report(study: PneumaticStudy) -> None:
     sc, d, n = study.scenario, study.diameters, study.ratios
     columns = [c.format(f=study.reference_hz) for c in _DESIGN_COLUMNS]
-    durations = study.runs.duration[np.isfinite(study.runs.duration)]
+    durations = np.unique(study.runs.duration[np.isfinite(study.runs.duration)])
+    lengths = f" (run lengths used: {', '.join(f'{v:.3g} s' for v in durations)})" if durations.size else ""
     lines = [f"# Air-spring orifice and damping chamber: {sc.name}", "",
              f"{d.size} orifice diameters ({d[0] * 1e3:.3g} to {d[-1] * 1e3:.3g} mm, log-spaced) x {n.size} "
              f"damping-chamber volume ratios N = V2 / V1r ({n[0]:.3g} to {n[-1]:.3g}), each applied to every "
@@ -215,9 +216,8 @@ def _write_report(study: PneumaticStudy) -> None:
               "the valves closed (their dead zone) and the chamber pressures as states; floor motion to table "
               "motion at the mass centre, same axis.",
               f"- Runs: the scenario's moves, at least {MIN_WINDOW:g} s after the carriages stop (or the scenario's "
-              f"duration if longer); designs not settled or not level by then "
-              "run again, longer" + (f" (run lengths used: {', '.join(f'{v:.3g} s' for v in np.unique(durations))})"
-                                     if durations.size else "") + ".",
+              "duration if longer); designs not settled or not level by then run again, longer, unless their "
+              "valves ran out of supply pressure" + lengths + ".",
               "- The spring chambers, pistons, capillary lengths, valves and lines stay the scenario's; only the "
               "orifice diameter and the damping-chamber volume change.",
               f"- Full numbers: `designs.csv`; re-run: `isolator study pneumatic {sc.name} --out DIR`."]
