@@ -344,7 +344,7 @@ def _closed_pose(
         c = model.layout.rest_inputs(q)
         z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
     if (failed | active).any():
-        raise UnstableTableError(f"no rest with the groups' air kept (run {int(np.argmax(failed | active))})")
+        raise UnstableTableError(f"no rest with the groups' air kept (row {int(np.argmax(failed | active))})")
     return z
 
 

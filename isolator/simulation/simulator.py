@@ -46,6 +46,10 @@ __all__ = [
 ]
 
 
+#: the staged inputs a simulator keeps for reuse, at most this many bytes (and 16 plans)
+STAGED_BYTES = 512 * 2**20
+
+
 class Simulator:
     """A scenario's model built once, run many times.
 
@@ -165,9 +169,10 @@ class Simulator:
             if staged is not None:
                 flat = inputs.reshape(inputs.shape[0] * inputs.shape[1], inputs.shape[2])
                 inputs = staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
-            if len(self._staged) >= 16:
-                self._staged.pop(next(iter(self._staged)))
             self._staged[key] = np.ascontiguousarray(inputs)
+            while len(self._staged) > 1 and (len(self._staged) > 16 or sum(
+                    a.nbytes for a in self._staged.values()) > STAGED_BYTES):  # oldest first
+                self._staged.pop(next(iter(self._staged)))
         return self._staged[key]
 
     def _at_samples(self) -> np.ndarray:
