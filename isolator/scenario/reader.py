@@ -34,6 +34,7 @@ from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
+from isolator.scenario.rules import check_scenario_values
 from isolator.scenario.tables import SPECTRUM_KINDS, load_spectrum, read_csv_columns, spectrum_from_columns
 from isolator.scenario.validation import (
     check_carriage_tree,
@@ -43,14 +44,8 @@ from isolator.scenario.validation import (
     check_unique_names,
 )
 
-__all__ = [
-    "bundled_scenarios",
-    "load_scenario",
-    "load_spectrum",
-    "read_csv_columns",
-    "resolve_scenario_path",
-    "scenario_from_dict",
-]
+__all__ = ["bundled_scenarios", "load_scenario", "load_spectrum", "read_csv_columns", "resolve_scenario_path",
+           "scenario_from_dict"]
 
 DEFAULT_SCENARIO = "paper-table-3-2"
 
@@ -178,6 +173,7 @@ def scenario_from_dict(
         air=air,
         leveling=leveling,
     )
+    check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
     check_strokes(scenario)
     check_pneumatics(scenario)
     return scenario
