@@ -2,13 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import casadi as ca
 import numpy as np
 
-from isolator.scenario.definitions import Scenario
+from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.scenario.rules import check_parameters, check_scenario_values, check_value, closest
+from isolator.scenario.validation import check_carriage_tree, check_isolator_layout
 
 __all__ = ["AIR_KEYS", "ParameterLayout", "PneumaticStructure"]
 
@@ -194,6 +198,12 @@ class ParameterLayout:
 
     @classmethod
     def of(cls, scenario: Scenario) -> ParameterLayout:
+        """The layout of a scenario, checked as the file reader checks it (for scenarios built from the
+        dataclasses directly): every number by :mod:`isolator.scenario.rules`, the carriage chain and the
+        isolators' layout; a :class:`ScenarioError` naming the key."""
+        check_scenario_values(scenario)
+        check_carriage_tree(scenario.carriages)
+        check_isolator_layout(scenario.isolators)
         return cls(
             len(scenario.carriages),
             len(scenario.isolators),
@@ -219,6 +229,80 @@ class ParameterLayout:
         if self.pneumatic is not None:
             values += self.pneumatic.pack(scenario)
         return np.array(values, dtype=float)
+
+    # -- checks of parameter vectors given as arguments --------------------------------------------------
+    def checked(self, p: object, argument: str = "p") -> np.ndarray:
+        """A whole parameter vector given as an argument, as floats, checked entry by entry.
+
+        Raises
+        ------
+        ParameterError
+            Naming the argument for a wrong shape, else the entry and its parameter:
+            ``p[17] (isolators[0].damping.z): must be >= 0, got -5``.
+        """
+        expected = f"must be a vector of {self.size} numbers (Simulator.layout.names)"
+        try:
+            array = np.array(p, dtype=float)
+        except (TypeError, ValueError):
+            raise ParameterError(f"{argument}: {expected}, got {type(p).__name__}") from None
+        if array.shape != (self.size,):
+            raise ParameterError(f"{argument}: {expected}, got shape {array.shape}")
+        self.check(array, lambda i: f"{argument}[{i}] ({self.names[i]})")
+        return array
+
+    def with_changes(self, p: np.ndarray, changes: Mapping[str, float] | None, argument: str = "changes"
+                     ) -> np.ndarray:
+        """A copy of ``p`` with named entries changed, each checked by its rule.
+
+        Raises
+        ------
+        ParameterError
+            ``changes['isolators[0].damping.z']: must be >= 0, got -5``; an unknown name with the
+            closest valid one.
+        """
+        out = np.array(p, dtype=float)
+        if changes is None:
+            return out
+        if not isinstance(changes, Mapping):
+            raise ParameterError(f"{argument}: must be a mapping of parameter names to values, "
+                                 f"got {type(changes).__name__}")
+        index = {n: i for i, n in enumerate(self.names)}
+        changed: list[int] = []
+        for name, value in changes.items():
+            if not isinstance(name, str) or name not in index:
+                near = closest(str(name), self.names)
+                hint = f"; did you mean '{near}'?" if near else ""
+                raise ParameterError(f"{argument}[{name!r}]: not a parameter of this scenario{hint} "
+                                     "(Simulator.layout.names lists them)")
+            i = index[name]
+            out[i] = check_value(name, value, f"{argument}[{name!r}]", ParameterError)
+            changed.append(i)
+        self.check(out, lambda i: f"{argument}[{self.names[i]!r}]", changed)
+        return out
+
+    def check(self, p: np.ndarray, key: Callable[[int], str], entries: Sequence[int] | None = None) -> None:
+        """Entries of ``p`` (default all) by their rules, and what they make together: unit directions,
+        the inertia's triangle, the isolators off one line, damping chambers as the model was built."""
+        check_parameters(self.names, p, key, ParameterError, entries)
+        which = set(range(self.size) if entries is None else entries)
+        if self.pneumatic is not None:
+            for i, damped in enumerate(self.pneumatic.chambers):
+                at = self.names.index(f"isolators[{i}].damping_volume")
+                if at in which and (p[at] > 0) != damped:
+                    raise ParameterError(
+                        f"{key(at)}: must be {'> 0' if damped else '0'}, got {p[at]:g} (the model was built "
+                        f"{'with' if damped else 'without'} a damping chamber here; change the scenario instead)")
+        at_positions = [[self.names.index(f"isolators[{i}].position.{a}") for a in "xyz"]
+                        for i in range(self.n_isolators)]
+        touched = [i for row in at_positions for i in row if i in which]
+        if touched:
+            zero = (0.0, 0.0, 0.0)
+            isolators = tuple(Isolator(tuple(float(p[i]) for i in row), zero, zero)  # type: ignore[arg-type]
+                              for row in at_positions)
+            try:
+                check_isolator_layout(isolators)
+            except ScenarioError as exc:
+                raise ParameterError(f"{key(touched[0])}: {exc}") from None
 
     def unpack(self, p: ca.SX) -> dict[str, ca.SX]:
         """Split a symbolic parameter vector into named blocks."""

@@ -24,6 +24,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import Any
 
+import numpy as np
+
 from isolator.errors import IsolatorError, ScenarioError
 from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
@@ -196,7 +198,7 @@ def closest(name: str, names: Sequence[str]) -> str | None:
 
 def check_parameters(
     names: Sequence[str],
-    values: Sequence[float],
+    values: Sequence[float] | np.ndarray,
     key: Callable[[int], str],
     error: type[IsolatorError],
     entries: Sequence[int] | None = None,

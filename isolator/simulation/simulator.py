@@ -88,15 +88,16 @@ class Simulator:
 
     # -- parameters ------------------------------------------------------------
     def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
-        """The parameter vector with named entries changed (names: ``layout.names``)."""
-        p = self.parameters.copy()
-        for name, value in (changes or {}).items():
-            if name not in self.layout.names:
-                raise ParameterError(f"changes: '{name}' is not a parameter of this scenario (Simulator.layout.names)")
-            if not math.isfinite(float(value)):
-                raise ParameterError(f"changes.{name}: must be finite, got {value}")
-            p[self.layout.names.index(name)] = float(value)
-        return p
+        """The parameter vector with named entries changed (names: ``layout.names``), each checked by the
+        rules the file reader checks by (:mod:`isolator.scenario.rules`).
+
+        Raises
+        ------
+        ParameterError
+            Naming the entry, ``changes['isolators[0].damping.z']: must be >= 0, got -5``; an unknown
+            name with the closest valid one.
+        """
+        return self.layout.with_changes(self.parameters, changes)
 
     def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
         """Parameter vector with all isolator stiffness and damping scaled (:func:`scaled_parameter_sets`)."""
@@ -223,7 +224,7 @@ class Simulator:
         :mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step
         RK4 on the sample grid, the controller ticking between intervals.
         """
-        p = self.parameter_vector(changes) if p is None else np.asarray(p, dtype=float)
+        p = self.parameter_vector(changes) if p is None else self.layout.checked(p, "p")
         start, end = self.equilibria(p)
         method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
         return self.run_method(p, start, end, method, forces, feedback)
