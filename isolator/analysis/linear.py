@@ -21,7 +21,6 @@ is an ordinary input.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -38,6 +37,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation, skew
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.scenario.rules import check_value, closest
 
 __all__ = [
     "FORCE_INPUTS",
@@ -82,16 +82,26 @@ def rest_positions(
     q = scenario.initial_positions()
     names = [c.name for c in scenario.carriages]
     if time is not None:
-        if not math.isfinite(time) or time < 0:
+        t = _finite(time, "time")
+        if t < 0:
             raise ParameterError(f"time: must be a finite time >= 0 s, got {time}")
-        q = np.array([c.profile.position(time) for c in scenario.carriages], dtype=float)
+        q = np.array([c.profile.position(t) for c in scenario.carriages], dtype=float)
     elif isinstance(positions, Mapping):
         for name, value in positions.items():
             if name not in names:
-                raise ParameterError(f"positions.{name}: no such carriage (carriages: {', '.join(names) or 'none'})")
+                near = closest(str(name), names)
+                hint = f"; did you mean '{near}'?" if near else ""
+                raise ParameterError(
+                    f"positions.{name}: no such carriage{hint} (carriages: {', '.join(names) or 'none'})")
             q[names.index(name)] = _finite(value, f"positions.{name}")
     elif positions is not None:
-        values = np.asarray(positions, dtype=float).ravel()
+        if isinstance(positions, str | bytes):
+            raise ParameterError(
+                f"positions: must be carriage positions by name or one per carriage, got {positions!r}")
+        try:
+            values = np.array(positions, dtype=float).ravel()
+        except (TypeError, ValueError):
+            values = np.array(positions, dtype=object).ravel()
         if values.size != len(names):
             raise ParameterError(f"positions: needs {len(names)} values (one per carriage), got {values.size}")
         q = np.array([_finite(v, f"positions[{i}]") for i, v in enumerate(values)])
@@ -100,13 +110,7 @@ def rest_positions(
 
 
 def _finite(value: object, key: str) -> float:
-    try:
-        x = float(value)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        raise ParameterError(f"{key}: must be a number, got {value!r}") from None
-    if not math.isfinite(x):
-        raise ParameterError(f"{key}: must be finite, got {x}")
-    return x
+    return check_value(key, value, key, ParameterError)
 
 
 def _check_footprint(scenario: Scenario, q: np.ndarray) -> None:
@@ -305,9 +309,7 @@ def linearise(
     q = rest_positions(scenario, positions, time)
     layout = ParameterLayout.of(scenario)
     model = get_model(layout, "exact")
-    p = layout.pack(scenario) if parameters is None else np.asarray(parameters, dtype=float)
-    if p.shape != (layout.size,) or not np.all(np.isfinite(p)):
-        raise ParameterError(f"parameters: must be {layout.size} finite numbers (Simulator.layout), got {p.shape}")
+    p = layout.pack(scenario) if parameters is None else layout.checked(parameters, "parameters")
     eq = static_equilibrium(model, p, q, "in this rest configuration", check=check)
     c = np.concatenate([q, np.zeros(2 * q.size)])
     mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]
