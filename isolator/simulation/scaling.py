@@ -25,8 +25,15 @@ __all__ = ["scaled_parameter_sets"]
 
 def _scales(values: float | Sequence[float] | np.ndarray, key: str, positive: bool) -> np.ndarray:
     """Scale factors as an array, each finite and > 0 (``positive``) or >= 0; one clear error naming ``key``."""
-    array = np.asarray(values, dtype=float)
+    if isinstance(values, str | bytes | bool):
+        raise ParameterError(f"{key}: scale must be a finite number or a sequence of them, got {values!r}")
+    try:
+        array = np.asarray(values, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{key}: scale must be a finite number or a sequence of them, got {values!r}") from None
     flat = array.reshape(-1)
+    if flat.size == 0:
+        raise ParameterError(f"{key}: needs at least one scale, got none")
     bad = ~(np.isfinite(flat) & ((flat > 0) if positive else (flat >= 0)))
     if bad.any():
         i = int(np.argmax(bad))
@@ -61,7 +68,7 @@ def scaled_parameter_sets(
     k = _scales(stiffness, "stiffness", positive=True)
     c = _scales(damping, "damping", positive=pneumatic)
     if k.size != c.size:
-        raise ParameterError("damping: needs one scale per stiffness scale")
+        raise ParameterError(f"damping: needs one scale per stiffness scale ({k.size}), got {c.size}")
     names = layout.names
     k, c = k[:, None], c[:, None]
 
