@@ -32,8 +32,6 @@ def _scales(values: float | Sequence[float] | np.ndarray, key: str, positive: bo
     except (TypeError, ValueError):
         raise ParameterError(f"{key}: scale must be a finite number or a sequence of them, got {values!r}") from None
     flat = array.reshape(-1)
-    if flat.size == 0:
-        raise ParameterError(f"{key}: needs at least one scale, got none")
     bad = ~(np.isfinite(flat) & ((flat > 0) if positive else (flat >= 0)))
     if bad.any():
         i = int(np.argmax(bad))
