@@ -16,6 +16,7 @@ from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
 
 __all__ = [
     "check_carriage_tree",
+    "check_duration",
     "check_isolator_layout",
     "check_pneumatics",
     "check_strokes",
@@ -87,6 +88,29 @@ def check_strokes(scenario: Scenario) -> None:
         )
 
 
+def check_duration(scenario: Scenario) -> None:
+    """The run must reach every carriage's start and stop: a run that ends before the motion would
+    report a table at rest (settling 0 s) for a move it never simulated."""
+    duration = scenario.simulation.duration
+    for i, carriage in enumerate(scenario.carriages):
+        profile = carriage.profile
+        start = float(profile.breakpoints[0]) if profile.breakpoints else 0.0
+        stop = float(profile.stop_time)
+        if start >= duration and start > 0.0:
+            ends = "" if math.isinf(stop) else f" and stops at {stop:.6g} s"
+            raise ScenarioError(
+                f"simulation.duration: {duration:.6g} s ends before carriages[{i}] ('{carriage.name}') "
+                f"starts moving at {start:.6g} s (profile t0){ends}; make simulation.duration longer "
+                "than the stop time"
+            )
+        if math.isfinite(stop) and stop > duration:
+            raise ScenarioError(
+                f"simulation.duration: {duration:.6g} s ends before carriages[{i}] ('{carriage.name}') "
+                f"stops at {stop:.6g} s (stop time); make simulation.duration longer than the stop time "
+                "to see the table settle"
+            )
+
+
 def rest_gauge_pressures(scenario: Scenario, positions: np.ndarray | None = None) -> np.ndarray:
     """Gauge pressure of each leveling group holding the table level at its rest pose [Pa], (groups,).
 
@@ -146,6 +170,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_carriage_tree(scenario.carriages)
     check_unique_names([a.name for a in scenario.actuators], "actuators")
     check_unique_names([pt.name for pt in scenario.points], "points")
+    check_duration(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)
     return scenario

@@ -100,7 +100,8 @@ def test_unstable_loops_are_detected_and_reported(active, lin):
 
 def test_sampled_loop_in_the_simulation_matches_an_independent_linear_loop():
     data = active_dict()
-    data["carriages"][0]["profile"]["t0"] = 50.0  # parked
+    start = data["carriages"][0]["profile"]["start"]
+    data["carriages"][0]["profile"] = {"type": "samples", "t": [0.0, 0.5], "q": [start, start]}  # parked
     data["simulation"]["duration"] = 1.0
     motion = {"x": (2e-6, 9.0), "z": (3e-6, 21.0), "ry": (1e-6, 30.0)}
     data["ground"] = {axis: {"type": "sine", "amplitude": a, "omega": w} for axis, (a, w) in motion.items()}

@@ -97,7 +97,7 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
     from isolator.numerics.dop853 import DenseStepper
 
     data = base_dict()
-    data["simulation"] = {"duration": 1.2, "sample_rate": 500.0}
+    data["simulation"] = {"duration": 2.7, "sample_rate": 500.0}  # the run includes the stop (2.65 s)
     sim = Simulator(scenario_from_dict(data))
     p = sim.parameters
     start, end = sim.equilibria(p)
@@ -131,7 +131,7 @@ def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
     from isolator.numerics.dop853 import DenseStepper
 
     data = asymmetric_3d_dict()
-    data["simulation"] = {"duration": 1.6, "sample_rate": 500.0}
+    data["simulation"] = {"duration": 1.9, "sample_rate": 500.0}  # the run includes the stop (1.8 s)
     sim = Simulator(scenario_from_dict(data), model=kind)
     params = np.array([sim.scaled_parameters(k, c) for k, c in ((0.6, 3.0), (1.0, 1.0), (1.4, 0.5), (2.0, 2.0))])
     starts = [sim.equilibria(p)[0] for p in params]

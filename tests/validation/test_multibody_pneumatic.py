@@ -127,8 +127,8 @@ def test_exact_model_matches_mujoco_on_the_bundled_pneumatic_table():
 
 def test_polytropic_one_without_valves_conserves_each_groups_air():
     """Valves shut, isothermal: the check's chambers keep each group's ``sum p V`` (a conservation law)."""
-    sc = make(pneumatic_dict(valves=False, polytropic=1.0, stroke=0.8, duration=1.5))
-    sc = sc.with_changes(simulation=SimulationSettings(duration=1.5, sample_rate=200.0))
+    sc = make(pneumatic_dict(valves=False, polytropic=1.0, stroke=0.8, duration=2.7))  # the stop: 2.65 s
+    sc = sc.with_changes(simulation=SimulationSettings(duration=2.7, sample_rate=200.0))
     check = MujocoTable(sc)
     mb = check.simulate()
     r = simulate(sc)
