@@ -271,7 +271,7 @@ def _read_samples(r: KeyReader, base_dir: Path) -> tuple[np.ndarray, np.ndarray]
         if r.has("t") or r.has("q"):
             raise ScenarioError(f"{r.key('file')}: give either file or inline t and q, not both")
         file_key = r.key("file")
-        columns = read_csv_columns(base_dir / r.string("file"), file_key, ("t", "q"), exact=True)
+        columns = read_csv_columns(base_dir / r.string("file"), file_key, ("t", "q"), exact=True, increasing="t")
         t, q, key = columns["t"], columns["q"], file_key
     else:
         tk, qk = r.key("t"), r.key("q")

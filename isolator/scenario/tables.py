@@ -14,54 +14,109 @@ __all__ = ["SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "spectrum_from
 
 
 def read_csv_columns(
-    path: Path, key: str, required: tuple[str, ...], optional: tuple[str, ...] = (), exact: bool = False
+    path: Path,
+    key: str,
+    required: tuple[str, ...],
+    optional: tuple[str, ...] = (),
+    exact: bool = False,
+    *,
+    min_rows: int = 2,
+    increasing: str | None = None,
+    repeats: bool = False,
 ) -> dict[str, np.ndarray]:
     """Numeric columns of a CSV file with a header line, checked.
+
+    Every problem is one :class:`ScenarioError` naming ``key``, the file, the line (and column) and
+    the reason. A UTF-8 byte-order mark (as spreadsheets write) is accepted; blank lines are skipped.
 
     Parameters
     ----------
     path : Path
         The file.
     key : str
-        Key path named in errors.
+        Key path (or option) named in errors.
     required, optional : tuple of str
         Column names that must and may appear.
     exact : bool
         The header must be exactly ``required`` in that order.
+    min_rows : int
+        Fewest data rows.
+    increasing : str, optional
+        A column whose values must increase strictly down the file (``repeats``: a value may
+        appear twice in a row, for a step).
 
     Raises
     ------
     ScenarioError
-        Unreadable file, unknown or missing columns, a cell that is not a number.
+        An unreadable, empty or non-UTF-8 file; unknown, missing or repeated columns; a row of the
+        wrong length; a cell that is not a finite number; too few rows; values not increasing.
     """
+    where = f"{key}: '{path}'"
     try:
-        with open(path, newline="") as handle:
-            rows = list(csv.reader(handle))
+        with open(path, newline="", encoding="utf-8-sig") as handle:
+            reader = csv.reader(handle)
+            rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
     except OSError as exc:
         raise ScenarioError(f"{key}: cannot read '{path}' ({exc.strerror})") from None
-    header = [h.strip() for h in rows[0]] if rows else []
-    if exact and header != list(required):
-        raise ScenarioError(f"{key}: '{path}' must be a CSV with the header '{','.join(required)}'")
-    missing = [c for c in required if c not in header]
-    unknown = [c for c in header if c not in required + optional]
-    if missing or unknown or len(set(header)) != len(header):
-        allowed = ", ".join(required + optional)
-        raise ScenarioError(
-            f"{key}: '{path}' must be a CSV whose header has {', '.join(required)} and maybe "
-            f"other columns among ({allowed}), once each; got '{','.join(header)}'"
-        )
-    values = []
-    for line, row in enumerate(rows[1:], start=2):
-        if not row:
-            continue
+    except UnicodeDecodeError as exc:
+        raise ScenarioError(f"{where}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset "
+                            f"{exc.start}); save it as UTF-8") from None
+    except csv.Error as exc:
+        raise ScenarioError(f"{where}: not a CSV file ({exc})") from None
+    if not rows:
+        raise ScenarioError(f"{where}: is empty (needs a header line {','.join(required)},... and data rows)")
+    head_line, header = rows[0][0], [h.strip() for h in rows[0][1]]
+    columns = _check_header(f"{where} line {head_line}", header, required, optional, exact)
+    values = np.empty((len(rows) - 1, len(header)))
+    for i, (line, row) in enumerate(rows[1:]):
         if len(row) != len(header):
-            raise ScenarioError(f"{key}: '{path}' line {line}: needs {len(header)} values ({','.join(header)})")
-        try:
-            values.append([float(x) for x in row])
-        except ValueError:
-            raise ScenarioError(f"{key}: '{path}' line {line}: not all numbers") from None
-    arr = np.array(values, dtype=float).reshape(-1, len(header))
-    return {name: arr[:, i] for i, name in enumerate(header)}
+            raise ScenarioError(f"{where} line {line}: {len(row)} values for {len(header)} columns ({columns})")
+        for j, cell in enumerate(row):
+            try:
+                values[i, j] = float(cell)
+            except ValueError:
+                raise ScenarioError(f"{where} line {line}, column '{header[j]}': '{cell.strip()}' is not a "
+                                    "number") from None
+            if not np.isfinite(values[i, j]):
+                raise ScenarioError(f"{where} line {line}, column '{header[j]}': {cell.strip()} is not a "
+                                    "finite number")
+    n = values.shape[0]
+    if n < min_rows:
+        got = "no data rows" if n == 0 else f"{n} data row{'s' if n > 1 else ''}"
+        raise ScenarioError(f"{where}: has {got} (needs at least {min_rows})")
+    if increasing is not None:
+        _check_increasing(where, [line for line, _ in rows[1:]], values[:, header.index(increasing)],
+                          increasing, repeats)
+    return {name: values[:, i] for i, name in enumerate(header)}
+
+
+def _check_header(
+    where: str, header: list[str], required: tuple[str, ...], optional: tuple[str, ...], exact: bool
+) -> str:
+    """The header as text, after checking its columns."""
+    got = ",".join(header)
+    if exact and header != list(required):
+        raise ScenarioError(f"{where}: the header must be '{','.join(required)}', got '{got}'")
+    for name in required:
+        if name not in header:
+            raise ScenarioError(f"{where}: column '{name}' missing (header: '{got}')")
+    allowed = required + optional
+    for name in header:
+        if name not in allowed:
+            raise ScenarioError(f"{where}: column '{name}' is not one of {', '.join(allowed)}")
+        if header.count(name) > 1:
+            raise ScenarioError(f"{where}: column '{name}' appears {header.count(name)} times")
+    return got
+
+
+def _check_increasing(where: str, lines: list[int], v: np.ndarray, name: str, repeats: bool) -> None:
+    for i in range(1, v.size):
+        if v[i] < v[i - 1] or (v[i] == v[i - 1] and not repeats):
+            raise ScenarioError(f"{where} line {lines[i]}: {name} = {v[i]:g} is not after {v[i - 1]:g} on line "
+                                f"{lines[i - 1]} ({name} must increase)")
+        if v[i] == v[i - 1] and i >= 2 and v[i - 1] == v[i - 2]:
+            raise ScenarioError(f"{where} line {lines[i]}: {name} = {v[i]:g} for the third time (it may repeat "
+                                "once, for a step)")
 
 
 SPECTRUM_KINDS = ("third-octave", "psd")
@@ -87,7 +142,7 @@ def load_spectrum(path: str | Path, kind: str, key: str = "spectrum") -> FloorSp
     """
     if kind not in SPECTRUM_KINDS:
         raise ScenarioError(f"{key}: kind must be one of {', '.join(SPECTRUM_KINDS)}, got '{kind}'")
-    columns = read_csv_columns(Path(path), key, ("frequency_hz",), ("x", "y", "z"))
+    columns = read_csv_columns(Path(path), key, ("frequency_hz",), ("x", "y", "z"), increasing="frequency_hz")
     columns["frequency"] = columns.pop("frequency_hz")
     return spectrum_from_columns(columns, kind, key)
 

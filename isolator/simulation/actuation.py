@@ -96,22 +96,30 @@ class ForceHistory:
 def load_forces(path: str | Path, scenario: Scenario, key: str = "forces") -> ForceHistory:
     """Read a forces file for a scenario's actuators.
 
+    The file has a column ``t`` (increasing; a time may appear twice in a row, for a step), at
+    least two rows and one or more columns named after actuators; an actuator it does not name
+    gets zero force.
+
     Raises
     ------
     ScenarioError
         No actuators in the scenario.
     ParameterError
-        An unreadable file; a column that names no actuator; non-numeric,
-        non-finite or non-increasing values (the message starts with ``key``).
+        An unreadable, empty or non-UTF-8 file; a missing ``t`` column or one that names no
+        actuator; no actuator named at all; fewer than two rows; a row of the wrong length;
+        non-numeric or non-finite values; times not increasing. The message starts with ``key``
+        and the file, then the line (and column).
     """
     names = tuple(a.name for a in scenario.actuators)
     if not names:
         raise ScenarioError(f"actuators: the scenario has no [[actuators]] to apply {key} with")
     try:
-        columns = read_csv_columns(Path(path), key, ("t",), names)
+        columns = read_csv_columns(Path(path), key, ("t",), names, increasing="t", repeats=True)
     except ScenarioError as exc:  # the file is an argument, not scenario content
         raise ParameterError(str(exc)) from None
     t = columns.pop("t")
+    if not columns:
+        raise ParameterError(f"{key}: '{path}' names no actuator (give t and one or more of {', '.join(names)})")
     forces = np.array([columns.get(n, np.zeros_like(t)) for n in names])
     return ForceHistory(t, forces, names)
 

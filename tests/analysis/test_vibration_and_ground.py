@@ -116,5 +116,5 @@ def test_ground_and_points_errors_are_named(section, message):
 def test_spectrum_csv_columns_are_checked(tmp_path: Path):
     path = tmp_path / "bad.csv"
     path.write_text("frequency_hz,w\n1,2\n2,3\n")
-    with pytest.raises(ScenarioError, match=r"spectrum: .* must be a CSV whose header has frequency_hz"):
+    with pytest.raises(ScenarioError, match=r"^spectrum: '.*bad\.csv' line 1: column 'w' is not one of "):
         load_spectrum(path, "psd")

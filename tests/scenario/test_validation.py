@@ -104,7 +104,7 @@ def test_samples_profile_errors(tmp_path: Path):
     data["carriages"][0]["profile"] = {"type": "samples", "file": "bad.csv"}
     from isolator import scenario_from_dict
 
-    with pytest.raises(ScenarioError, match=r"profile\.file: samples must be finite"):
+    with pytest.raises(ScenarioError, match=r"profile\.file: '.*bad\.csv' line 3, column 'q': nan is not a finite"):
         scenario_from_dict(data, base_dir=tmp_path)
 
 
