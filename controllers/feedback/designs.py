@@ -27,6 +27,7 @@ from isolator.analysis.linear import FORCE_INPUTS, STATE_NAMES, LinearModel
 from isolator.errors import OptimisationError, ParameterError, ScenarioError
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.rules import check_value
 
 __all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "decentralised", "hinf", "lead", "lqr", "pid", "skyhook"]
 
@@ -59,8 +60,11 @@ class Controller:
     description: str = ""
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.sample_rate) and self.sample_rate > 0):
+        rate = check_value("sample_rate", self.sample_rate, "sample_rate", ParameterError)
+        if not rate > 0:
             raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {self.sample_rate}")
+        if not isinstance(self.system, control.StateSpace):
+            raise ParameterError(f"system: must be a control.StateSpace, got {type(self.system).__name__}")
 
     def discrete(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """``(A, B, C, D)`` of the controller discretised by Tustin's method at :attr:`sample_rate`."""
@@ -113,6 +117,8 @@ def decentralised(
     measure : {"displacement", "velocity"}
     name : str
     """
+    if not isinstance(transfer, control.TransferFunction | control.StateSpace):
+        raise ParameterError(f"transfer: must be a control.TransferFunction, got {type(transfer).__name__}")
     if measure not in ("displacement", "velocity"):
         raise ParameterError(f"measure: must be 'displacement' or 'velocity', got '{measure}'")
     j = _collocation(lin)
@@ -131,7 +137,7 @@ def decentralised(
 
 
 def _positive(value: float, key: str, allow_zero: bool = False) -> float:
-    v = float(value)
+    v = check_value(key, value, key, ParameterError)
     if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
         raise ParameterError(f"{key}: must be a finite number {'>=' if allow_zero else '>'} 0, got {value}")
     return v

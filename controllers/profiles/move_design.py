@@ -22,6 +22,7 @@ from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Carriage, Scenario
 from isolator.scenario.profile_shapes import scurve, trapezoid
 from isolator.scenario.profiles import PiecewisePolynomialProfile
+from isolator.scenario.rules import check_arguments, check_value
 
 __all__ = [
     "DEFAULT_JERK_RAMP",
@@ -59,6 +60,10 @@ class DriveLimits:
     velocity: float
     acceleration: float
     jerk: float
+
+    def __post_init__(self) -> None:
+        for name in ("velocity", "acceleration", "jerk"):
+            check_value(f"carriages.limits.{name}", getattr(self, name), f"limits.{name}", ParameterError)
 
 
 def drive_limits(carriage: Carriage, index: int) -> DriveLimits:
@@ -138,6 +143,19 @@ class MoveDesign:
     limits: DriveLimits
     deceleration_jerk: float | None = None
 
+    def __post_init__(self) -> None:
+        if self.shape not in SHAPES:
+            raise ParameterError(f"shape: must be one of {', '.join(SHAPES)}, got {self.shape!r}")
+        if self.shape == "scurve" and self.jerk is None:
+            raise ParameterError("jerk: an scurve needs one, got None")
+        if not isinstance(self.limits, DriveLimits):
+            raise ParameterError(f"limits: must be DriveLimits, got {type(self.limits).__name__}")
+        check_value("t0", self.t0, "t0", ParameterError)  # the optimiser may leave it a hair below 0
+        check_arguments(start=self.start, stroke=self.stroke, velocity=self.velocity,
+                        acceleration=self.acceleration, deceleration=self.deceleration,
+                        jerk=self.jerk if self.shape == "scurve" else None,
+                        deceleration_jerk=self.deceleration_jerk if self.shape == "scurve" else None)
+
     # -- the parameter vector -----------------------------------------------------
     @property
     def names(self) -> tuple[str, ...]:
@@ -198,8 +216,9 @@ class MoveDesign:
 
     def profile(self) -> PiecewisePolynomialProfile:
         """The profile these parameters make (a trapezoid or an scurve, with its keys)."""
+        t0 = max(self.t0, 0.0) if self.t0 > -1e-9 else self.t0  # within the optimiser's bound tolerance
         common = {"start": self.start, "stroke": self.stroke, "velocity": self.velocity,
-                  "acceleration": self.acceleration, "deceleration": self.deceleration, "t0": self.t0}
+                  "acceleration": self.acceleration, "deceleration": self.deceleration, "t0": t0}
         if self.shape == "trapezoid":
             return trapezoid(**common)
         return scurve(jerk=float(self.jerk or 0.0), deceleration_jerk=self.deceleration_jerk, **common)
@@ -238,6 +257,8 @@ def move_designs(scenario: Scenario, shape: str | None = None) -> tuple[MoveDesi
     designs = []
     for i, carriage in enumerate(scenario.carriages):
         spec = _spec(carriage, i)
+        if spec["stroke"] == 0.0:
+            raise ScenarioError(f"carriages[{i}].profile.stroke: profile design needs a move, got a stroke of 0")
         limits = drive_limits(carriage, i)
         kind = shape or carriage.profile.kind  # type: ignore[attr-defined]
         move = MoveDesign(

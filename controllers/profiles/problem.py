@@ -25,7 +25,7 @@ import numpy as np
 from isolator.errors import ParameterError
 from isolator.scenario.definitions import Scenario
 
-from .move_design import MoveDesign
+from .move_design import SHAPES, MoveDesign
 from .move_metrics import ROBUSTNESS_VARIANTS, ModelVariant
 from .objective import calibration, residual
 from .transcription import (
@@ -96,8 +96,30 @@ class ProfileSettings:
     max_iterations: int = 100
     tolerance: float = 1e-6
 
+    def __post_init__(self) -> None:
+        self.check()
+
     def check(self) -> None:
-        """Raise :class:`ParameterError` naming a bad setting."""
+        """Raise :class:`ParameterError` naming a bad setting (run on construction)."""
+        for name in ("objective", "transcription"):
+            if not isinstance(getattr(self, name), str):
+                raise ParameterError(f"{name}: must be a string, got {getattr(self, name)!r}")
+        if self.shape is not None and self.shape not in SHAPES:
+            raise ParameterError(f"shape: must be one of {', '.join(SHAPES)} or None, got {self.shape!r}")
+        if not isinstance(self.screen, bool):
+            raise ParameterError(f"screen: must be True or False, got {self.screen!r}")
+        if not isinstance(self.variants, tuple | list) or not all(
+                isinstance(v, ModelVariant) for v in self.variants):
+            raise ParameterError(f"variants: must be a sequence of ModelVariant, got {self.variants!r}")
+        for name in ("max_move_time_increase", "step_angle", "window_periods", "band_margin", "residual_limit",
+                     "tolerance"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | float | np.integer | np.floating):
+                raise ParameterError(f"{name}: must be a number, got {value!r}")
+        for name in ("shooting_steps", "max_iterations"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+                raise ParameterError(f"{name}: must be a whole number >= 1, got {value!r}")
         if self.objective not in OBJECTIVES:
             raise ParameterError(f"objective: must be one of {', '.join(OBJECTIVES)}, got '{self.objective}'")
         if self.transcription not in TRANSCRIPTIONS:
@@ -114,9 +136,6 @@ class ProfileSettings:
             value = getattr(self, name)
             if not (math.isfinite(value) and value > 0):
                 raise ParameterError(f"{name}: must be a finite number > 0, got {value}")
-        for name in ("shooting_steps", "max_iterations"):
-            if int(getattr(self, name)) < 1:
-                raise ParameterError(f"{name}: must be at least 1, got {getattr(self, name)}")
 
 
 class Problem:

@@ -15,7 +15,9 @@ from numpy.typing import ArrayLike
 from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
+from isolator.errors import ParameterError
 from isolator.scenario.profiles import PiecewisePolynomialProfile
+from isolator.scenario.rules import check_arguments
 
 __all__ = ["samples", "scurve", "segment_starts", "segments", "shaped", "trapezoid"]
 
@@ -112,6 +114,8 @@ def trapezoid(
     When the stroke is too short to reach ``velocity`` the profile is
     triangular with peak speed ``sqrt(2 |stroke| a d / (a + d))``.
     """
+    check_arguments(start=start, stroke=stroke, velocity=velocity, acceleration=acceleration, t0=t0,
+                    deceleration=deceleration)
     dec = acceleration if deceleration is None else deceleration
     distance = abs(stroke)
     sign = 1.0 if stroke >= 0 else -1.0
@@ -166,6 +170,8 @@ def scurve(
     deceleration_jerk : float, optional
         Jerk of the braking phase [m/s^3]; defaults to ``jerk``.
     """
+    check_arguments(start=start, stroke=stroke, velocity=velocity, acceleration=acceleration, jerk=jerk, t0=t0,
+                    deceleration=deceleration, deceleration_jerk=deceleration_jerk)
     dec = acceleration if deceleration is None else deceleration
     jerk_down = jerk if deceleration_jerk is None else deceleration_jerk
     distance = abs(stroke)
@@ -257,8 +263,19 @@ def samples(t: ArrayLike, q: ArrayLike) -> PiecewisePolynomialProfile:
     q : array_like
         Positions [m] at those times.
     """
-    t = np.asarray(t, dtype=float)
-    q = np.asarray(q, dtype=float)
+    try:
+        t = np.asarray(t, dtype=float).ravel()
+        q = np.asarray(q, dtype=float).ravel()
+    except (TypeError, ValueError):
+        raise ParameterError("t, q: must be sequences of numbers") from None
+    if t.size < 2 or q.size != t.size:
+        raise ParameterError(f"q: needs one position per sample time, two or more ({t.size} times, {q.size} q)")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
+        raise ParameterError("t, q: samples must be finite (found NaN or infinity)")
+    if np.any(np.diff(t) <= 0):
+        raise ParameterError("t: sample times must be strictly increasing")
+    if t[0] < 0:
+        raise ParameterError(f"t: sample times must be >= 0, got {t[0]:g}")
     spline = CubicSpline(t, q, bc_type="clamped")
     coef = spline.c[::-1].T  # ascending powers per piece
     return PiecewisePolynomialProfile(

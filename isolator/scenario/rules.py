@@ -26,19 +26,22 @@ from typing import Any
 
 import numpy as np
 
-from isolator.errors import IsolatorError, ScenarioError
+from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 
 __all__ = [
     "RULES",
     "UNIT_TOLERANCE",
     "Rule",
+    "check_arguments",
     "check_parameters",
     "check_scenario_values",
     "check_value",
     "closest",
     "field_of",
+    "profile_values",
     "rule_for",
     "scenario_values",
 ]
@@ -99,6 +102,21 @@ RULES: dict[str, Rule] = {
     "carriages.mass": POSITIVE,
     "carriages.axis": Rule(unit=True),
     "carriages.origin": FINITE,
+    "carriages.limits.velocity": POSITIVE,
+    "carriages.limits.acceleration": POSITIVE,
+    "carriages.limits.jerk": POSITIVE,
+    "carriages.profile.start": FINITE,
+    "carriages.profile.stroke": FINITE,
+    "carriages.profile.velocity": POSITIVE,
+    "carriages.profile.acceleration": POSITIVE,
+    "carriages.profile.deceleration": POSITIVE,
+    "carriages.profile.jerk": POSITIVE,
+    "carriages.profile.deceleration_jerk": POSITIVE,
+    "carriages.profile.t0": NONNEGATIVE,
+    "carriages.profile.amplitude": FINITE,
+    "carriages.profile.omega": POSITIVE,
+    "carriages.profile.phase": FINITE,
+    "carriages.profile.offset": FINITE,
     "isolators.position": FINITE,
     "isolators.stiffness": NONNEGATIVE,
     "isolators.damping": NONNEGATIVE,
@@ -243,6 +261,23 @@ def _vector(key: str, values: Any) -> Iterator[tuple[str, object]]:
         yield f"{key}[{i}]", v
 
 
+def profile_values(profile: Profile, key: str) -> Iterator[tuple[str, object]]:
+    """A profile's numbers (a sine's fields, a trapezoid's or S-curve's keys) by their file keys."""
+    if isinstance(profile, SineProfile):
+        for name in ("amplitude", "omega", "phase", "offset", "t0"):
+            yield f"{key}.{name}", getattr(profile, name)
+    elif isinstance(profile, PiecewisePolynomialProfile):
+        for name, value in profile.spec:
+            yield f"{key}.{name}", value
+
+
+def check_arguments(error: type[IsolatorError] = ParameterError, /, **values: object) -> None:
+    """Arguments of a profile builder by the rules of the profile keys they are (``velocity``, ``t0``, ...)."""
+    for name, value in values.items():
+        if value is not None:
+            check_value(f"carriages.profile.{name}", value, name, error)
+
+
 def scenario_values(scenario: Scenario) -> Iterator[tuple[str, object]]:
     """Every number of a scenario with its file key (``isolators[0].damping[2]``), vectors one component each."""
     yield "gravity", scenario.gravity
@@ -273,6 +308,10 @@ def scenario_values(scenario: Scenario) -> Iterator[tuple[str, object]]:
         yield f"{k}.mass", c.mass
         yield from _vector(f"{k}.axis", c.axis)
         yield from _vector(f"{k}.origin", c.origin)
+        for name in ("velocity", "acceleration", "jerk"):
+            if getattr(c.limits, name, None) is not None:
+                yield f"{k}.limits.{name}", getattr(c.limits, name)
+        yield from profile_values(c.profile, f"{k}.profile")
     for i, a in enumerate(scenario.actuators):
         k = f"actuators[{i}]"
         yield from _vector(f"{k}.position", a.position)
