@@ -1,17 +1,77 @@
-"""Reading a TOML table key by key, every problem one :class:`ScenarioError` naming the key path."""
+"""Reading a TOML file, and a TOML table key by key: every problem one :class:`ScenarioError` naming the
+file or the key path. A key missing where the table has a near spelling of it (``stifness``) is reported
+as that unknown key with the suggestion, before any "missing" error.
+"""
 
 from __future__ import annotations
 
+import difflib
 import math
-from collections.abc import Mapping
+import re
+import tomllib
+from collections.abc import Collection, Mapping
+from functools import lru_cache
+from pathlib import Path
 from typing import Any
 
 from isolator.errors import ScenarioError
 
-__all__ = ["KeyReader", "number", "number_list", "table_of_tables"]
+__all__ = ["TOP_LEVEL_KEYS", "KeyReader", "load_toml", "number", "number_list", "table_of_tables"]
 
 
 _UNIT_TOL = 1e-6
+
+#: the keys of a scenario's top level
+TOP_LEVEL_KEYS = ("name", "gravity", "table", "isolators", "air", "leveling", "simulation", "carriages",
+                  "actuators", "settling", "ground", "points")
+
+
+def load_toml(path: Path) -> dict[str, Any]:
+    """A TOML file's keys; a file that is not UTF-8, has a byte-order mark, is empty, is not valid TOML
+    or nests too deeply is a :class:`ScenarioError` naming the file (and the line)."""
+    try:
+        raw = path.read_bytes()
+    except IsADirectoryError:
+        raise ScenarioError(f"{path}: is a folder, not a scenario file") from None
+    except OSError as exc:
+        raise ScenarioError(f"{path}: cannot be read ({exc.strerror})") from None
+    if raw.startswith(b"\xef\xbb\xbf"):
+        raise ScenarioError(f"{path}: starts with a byte-order mark (BOM), which TOML does not allow; "
+                            "save it as UTF-8 without BOM")
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw[: exc.start].count(b"\n") + 1
+        raise ScenarioError(f"{path} line {line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); "
+                            "save the file as UTF-8") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ScenarioError(f"{path}: not valid TOML ({exc})") from None
+    except RecursionError:
+        raise ScenarioError(f"{path}: nested too deeply (arrays or tables inside each other hundreds of "
+                            "levels deep)") from None
+    if not data:
+        raise ScenarioError(f"{path}: is empty (a scenario needs at least [table] and [[isolators]])")
+    return data
+
+
+@lru_cache(maxsize=1)
+def _known_keys() -> frozenset[str]:
+    """Every key name the scenario's readers know: a key in a file that is one of them is no typo."""
+    folder = Path(__file__).parent
+    text = "".join((folder / name).read_text() for name in ("reader.py", "pneumatic_reader.py"))
+    return frozenset(re.findall(r'"([a-z][a-z0-9_]*)"', text))
+
+
+def _misspelt(data: Mapping, name: str, path: str, known: Collection[str]) -> ScenarioError | None:
+    """The error for a key of ``data`` that looks like a misspelling of the absent key ``name``, if any."""
+    candidates = [k for k in data if isinstance(k, str) and k not in known]
+    close = difflib.get_close_matches(name, candidates, n=1, cutoff=0.75)
+    if not close:
+        return None
+    key = f"{path}.{close[0]}" if path else close[0]
+    return ScenarioError(f"{key}: unknown key; did you mean '{name}'?")
 
 
 class KeyReader:
@@ -34,6 +94,9 @@ class KeyReader:
         self.used.add(name)
         if name in self.data:
             return self.data[name]
+        typo = _misspelt(self.data, name, self.path, TOP_LEVEL_KEYS if not self.path else _known_keys())
+        if typo is not None:
+            raise typo
         if default is not ... or not required:
             return None if default is ... else default
         raise ScenarioError(f"{self.key(name)}: missing")
@@ -78,6 +141,9 @@ class KeyReader:
     def finish(self) -> None:
         unknown = sorted(set(self.data) - self.used)
         if unknown:
+            close = difflib.get_close_matches(unknown[0], sorted(self.used), n=1, cutoff=0.75)
+            if close:
+                raise ScenarioError(f"{self.key(unknown[0])}: unknown key; did you mean '{close[0]}'?")
             allowed = ", ".join(sorted(self.used))
             raise ScenarioError(f"{self.key(unknown[0])}: unknown key (allowed here: {allowed})")
 
@@ -105,6 +171,10 @@ def number(
 
 
 def table_of_tables(data: Mapping, name: str) -> list:
+    if name not in data:
+        typo = _misspelt(data, name, "", TOP_LEVEL_KEYS)
+        if typo is not None:
+            raise typo
     value = data.get(name, [])
     if not isinstance(value, list):
         raise ScenarioError(f"{name}: must be an array of tables ([[{name}]])")

@@ -6,7 +6,6 @@ with the key path, for example ``carriages[1].profile.acceleration: must be > 0`
 
 from __future__ import annotations
 
-import tomllib
 from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
@@ -29,7 +28,7 @@ from isolator.scenario.definitions import (
     SimulationSettings,
     Table,
 )
-from isolator.scenario.keys import KeyReader, number, number_list, table_of_tables
+from isolator.scenario.keys import KeyReader, load_toml, number, number_list, table_of_tables
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
@@ -67,6 +66,8 @@ def resolve_scenario_path(spec: str | Path | None) -> Path:
     path = Path(spec)
     if path.is_file():
         return path
+    if path.is_dir():
+        raise ScenarioError(f"{spec}: is a folder, not a scenario file")
     bundled = bundled_scenarios()
     name = path.name[:-5] if path.name.endswith(".toml") else path.name
     if name in bundled and not path.exists():
@@ -94,14 +95,7 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
         With the offending key path and the reason.
     """
     path = resolve_scenario_path(spec)
-    try:
-        with open(path, "rb") as handle:
-            data = tomllib.load(handle)
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML ({exc})") from None
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot be read ({exc.strerror})") from None
-    return scenario_from_dict(data, base_dir=path.parent, default_name=path.stem)
+    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=path.stem)
 
 
 def scenario_from_dict(

@@ -144,18 +144,44 @@ def load_spectrum(path: str | Path, kind: str, key: str = "spectrum") -> FloorSp
         raise ScenarioError(f"{key}: kind must be one of {', '.join(SPECTRUM_KINDS)}, got '{kind}'")
     columns = read_csv_columns(Path(path), key, ("frequency_hz",), ("x", "y", "z"), increasing="frequency_hz")
     columns["frequency"] = columns.pop("frequency_hz")
-    return spectrum_from_columns(columns, kind, key)
+    return spectrum_from_columns(columns, kind, key, source=str(path))
 
 
-def spectrum_from_columns(columns: dict[str, np.ndarray], kind: str, key: str) -> FloorSpectrum:
+def spectrum_from_columns(
+    columns: dict[str, np.ndarray], kind: str, key: str, source: str | None = None
+) -> FloorSpectrum:
+    """A floor spectrum from its columns (``frequency`` and some of ``x, y, z``), checked.
+
+    The frequencies of a third-octave spectrum must be band centres (``10^(n/10)`` Hz, or their
+    nominal values 1.25, 1.6, ...); a PSD whose frequencies are three or more consecutive band centres
+    is taken for a third-octave spectrum given the wrong kind. ``source`` (a file) is named after ``key``.
+    """
+    where = key if source is None else f"{key}: '{source}'"
     f = columns.pop("frequency")
     if not columns:
-        raise ScenarioError(f"{key}: needs values for at least one of x, y, z")
+        raise ScenarioError(f"{where}: needs values for at least one of x, y, z")
     if f.size < 2 or np.any(np.diff(f) <= 0) or f[0] <= 0:
-        raise ScenarioError(f"{key}: frequencies must be > 0 and strictly increasing (at least two)")
+        raise ScenarioError(f"{where}: frequencies must be > 0 and strictly increasing (at least two)")
     for axis, v in columns.items():
+        name = f"{key}.{axis}" if source is None else f"{where}, column '{axis}'"
         if v.size != f.size:
-            raise ScenarioError(f"{key}.{axis}: has {v.size} values for {f.size} frequencies")
+            raise ScenarioError(f"{name}: has {v.size} values for {f.size} frequencies")
         if not np.all(np.isfinite(v)) or np.any(v < 0):
-            raise ScenarioError(f"{key}.{axis}: values must be finite and >= 0")
+            raise ScenarioError(f"{name}: values must be finite and >= 0")
+    _check_kind(f, kind, where)
     return FloorSpectrum(kind=kind, frequency=f, values=columns)
+
+
+def _check_kind(f: np.ndarray, kind: str, where: str) -> None:
+    """Refuse a spectrum whose frequencies belong to the other kind."""
+    band = 10 * np.log10(f)  # base-10 one-third-octave band numbers: integers at the centres
+    centre = np.abs(band - np.round(band)) < 0.1  # within 2.3 %: the nominal centres 1.25, 1.6, 3.15, ...
+    if kind == "third-octave" and not centre.all():
+        off = float(f[np.argmin(centre)])
+        raise ScenarioError(f"{where}: {off:.4g} Hz is not a one-third-octave band centre (1, 1.25, 1.6, 2, 2.5, "
+                            "3.15, ... Hz); a spectrum on another frequency grid is a velocity PSD: give its "
+                            "kind as psd")
+    if kind == "psd" and f.size >= 3 and centre.all() and np.all(np.diff(np.round(band)) == 1):
+        raise ScenarioError(f"{where}: the frequencies are consecutive one-third-octave band centres "
+                            f"({f[0]:.4g} to {f[-1]:.4g} Hz), as in a third-octave spectrum (band RMS "
+                            "velocities), not a PSD's frequency grid: give its kind as third-octave")
