@@ -2,7 +2,9 @@
 
 The tests mirror the packages: ``tests/scenario``, ``model``, ``numerics``,
 ``simulation``, ``analysis``, ``validation``, ``cli`` for the plant,
-``tests/controllers`` and ``tests/studies``; ``test_style.py`` stays here. No
+``tests/controllers`` and ``tests/studies``; ``tests/properties`` holds the
+property-based tests (hypothesis: the "ci" profile below by default, many
+more examples with ``HYPOTHESIS_PROFILE=thorough``); ``test_style.py`` stays here. No
 folder of tests has an ``__init__.py``, on purpose: in pytest's default
 ("prepend") import mode, loading this conftest puts ``tests/`` on
 ``sys.path``, and importing a test module puts its own folder there. Hence:
@@ -21,11 +23,18 @@ folder of tests has an ``__init__.py``, on purpose: in pytest's default
 from __future__ import annotations
 
 import copy
+import os
 from typing import Any
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 from isolator import Scenario, scenario_from_dict
+
+# property-based tests (tests/properties): few examples in CI, many with HYPOTHESIS_PROFILE=thorough
+settings.register_profile("ci", max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.register_profile("thorough", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 
 def corner_isolators(k: float = 5.7e5, c: float = 5.7e3, hs: float = 0.15) -> list[dict[str, Any]]:
