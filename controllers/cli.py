@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from isolator.cli.helpers import report, scenario_argument, use_agg
+from isolator.cli.helpers import check_run_memory, output_path, report, scenario_argument, use_agg
 from isolator.errors import OptimisationError
 from isolator.scenario.reader import load_scenario
 
@@ -22,7 +22,7 @@ def register(sub: Any) -> None:
     ff = sub.add_parser(
         "feedforward", help="actuator forces that cancel the carriages' reaction, and what they buy",
         description="Compute feedforward actuator forces from the planned carriage motion and compare "
-        "the passive and controlled runs (settling band: 5 %% of the passive peak per signal).",
+        "the passive and controlled runs (settling band: 5 % of the passive peak per signal).",
     )
     ff.add_argument("scenario", nargs="?", default=None,
                     help="scenario file or bundled name with [[actuators]] (default: paper-table-3-2-active)")
@@ -36,7 +36,7 @@ def register(sub: Any) -> None:
     opt = sub.add_parser(
         "optimise-profile", help="optimise the carriages' motion profiles to cut the settling or cycle time",
         description="Optimise each carriage's S-curve (or trapezoid) through the time-varying model with casadi "
-        "and IPOPT, over model variants (isolator stiffness, damping and payload mass 15 %% off), and compare "
+        "and IPOPT, over model variants (isolator stiffness, damping and payload mass 15 % off), and compare "
         "with the scenario's own profiles by simulation.",
     )
     scenario_argument(opt)
@@ -62,14 +62,16 @@ def _feedforward(args: argparse.Namespace) -> int:
     use_agg()
     from controllers.feedforward import compare_feedforward, feedforward_optimal
 
+    out = output_path(args.out, "--out", (".csv",)) if args.out else None
     scenario = load_scenario(args.scenario or "paper-table-3-2-active")
+    check_run_memory(scenario)
     feedforward = None
     if args.method == "optimal":
         feedforward = feedforward_optimal(scenario, progress=not args.json)
     result = compare_feedforward(scenario, feedforward)
-    if args.out:
-        result.feedforward.forces.to_csv(args.out)
-    return report(args.json, result.to_dict(), result.summary(), [("forces file", args.out)])
+    if out:
+        result.feedforward.forces.to_csv(out)
+    return report(args.json, result.to_dict(), result.summary(), [("forces file", out)])
 
 
 def _optimise_profile(args: argparse.Namespace) -> int:
@@ -84,7 +86,9 @@ def _optimise_profile(args: argparse.Namespace) -> int:
         write_scenario,
     )
 
+    out = output_path(args.out, "--out", (".toml",)) if args.out else None
     scenario = load_scenario(args.scenario)
+    check_run_memory(scenario)
     settings = ProfileSettings(
         objective=args.objective, transcription=args.transcription, shape=args.shape,
         max_move_time_increase=args.max_move_time_increase,
@@ -103,13 +107,13 @@ def _optimise_profile(args: argparse.Namespace) -> int:
         "baseline": [m.settling_time_max for m in over_variants(scenario, "baseline", start)],
         "optimised": [m.settling_time_max for m in over_variants(result.scenario, "optimised", start)],
     }
-    if args.out:
-        write_scenario(args.scenario, result.designs, args.out)
+    if out:
+        write_scenario(args.scenario, result.designs, out)
     data = {**result.to_dict(), "robustness": spread}
     if warning:
         data["warning"] = warning
         print(f"isolator: warning: {warning}", file=sys.stderr)
-    return report(args.json, data, _profile_summary(result, spread), [("optimised scenario", args.out)])
+    return report(args.json, data, _profile_summary(result, spread), [("optimised scenario", out)])
 
 
 def _profile_summary(result: ProfileOptimisation, spread: dict[str, Any]) -> str:

@@ -1,4 +1,5 @@
-"""The ``isolator study`` subcommand (registered with the ``isolator`` command)."""
+"""The ``isolator study`` subcommands, one per study with only its own options (registered with the
+``isolator`` command)."""
 
 from __future__ import annotations
 
@@ -7,95 +8,143 @@ import math
 from pathlib import Path
 from typing import Any
 
-from isolator.cli.helpers import use_agg
+from isolator.cli.helpers import check_run_memory, output_folder, use_agg
 from isolator.errors import ParameterError
+from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import DEFAULT_SCENARIO, load_scenario
 
-__all__ = ["PNEUMATIC_SCENARIO", "register"]
+__all__ = ["CONTROL_SCENARIO", "PNEUMATIC_SCENARIO", "register"]
 
 #: the pneumatic study's default scenario
 PNEUMATIC_SCENARIO = "paper-table-3-2-pneumatic"
+#: the control study's default scenario
+CONTROL_SCENARIO = "paper-table-3-2-active"
 
 
 def register(sub: Any) -> None:
-    """Add ``study`` to the ``isolator`` command's subparsers."""
-    study = sub.add_parser("study", help="run a study that writes figures and a report")
-    study.add_argument("name", choices=["paper", "control", "profiles", "tradeoff", "pneumatic"],
-                       help="paper: reproduce Shin, Sun and Kim; control: passive, feedforward, feedback and both; "
-                       "profiles: paper profile, input shapers, time-optimal and optimised moves; "
-                       "tradeoff: isolator stiffness and damping, settling time against transmissibility; "
-                       "pneumatic: air springs' orifice and damping-chamber volume, transmissibility peaks, "
-                       "settling and leveling, the optimal orifice")
-    study.add_argument("scenario", nargs="?", default=None,
-                       help="control: scenario with [[actuators]] (default: paper-table-3-2-active); "
-                       f"profiles and tradeoff: (default: {DEFAULT_SCENARIO}); "
-                       f"pneumatic: with pneumatic isolators (default: {PNEUMATIC_SCENARIO})")
-    study.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder")
-    study.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
-    study.add_argument("--controller", choices=["skyhook", "lead", "lqr", "hinf"], default="skyhook",
-                       help="control: the feedback design in the time runs")
-    study.add_argument("--feedforward", choices=["allocation", "optimal"], default="allocation",
-                       help="control: the feedforward method")
-    study.add_argument("--frequency", type=float, default=10.0, metavar="HZ",
-                       help="tradeoff and pneumatic: frequency of the transmissibility figure (default 10 Hz)")
+    """Add ``study`` and its subcommands (``paper``, ``control``, ``profiles``, ``tradeoff``, ``pneumatic``)."""
+    study = sub.add_parser("study", help="run a study that writes figures and a report",
+                           description="Run a study; each writes its figures and report.md into --out.")
+    studies = study.add_subparsers(dest="study", required=True, metavar="STUDY")
 
-    study.set_defaults(handler=_study)
+    paper = _study(studies, "paper", "reproduce Shin, Sun and Kim's figures and settling time", None)
+    paper.set_defaults(handler=_paper)
+
+    control = _study(studies, "control", "passive, feedforward, feedback and both on an active table",
+                     f"scenario with [[actuators]] (default: {CONTROL_SCENARIO})")
+    control.add_argument("--controller", choices=["skyhook", "lead", "lqr", "hinf"], default="skyhook",
+                         help="the feedback design in the time runs (default skyhook)")
+    control.add_argument("--feedforward", choices=["allocation", "optimal"], default="allocation",
+                         help="the feedforward method (default allocation)")
+    control.set_defaults(handler=_control)
+
+    profiles = _study(studies, "profiles", "the scenario's profile, input shapers, time-optimal and optimised "
+                      "moves", f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
+    profiles.set_defaults(handler=_profiles)
+
+    tradeoff = _study(studies, "tradeoff", "isolator stiffness and damping: settling time against "
+                      "transmissibility", f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
+    _frequency(tradeoff)
+    tradeoff.set_defaults(handler=_tradeoff)
+
+    pneumatic = _study(studies, "pneumatic", "air springs' orifice and damping-chamber volume: transmissibility "
+                       "peaks, settling and leveling, the optimal orifice",
+                       f"scenario with pneumatic isolators (default: {PNEUMATIC_SCENARIO})")
+    _frequency(pneumatic)
+    pneumatic.set_defaults(handler=_pneumatic)
 
 
-def _study(args: argparse.Namespace) -> int:
+def _study(studies: Any, name: str, help_text: str, scenario_help: str | None) -> argparse.ArgumentParser:
+    parser: argparse.ArgumentParser = studies.add_parser(name, help=help_text, description=help_text[0].upper()
+                                                         + help_text[1:] + "; figures and report.md in --out.")
+    if scenario_help is not None:
+        parser.add_argument("scenario", nargs="?", default=None, help=scenario_help)
+    parser.add_argument("--out", type=Path, required=True, metavar="DIR", help="output folder (made if missing)")
+    parser.add_argument("--quick", action="store_true", help="shorter runs (for tests)")
+    return parser
+
+
+def _frequency(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--frequency", type=float, default=10.0, metavar="HZ",
+                        help="frequency of the transmissibility figure (default 10 Hz)")
+
+
+def _checked_frequency(args: argparse.Namespace) -> float:
+    if not (math.isfinite(args.frequency) and args.frequency > 0):
+        raise ParameterError(f"--frequency: must be a finite frequency > 0 Hz, got {args.frequency}")
+    return float(args.frequency)
+
+
+def _scenario(args: argparse.Namespace, default: str | None) -> Scenario:
+    """The study's scenario, after its output folder is made; a run too long for memory refused up front."""
+    output_folder(args.out, "--out")
+    scenario = load_scenario(args.scenario or default)
+    check_run_memory(scenario)
     use_agg()
-    if args.name == "paper":
-        from studies.paper import run_paper_study
+    return scenario
 
-        report = run_paper_study(args.out, quick=args.quick)
-        print(f"report: {report}")
-    elif args.name == "control":
-        from studies.control import run_control_study
 
-        scenario = load_scenario(args.scenario or "paper-table-3-2-active")
-        control = run_control_study(args.out, scenario, args.controller, args.feedforward)
-        for run in ("passive", "feedforward", "feedback", "both"):
-            value = control.settling_time_max(run)
-            print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
-        print(f"report: {args.out / 'report.md'}")
-    elif args.name == "tradeoff":
-        from studies.tradeoff import run_tradeoff_study
+def _paper(args: argparse.Namespace) -> int:
+    from studies.paper import run_paper_study
 
-        if not (math.isfinite(args.frequency) and args.frequency > 0):
-            raise ParameterError(f"--frequency: must be a finite frequency > 0 Hz, got {args.frequency}")
-        stiffness = [0.5, 1.0, 2.0] if args.quick else None
-        damping = [0.5, 1.0, 2.0, 4.0] if args.quick else None
-        tradeoff = run_tradeoff_study(args.out, load_scenario(args.scenario), stiffness, damping,
-                                      reference_hz=args.frequency)
-        front = tradeoff.pareto()
-        print(f"{len(front)} Pareto-optimal designs of {tradeoff.stiffness.size * tradeoff.damping.size}")
-        print(f"report: {args.out / 'report.md'}")
-    elif args.name == "pneumatic":
-        from studies.pneumatic import run_pneumatic_study
+    output_folder(args.out, "--out")
+    use_agg()
+    print(f"report: {run_paper_study(args.out, quick=args.quick)}")
+    return 0
 
-        if not (math.isfinite(args.frequency) and args.frequency > 0):
-            raise ParameterError(f"--frequency: must be a finite frequency > 0 Hz, got {args.frequency}")
-        scenario = load_scenario(args.scenario or PNEUMATIC_SCENARIO)
-        diameters = ratios = None
-        if args.quick:
-            from studies.pneumatic import default_diameters
 
-            own = default_diameters(scenario)
-            diameters, ratios = own[[2, 7, 12]], [1.0, 2.0, 4.0]  # 0.52, 1 and 1.92 x the scenario's orifice
-        pneumatic = run_pneumatic_study(args.out, scenario, diameters, ratios, reference_hz=args.frequency)
-        for o, c in zip(pneumatic.optima, pneumatic.closed_form, strict=True):
-            print(f"N = {o.ratio:.3g}: optimal orifice {o.diameter * 1e3:.4g} mm, heave peak {o.peak:.4g} "
-                  f"(one-mass closed form {c.peak:.4g} with {c.diameter * 1e3:.4g} mm)")
-        print(f"{len(pneumatic.pareto())} Pareto-optimal designs of {pneumatic.diameters.size * pneumatic.ratios.size}")
-        print(f"report: {args.out / 'report.md'}")
-    elif args.name == "profiles":
-        from controllers.profiles import ROBUSTNESS_VARIANTS, ModelVariant
-        from studies.profiles import run_profile_study
+def _control(args: argparse.Namespace) -> int:
+    from studies.control import run_control_study
 
-        variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
-        profiles = run_profile_study(args.out, load_scenario(args.scenario), variants)
-        for name, m in profiles.methods.items():
-            settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
-            print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
-        print(f"report: {args.out / 'report.md'}")
+    control = run_control_study(args.out, _scenario(args, CONTROL_SCENARIO), args.controller, args.feedforward)
+    for run in ("passive", "feedforward", "feedback", "both"):
+        value = control.settling_time_max(run)
+        print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
+    print(f"report: {args.out / 'report.md'}")
+    return 0
+
+
+def _tradeoff(args: argparse.Namespace) -> int:
+    from studies.tradeoff import run_tradeoff_study
+
+    frequency = _checked_frequency(args)
+    stiffness = [0.5, 1.0, 2.0] if args.quick else None
+    damping = [0.5, 1.0, 2.0, 4.0] if args.quick else None
+    tradeoff = run_tradeoff_study(args.out, _scenario(args, None), stiffness, damping, reference_hz=frequency)
+    front = tradeoff.pareto()
+    print(f"{len(front)} Pareto-optimal designs of {tradeoff.stiffness.size * tradeoff.damping.size}")
+    print(f"report: {args.out / 'report.md'}")
+    return 0
+
+
+def _pneumatic(args: argparse.Namespace) -> int:
+    from studies.pneumatic import run_pneumatic_study
+
+    frequency = _checked_frequency(args)
+    scenario = _scenario(args, PNEUMATIC_SCENARIO)
+    diameters = ratios = None
+    if args.quick:
+        from studies.pneumatic import default_diameters
+
+        own = default_diameters(scenario)
+        diameters, ratios = own[[2, 7, 12]], [1.0, 2.0, 4.0]  # 0.52, 1 and 1.92 x the scenario's orifice
+    pneumatic = run_pneumatic_study(args.out, scenario, diameters, ratios, reference_hz=frequency)
+    for o, c in zip(pneumatic.optima, pneumatic.closed_form, strict=True):
+        print(f"N = {o.ratio:.3g}: optimal orifice {o.diameter * 1e3:.4g} mm, heave peak {o.peak:.4g} "
+              f"(one-mass closed form {c.peak:.4g} with {c.diameter * 1e3:.4g} mm)")
+    print(f"{len(pneumatic.pareto())} Pareto-optimal designs of {pneumatic.diameters.size * pneumatic.ratios.size}")
+    print(f"report: {args.out / 'report.md'}")
+    return 0
+
+
+def _profiles(args: argparse.Namespace) -> int:
+    from controllers.profiles import ROBUSTNESS_VARIANTS, ModelVariant
+    from studies.profiles import run_profile_study
+
+    variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
+    profiles = run_profile_study(args.out, _scenario(args, None), variants)
+    for name, m in profiles.methods.items():
+        settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
+        print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
+    print(f"report: {args.out / 'report.md'}")
     return 0

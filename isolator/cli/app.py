@@ -6,15 +6,23 @@ a ``register(subparsers)`` function that adds parsers with a ``handler``. So the
 packages above it, and a new package adds commands without touching this one.
 
 Every error a user can cause (bad scenario or option, unstable table, diverging run) is printed as one
-line, ``isolator: error: ...``, with exit status 2.
+line, ``isolator: error: ...``, with exit status 2 (``isolator stability`` exits with 3 for a table that
+would tip; an interrupt with 130). Bad options and arguments too: one line naming the option and the
+subcommand's ``--help``. What numpy warns about during a command is summed up in one line after a result,
+and left out after an error; a machine out of memory or a numerical failure the toolkit did not foresee
+is one error line as well, never a traceback.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Sequence
 from importlib.metadata import entry_points, version
+from typing import NoReturn
+
+import numpy as np
 
 from isolator.cli import commands
 from isolator.errors import IsolatorError
@@ -25,9 +33,16 @@ __all__ = ["ENTRY_POINT_GROUP", "build_parser", "main"]
 ENTRY_POINT_GROUP = "isolator.commands"
 
 
+class _Parser(argparse.ArgumentParser):
+    """A parser whose errors are one line naming the subcommand's help (its subparsers are of this class)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"isolator: error: {message} (see '{self.prog} --help')\n")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The ``isolator`` parser with the plant's subcommands and every registered package's."""
-    parser = argparse.ArgumentParser(
+    parser = _Parser(
         prog="isolator",
         description="Pneumatic isolation tables carrying moving stages: transients, settling, "
         "modes, transmissibility, stability and vibration criteria.",
@@ -42,18 +57,56 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``isolator`` command; returns the exit status."""
-    args = build_parser().parse_args(argv)
+    parser = build_parser()
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # an option of another subcommand (or none): name the subcommand whose help lists the real ones
+        prog = " ".join(["isolator", args.command, *([args.study] if getattr(args, "study", None) else [])])
+        parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {' '.join(extra)} "
+                    f"(see '{prog} --help')\n")
+    with warnings.catch_warnings(record=True) as caught:  # the filters as they are (deprecations stay hidden)
+        warnings.simplefilter("always", RuntimeWarning)
+        status = _run(args)
+    if status in (0, 3):
+        _summarise(caught)
+    return status
+
+
+def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.handler(args))
     except IsolatorError as exc:
-        print(f"isolator: error: {exc}", file=sys.stderr)
-        return 2
+        return _error(str(exc))
+    except MemoryError as exc:
+        return _error(f"out of memory ({exc or 'an allocation failed'}): the inputs ask for more than this "
+                      "machine has (a very long run, a high sample rate, or a design so stiff that the "
+                      "integrator needs very many steps)")
+    except (ArithmeticError, np.linalg.LinAlgError, RecursionError) as exc:
+        return _error(f"numerical failure ({type(exc).__name__}: {exc}); the inputs' magnitudes are likely "
+                      "extreme (masses, stiffness, damping many orders of magnitude apart)")
     except BrokenPipeError:  # output piped into a command that stopped reading
         sys.stderr.close()
         return 0
+    except OSError as exc:  # writing an output (the paths were checked before any work)
+        return _error(f"{exc.filename or 'output'}: {exc.strerror or exc}")
     except KeyboardInterrupt:
         print("isolator: interrupted", file=sys.stderr)
         return 130
+
+
+def _error(message: str) -> int:
+    print(f"isolator: error: {message}", file=sys.stderr)
+    return 2
+
+
+def _summarise(caught: list[warnings.WarningMessage]) -> None:
+    """One line per distinct warning; numpy's floating-point warnings summed up in one line."""
+    numeric = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    for text in dict.fromkeys(str(w.message) for w in caught if w not in numeric):
+        print(f"isolator: warning: {text}", file=sys.stderr)
+    if numeric:
+        first = str(numeric[0].message)
+        print(f"isolator: warning: numpy warned {len(numeric)} time(s) ('{first}'): some inputs are of extreme "
+              "magnitude; check the results", file=sys.stderr)
 
 
 if __name__ == "__main__":

@@ -8,7 +8,17 @@ from pathlib import Path
 from typing import Any
 
 from isolator.analysis.linear import LinearModel, linearise
-from isolator.cli.helpers import report, save_figure, scenario_argument, use_agg
+from isolator.cli.helpers import (
+    check_memory,
+    check_run_memory,
+    count,
+    figure_path,
+    output_path,
+    report,
+    save_figure,
+    scenario_argument,
+    use_agg,
+)
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
@@ -21,7 +31,7 @@ def register(sub: Any) -> None:
     """Add the plant's subcommands to the ``isolator`` command's subparsers."""
     sim = sub.add_parser(
         "simulate",
-        help="simulate the carriages' transients and report peaks and 5 %% settling times",
+        help="simulate the carriages' transients and report peaks and settling times",
         description="Simulate a scenario from its initial static equilibrium; print peaks, "
         "final values and settling times per signal, and write a figure.",
     )
@@ -55,7 +65,7 @@ def register(sub: Any) -> None:
     trans.add_argument("--plot", type=Path, metavar="FILE.png", help="write the Bode plot")
     trans.add_argument("--compliance", action="store_true",
                        help="force / moment at the mass centre to table motion instead")
-    trans.add_argument("--points", type=int, default=1000, help="frequencies, log-spaced (default 1000)")
+    trans.add_argument("--points", type=count, default=1000, help="frequencies, log-spaced (default 1000)")
 
     stab = sub.add_parser(
         "stability", help="rocking-stiffness margin over the carriages' travel",
@@ -68,7 +78,7 @@ def register(sub: Any) -> None:
     crit = sub.add_parser(
         "criteria", help="one-third-octave table velocity from a floor spectrum, and its VC class",
         description="Pass a floor vibration spectrum through the parked table and rate a point "
-        "against the VC curves (VC-A 50 um/s ... VC-G 0.78 um/s, 1-80 Hz).",
+        "against the VC curves (VC-A 50 µm/s ... VC-G 0.78 µm/s, 1-80 Hz).",
     )
     _linear_arguments(crit)
     crit.add_argument("--spectrum", type=Path, metavar="FILE.csv",
@@ -121,6 +131,8 @@ def _modes(args: argparse.Namespace) -> int:
     use_agg()
     from isolator.analysis.modes import modes, modes_over_travel
 
+    figure_path(args.plot, "--plot")
+    figure_path(args.travel, "--travel")
     scenario, lin = _linearised(args)
     result = modes(lin)
     if args.plot:
@@ -137,7 +149,10 @@ def _transmissibility(args: argparse.Namespace) -> int:
 
     if args.points < 2:
         raise ParameterError(f"--points: must be >= 2, got {args.points}")
+    figure_path(args.plot, "--plot")
     _, lin = _linearised(args)
+    check_memory(args.points * 16 * (lin.system.nstates ** 2 + 8 * 36), f"--points: {args.points:.3g} frequencies",
+                 "ask for fewer")
     f = default_frequencies(lin, args.points)
     result = compliance(lin, f) if args.compliance else transmissibility(lin, f)
     if args.plot:
@@ -158,39 +173,40 @@ def _criteria(args: argparse.Namespace) -> int:
     from isolator.analysis.vibration import vibration_criteria
     from isolator.scenario.tables import load_spectrum
 
+    figure_path(args.plot, "--plot")
     _, lin = _linearised(args)
     spectrum = load_spectrum(args.spectrum, args.kind, key="--spectrum") if args.spectrum else None
     result = vibration_criteria(lin, spectrum, point=args.point)
     if args.plot:
         save_figure(result.plot(), args.plot)
     text = (f"floor: {result.floor_class}; table at {result.point}: {result.table_class} "
-            f"(largest band RMS {result.table_max * 1e6:.3g} um/s over 1-80 Hz)")
+            f"(largest band RMS {result.table_max * 1e6:.3g} µm/s over 1-80 Hz)")
     return report(args.json, result.to_dict(), text, [("figure", args.plot)])
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from isolator.simulation.simulator import simulate
+    from isolator.simulation.simulator import Simulator
 
+    out = output_path(args.out, "--out", (".csv",)) if args.out else None
+    plot = figure_path(args.plot, "--plot")
     scenario = load_scenario(args.scenario)
+    forces = None
     if args.forces:
         from isolator.simulation.actuation import load_forces
-        from isolator.simulation.simulator import Simulator
 
-        response = Simulator(scenario, args.model).run(forces=load_forces(args.forces, scenario, key="--forces"))
-    else:
-        response = simulate(scenario, model=args.model)
-    if args.out:
-        response.to_csv(args.out)
-    plot = args.plot
+        forces = load_forces(args.forces, scenario, key="--forces")
+    check_run_memory(scenario)
     if plot is None and not args.json:
-        plot = Path(f"{scenario.name}.png")
+        plot = figure_path(Path(f"{scenario.name}.png"), "--plot")
+    response = Simulator(scenario, args.model).run(forces=forces)
+    if out:
+        response.to_csv(out)
     leveling = None
     if plot is not None:
         use_agg()
-        fig = response.plot()
-        fig.savefig(plot, dpi=120)
+        save_figure(response.plot(), plot)
         if response.pneumatic is not None:
-            leveling = plot.with_name(f"{plot.stem}-leveling{plot.suffix or '.png'}")
-            response.plot_leveling().savefig(leveling, dpi=120)
-    outputs = [("response table", args.out), ("figure", plot), ("pressures and heights", leveling)]
+            leveling = plot.with_name(f"{plot.stem}-leveling{plot.suffix}")
+            save_figure(response.plot_leveling(), leveling)
+    outputs = [("response table", out), ("figure", plot), ("pressures and heights", leveling)]
     return report(args.json, response.to_dict(), response.summary(), outputs)

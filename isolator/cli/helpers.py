@@ -1,16 +1,36 @@
-"""What the command-line modules of every package share: the scenario argument, reports, figures."""
+"""What the command-line modules of every package share: the scenario argument, output paths checked
+before any work, memory estimates, reports, figures."""
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
+import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
+from isolator.errors import ParameterError
 from isolator.scenario.reader import DEFAULT_SCENARIO
 
-__all__ = ["Handler", "report", "save_figure", "scenario_argument", "use_agg"]
+if TYPE_CHECKING:
+    from isolator.scenario.definitions import Scenario
+
+__all__ = [
+    "Handler",
+    "available_memory",
+    "check_memory",
+    "check_run_memory",
+    "count",
+    "figure_path",
+    "output_folder",
+    "output_path",
+    "report",
+    "save_figure",
+    "scenario_argument",
+    "use_agg",
+]
 
 #: a subcommand's handler: the parsed arguments in, the exit status out
 Handler = Callable[[argparse.Namespace], int]
@@ -22,11 +42,105 @@ def scenario_argument(parser: argparse.ArgumentParser, help_text: str | None = N
                         help=help_text or f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
 
 
+def count(text: str) -> int:
+    """An argparse type: a whole number, also written as ``1e3``."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'") from None
+    if not math.isfinite(value) or value != int(value):
+        raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'")
+    return int(value)
+
+
 def use_agg() -> None:
     """Draw figures without a display (files only)."""
     import matplotlib
 
     matplotlib.use("Agg")
+
+
+def output_folder(path: Path, option: str) -> Path:
+    """A folder to write into, made if missing; a :class:`ParameterError` naming ``option`` if it cannot be."""
+    if path.exists() and not path.is_dir():
+        raise ParameterError(f"{option}: '{path}' is a file, not a folder")
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"{option}: cannot make the folder '{path}' ({exc.strerror})") from None
+    if not os.access(path, os.W_OK | os.X_OK):
+        raise ParameterError(f"{option}: cannot write into the folder '{path}' (permission denied)")
+    return path
+
+
+def output_path(path: Path, option: str, suffixes: Sequence[str]) -> Path:
+    """A file to write, checked before any work: a known extension (case-insensitive), its folder made if
+    missing, writable. Every problem is a :class:`ParameterError` naming ``option``."""
+    if path.suffix.lower() not in suffixes:
+        got = f"'{path.suffix}'" if path.suffix else "none"
+        raise ParameterError(f"{option}: '{path}' has extension {got}; supported: {', '.join(suffixes)}")
+    if path.is_dir():
+        raise ParameterError(f"{option}: '{path}' is a folder, not a file")
+    parent = path.parent
+    for above in (parent, *parent.parents):  # the nearest existing ancestor must be a folder
+        if above.exists():
+            if not above.is_dir():
+                raise ParameterError(f"{option}: cannot write '{path}': '{above}' is a file, not a folder")
+            break
+    output_folder(parent, option)
+    if path.exists() and not os.access(path, os.W_OK):
+        raise ParameterError(f"{option}: cannot write '{path}' (permission denied)")
+    return path
+
+
+def figure_path(path: Path | None, option: str) -> Path | None:
+    """:func:`output_path` for a figure: an extension matplotlib writes."""
+    if path is None:
+        return None
+    from matplotlib.figure import Figure
+
+    formats = Figure().canvas.get_supported_filetypes()
+    return output_path(path, option, tuple(f".{ext}" for ext in sorted(formats)))
+
+
+def available_memory() -> int | None:
+    """Bytes of memory available to a new allocation (Linux ``MemAvailable``), None if unknown."""
+    try:
+        with open("/proc/meminfo") as handle:
+            for line in handle:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    try:
+        return int(os.sysconf("SC_AVPHYS_PAGES")) * int(os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):
+        return None
+
+
+def _gb(n: float) -> str:
+    return f"{n / 1e9:.3g} GB"
+
+
+def check_memory(needed: float, what: str, fix: str) -> None:
+    """Refuse up front what needs more memory than the machine has available, with the estimate.
+
+    ``what`` starts with the key or option it comes from (``--points: 1e+09 frequencies``)."""
+    have = available_memory()
+    if have is not None and needed > have:
+        raise ParameterError(f"{what} need about {_gb(needed)} of memory, more than the {_gb(have)} this machine "
+                             f"has available; {fix}")
+
+
+def check_run_memory(scenario: Scenario) -> None:
+    """Refuse a run whose output grid (``simulation.duration`` x ``simulation.sample_rate``) needs more
+    memory than the machine has: the states, the signals and the integrator's dense output per sample."""
+    sim = scenario.simulation
+    samples = sim.duration * sim.sample_rate + 1
+    states = 12 + 2 * len(scenario.carriages) + 4 * len(scenario.isolators) + len(scenario.actuators)
+    check_memory(samples * 8 * (6 * states + 24),
+                 f"simulation.duration x simulation.sample_rate: {sim.duration:g} s at {sim.sample_rate:g} Hz, "
+                 f"{samples:.3g} output samples,", "shorten the run or lower the sample rate")
 
 
 def save_figure(fig: Any, path: Path) -> None:
