@@ -35,6 +35,8 @@ from isolator import Scenario, scenario_from_dict
 settings.register_profile("ci", max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("thorough", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+# no "compiling the model ..." line on stderr: tests count the command's stderr lines (subprocesses inherit it)
+os.environ.setdefault("ISOLATOR_QUIET", "1")
 
 
 def corner_isolators(k: float = 5.7e5, c: float = 5.7e3, hs: float = 0.15) -> list[dict[str, Any]]:

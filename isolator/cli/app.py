@@ -100,7 +100,7 @@ def _error(message: str) -> int:
 
 def _summarise(caught: list[warnings.WarningMessage]) -> None:
     """One line per distinct warning; numpy's floating-point warnings summed up in one line."""
-    numeric = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+    numeric = [w for w in caught if issubclass(w.category, RuntimeWarning) and "encountered" in str(w.message)]
     for text in dict.fromkeys(str(w.message) for w in caught if w not in numeric):
         print(f"isolator: warning: {text}", file=sys.stderr)
     if numeric:

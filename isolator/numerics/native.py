@@ -2,7 +2,8 @@
 
 casadi generates C for a function; it is compiled once with the system C
 compiler into ``$ISOLATOR_CACHE`` (default ``~/.cache/isolator``) under a name
-derived from the source's hash, and loaded with ctypes. Calls pass numpy
+derived from the source's hash, and loaded with ctypes; while it compiles, one line on stderr says so
+(``ISOLATOR_QUIET=1`` silences it). Calls pass numpy
 buffers without copies and release the GIL, so threads run in parallel. When no
 compiler is available the casadi function itself is evaluated instead (slower,
 same numbers).
@@ -15,6 +16,7 @@ import hashlib
 import os
 import shutil
 import subprocess
+import sys
 import tempfile
 import threading
 import warnings
@@ -96,6 +98,7 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     target = folder / f"{name}-{digest}.so"
     with _LOCK:
         if not target.exists():
+            _announce(language)
             suffix = ".c" if language == "c" else ".cpp"
             src = folder / f"{name}-{digest}{suffix}"
             src.write_text(source)
@@ -113,6 +116,19 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
                     os.unlink(tmp_so)
                 src.unlink(missing_ok=True)
     return target
+
+
+_ANNOUNCED: set[str] = set()
+
+
+def _announce(language: str) -> None:
+    """Say on stderr that compiling is under way (it takes seconds): once per process and language, and
+    not with ``ISOLATOR_QUIET=1``."""
+    if language in _ANNOUNCED or os.environ.get("ISOLATOR_QUIET", "") not in ("", "0"):
+        return
+    _ANNOUNCED.add(language)
+    what = "the model for this structure" if language == "c" else "the integrator"
+    print(f"isolator: compiling {what} (first use, a few seconds)...", file=sys.stderr, flush=True)
 
 
 class NativeFunction:

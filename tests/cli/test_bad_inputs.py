@@ -167,3 +167,19 @@ def test_api_raises_only_isolator_errors() -> None:
     for call in calls:
         with pytest.raises(IsolatorError):
             call()
+
+
+def test_compiling_says_so_once(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
+                                capsys: pytest.CaptureFixture[str]) -> None:
+    from isolator.numerics import native
+
+    monkeypatch.setenv("ISOLATOR_CACHE", str(tmp_path))
+    monkeypatch.delenv("ISOLATOR_QUIET")
+    monkeypatch.setattr(native, "_ANNOUNCED", set())
+    native.compiled_library("probe", "int probe(void) { return 1; }\n")
+    native.compiled_library("probe2", "int probe2(void) { return 2; }\n")
+    assert capsys.readouterr().err == "isolator: compiling the model for this structure (first use, a few seconds)...\n"
+    monkeypatch.setenv("ISOLATOR_QUIET", "1")
+    monkeypatch.setattr(native, "_ANNOUNCED", set())
+    native.compiled_library("probe3", "int probe3(void) { return 3; }\n")
+    assert capsys.readouterr().err == ""
