@@ -306,8 +306,8 @@ def linearise(
     >>> lin.system.nstates
     12
     """
+    layout = ParameterLayout.of(scenario)  # checks a scenario built from the dataclasses, as the reader does
     q = rest_positions(scenario, positions, time)
-    layout = ParameterLayout.of(scenario)
     model = get_model(layout, "exact")
     p = layout.pack(scenario) if parameters is None else layout.checked(parameters, "parameters")
     eq = static_equilibrium(model, p, q, "in this rest configuration", check=check)

@@ -247,7 +247,8 @@ class ParameterLayout:
             raise ParameterError(f"{argument}: {expected}, got {type(p).__name__}") from None
         if array.shape != (self.size,):
             raise ParameterError(f"{argument}: {expected}, got shape {array.shape}")
-        self.check(array, lambda i: f"{argument}[{i}] ({self.names[i]})")
+        self.check(array, lambda i: f"{argument}[{i}] ({self.names[i]})",
+                   vector_key=lambda at, head: f"{argument}[{at[0]}:{at[-1] + 1}] ({head})")
         return array
 
     def with_changes(self, p: np.ndarray, changes: Mapping[str, float] | None, argument: str = "changes"
@@ -280,10 +281,12 @@ class ParameterLayout:
         self.check(out, lambda i: f"{argument}[{self.names[i]!r}]", changed)
         return out
 
-    def check(self, p: np.ndarray, key: Callable[[int], str], entries: Sequence[int] | None = None) -> None:
+    def check(self, p: np.ndarray, key: Callable[[int], str], entries: Sequence[int] | None = None,
+              vector_key: Callable[[list[int], str], str] | None = None) -> None:
         """Entries of ``p`` (default all) by their rules, and what they make together: unit directions,
-        the inertia's triangle, the isolators off one line, damping chambers as the model was built."""
-        check_parameters(self.names, p, key, ParameterError, entries)
+        the inertia's triangle, the isolators off one line, damping chambers as the model was built
+        (errors start with ``key(i)``, or ``vector_key(entries, name)`` for a whole vector)."""
+        check_parameters(self.names, p, key, ParameterError, entries, vector_key)
         which = set(range(self.size) if entries is None else entries)
         if self.pneumatic is not None:
             for i, damped in enumerate(self.pneumatic.chambers):

@@ -220,6 +220,7 @@ def check_parameters(
     key: Callable[[int], str],
     error: type[IsolatorError],
     entries: Sequence[int] | None = None,
+    vector_key: Callable[[list[int], str], str] | None = None,
 ) -> None:
     """Check named parameter values by :data:`RULES`, entry by entry and as vectors.
 
@@ -234,6 +235,9 @@ def check_parameters(
         ``ParameterError`` for arguments, ``ScenarioError`` for scenario content.
     entries : sequence of int, optional
         Only these entries (and the vectors they are part of); default all.
+    vector_key : callable, optional
+        The key an error about a whole vector (its entries, its name) starts with; default: ``key`` of the
+        first entry given, then the vector's name.
     """
     which = range(len(names)) if entries is None else sorted(set(entries))
     chosen = set(which)
@@ -251,7 +255,8 @@ def check_parameters(
             continue
         problem = vector_problem(head, [float(values[i]) for i in members])
         if problem is not None:
-            raise error(f"{key(touched[0])}: {head} {problem}")
+            raise error(f"{vector_key(members, head)}: {problem}" if vector_key is not None
+                        else f"{key(touched[0])}: {head} {problem}")
 
 
 def _vector(key: str, values: Any) -> Iterator[tuple[str, object]]:

@@ -171,8 +171,8 @@ def set_path(data: dict[str, Any], path: str, value: Any) -> dict[str, Any]:
 
 
 @st.composite
-def broken_scenarios(draw: st.DrawFn) -> tuple[dict[str, Any], str, Any]:
-    """A valid scenario with one field broken: (the dictionary, the broken key path, the bad value)."""
+def broken_scenarios(draw: st.DrawFn) -> tuple[dict[str, Any], str, Any, dict[str, Any]]:
+    """A valid scenario with one field broken: (the dictionary, the broken key path, the bad value, the valid one)."""
     data = draw(scenario_dicts(min_carriages=1))
     if draw(st.booleans()):
         template, values = draw(st.sampled_from(NUMBER_BREAKS))
@@ -183,4 +183,4 @@ def broken_scenarios(draw: st.DrawFn) -> tuple[dict[str, Any], str, Any]:
                            draw(st.integers(0, len(data["carriages"]) - 1)), j=draw(st.integers(0, 2)))
     if path == "gravity":
         data["gravity"] = 9.81
-    return set_path(data, path, value), path, value
+    return set_path(data, path, value), path, value, data
