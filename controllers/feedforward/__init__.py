@@ -21,8 +21,9 @@ order in the small rotations.
 Modules: :mod:`.wrench` (the reaction and allocation wrenches), :mod:`.path`
 (the quasi-static path and the demand along it), :mod:`.allocation` (the
 instantaneous allocation), :mod:`.optimal` (command histories optimised
-through the time-varying model, with the actuators' lag and limits),
-:mod:`.comparison` (passive against controlled runs).
+through the time-varying model, with the actuators' lag and limits and a
+pneumatic table's chamber pressures; its model along the path in
+:mod:`.optimal_stages`), :mod:`.comparison` (passive against controlled runs).
 """
 
 from __future__ import annotations
@@ -30,11 +31,12 @@ from __future__ import annotations
 from .allocation import Feedforward, feedforward_allocation
 from .comparison import FeedforwardComparison, compare_feedforward, path_deviation, settling_in_band
 from .optimal import OptimalSettings, feedforward_optimal
-from .path import QS_SPACING, PathDemand, QuasiStaticPath, path_demand, quasi_static_path
+from .path import QS_SPACING, AirDemand, PathDemand, QuasiStaticPath, path_demand, quasi_static_path
 from .wrench import allocation_matrix, carriage_inertia_wrench, reaction_wrench
 
 __all__ = [
     "QS_SPACING",
+    "AirDemand",
     "Feedforward",
     "FeedforwardComparison",
     "OptimalSettings",

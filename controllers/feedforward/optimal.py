@@ -12,7 +12,12 @@ deviation ``e`` from its quasi-static path through the exact model linearised
 ``M(t) e'' + C(t) e' + K(t) e = B(t) f(t) - w(t)``
 
 with ``w`` the cancelling wrench and ``B`` the actuators' allocation (both from
-:func:`controllers.feedforward.path.path_demand`). The quadratic programme (solved
+:func:`controllers.feedforward.path.path_demand`). Pneumatic tables add the
+chamber pressures' deviation ``p`` from the path's quasi-static pressures
+(each group's air as at the start) to the state: ``+ Kp p`` on the left and
+``p' = Pd e + Pv e' + Pp p + r(t)``, valves closed, with ``r`` what moving
+along the path leaves (:class:`controllers.feedforward.path.AirDemand`;
+:mod:`.optimal_stages`). The quadratic programme (solved
 in multiple-shooting form, one RK4 step per knot interval; casadi gives each
 interval's Jacobians, Clarabel solves the sparse QP) minimises the deviation,
 normalised per signal by the passive run's, plus the vibration left at the end of the window, within ``max_force`` and
@@ -31,7 +36,7 @@ import casadi as ca
 import numpy as np
 from scipy import sparse
 
-from isolator.analysis.linear import LinearModel, linearise
+from isolator.analysis.linear import linearise
 from isolator.errors import OptimisationError, ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.actuation import ForceHistory
@@ -40,7 +45,8 @@ from isolator.simulation.time_grid import grid_breakpoints
 
 from .allocation import Feedforward
 from .comparison import path_deviation
-from .path import QuasiStaticPath, path_demand, quasi_static_path
+from .optimal_stages import interval_function, stage_data
+from .path import path_demand, quasi_static_path
 
 __all__ = ["OptimalSettings", "feedforward_optimal"]
 
@@ -59,7 +65,9 @@ class OptimalSettings:
     tail : float
         How long after the last carriage stops the actuators may still act [s].
     terminal_weight : float
-        Weight of the vibration left at the end of the window, against the
+        Weight of the vibration left at the end of the window (the table's
+        deviation and its rate; not a pneumatic table's pressures, whose slow
+        part is the groups' air, which the runs are measured about), against the
         time integral of the squared normalised deviation [s].
     effort_weight : float
         Weight of the squared forces over ``max_force`` (regularisation).
@@ -103,58 +111,6 @@ def _knot_times(scenario: Scenario, settings: OptimalSettings) -> np.ndarray:
     return np.union1d(t[keep], bps)
 
 
-def _stage_data(scenario: Scenario, lin: LinearModel, path: QuasiStaticPath, knots: np.ndarray) -> np.ndarray:
-    """Per interval and RK4 stage (start, middle, end): ``M^-1 K``, ``M^-1 C``, ``M^-1 B``, ``M^-1 w``."""
-    h = np.diff(knots)
-    t = np.column_stack([knots[:-1], knots[:-1] + h / 2, knots[1:]]).ravel()
-    sides = np.repeat(knots[:-1] + h / 2, 3)
-    demand = path_demand(scenario, lin, path, t, sides)
-    inv_m = np.linalg.inv(demand.mass)
-    blocks = [inv_m @ demand.stiffness, inv_m @ demand.damping, inv_m @ demand.allocation,
-              (inv_m @ demand.wrench[:, :, None])[..., 0]]
-    n = h.size
-    flat = np.hstack([b.reshape(t.size, -1, order="F") for b in blocks])  # column-major per stage
-    return flat.reshape(n, 3 * flat.shape[1])
-
-
-def _interval_function(n_a: int, tau: np.ndarray, lagged: list[int]) -> ca.Function:
-    """One knot interval: RK4 on the deviation with the exact lag of a linear command."""
-    e = ca.SX.sym("e", 12)
-    fl = ca.SX.sym("f", len(lagged))
-    u0, u1 = ca.SX.sym("u0", n_a), ca.SX.sym("u1", n_a)
-    h = ca.SX.sym("h")
-    width = 36 + 36 + 6 * n_a + 6
-    data = ca.SX.sym("d", 3 * width)
-    slope = (u1 - u0) / h
-
-    def applied(s: ca.SX | float) -> ca.SX:
-        f = u0 + slope * s
-        if not lagged:
-            return f
-        parts = [f[k] for k in range(n_a)]
-        for j, k in enumerate(lagged):
-            parts[k] = u0[k] + slope[k] * s + (fl[j] - u0[k] + slope[k] * tau[j]) * ca.exp(-s / tau[j]) \
-                - slope[k] * tau[j]
-        return ca.vertcat(*parts)
-
-    def rates(x: ca.SX, stage: int, s: ca.SX | float) -> ca.SX:
-        d = data[stage * width:(stage + 1) * width]
-        mk = ca.reshape(d[0:36], 6, 6)
-        mc = ca.reshape(d[36:72], 6, 6)
-        mb = ca.reshape(d[72:72 + 6 * n_a], 6, n_a)
-        mw = d[72 + 6 * n_a:]
-        acc = mb @ applied(s) - mw - mc @ x[6:] - mk @ x[:6]
-        return ca.vertcat(x[6:], acc)
-
-    k1 = rates(e, 0, 0)
-    k2 = rates(e + h / 2 * k1, 1, h / 2)
-    k3 = rates(e + h / 2 * k2, 1, h / 2)
-    k4 = rates(e + h * k3, 2, h)
-    e_next = e + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
-    f_next = applied(h)[lagged] if lagged else ca.SX.zeros(0, 1)
-    return ca.Function("interval", [e, fl, u0, u1, h, data], [e_next, f_next])
-
-
 @dataclass(frozen=True)
 class _QP:
     """``min 1/2 x' P x`` s.t. ``A x = b`` and ``lower <= C x <= upper``, in scaled variables ``x = D^-1 z``."""
@@ -179,22 +135,26 @@ def _assemble(
     lag_scale: np.ndarray,
     rates: list[float | None],
     settings: OptimalSettings,
+    air_scale: np.ndarray | None = None,
 ) -> _QP:
     """The sparse QP in the knot-wise variables ``z_k = [e_k, f_k, u_k]``, k = 0 .. n.
 
     The dynamics are affine, so each interval's map is its Jacobian (casadi,
     evaluated for all intervals in one call) plus an offset. Variables and
     dynamics rows are scaled so that the passive run's deviation and the
-    actuators' ``max_force`` are 1.
+    actuators' ``max_force`` are 1 (pneumatic tables: the chamber pressures'
+    deviations by ``air_scale`` [Pa]).
     """
     n = h.size
     n_a = cap.size
-    nx = 12 + n_lag
+    air_scale = np.zeros(0) if air_scale is None else air_scale
+    n_dev = 12 + air_scale.size  # the deviation: d, d', then the chamber pressures
+    nx = n_dev + n_lag
     m = nx + n_a
     decision = ca.SX.sym("z", nx + 2 * n_a)
     step = ca.SX.sym("h")
     table = ca.SX.sym("d", interval.size_in(5)[0])
-    parts = ca.vertsplit(decision, [0, 12, nx, nx + n_a, nx + 2 * n_a])
+    parts = ca.vertsplit(decision, [0, n_dev, nx, nx + n_a, nx + 2 * n_a])
     outs = ca.vertcat(*interval(*parts, step, table))
     jac = ca.Function("interval_jacobian", [decision, step, table], [ca.jacobian(outs, decision), outs])
     jacs, offsets = jac.map(n, "serial")(np.zeros((decision.shape[0], n)), h[None, :], data.T)
@@ -214,7 +174,7 @@ def _assemble(
     fixed = np.concatenate([np.arange(nx), n * m + nx + np.arange(n_a)])
     pin = sparse.csc_matrix((np.ones(fixed.size), (np.arange(fixed.size), fixed)), shape=(fixed.size, (n + 1) * m))
     # scaling: z = D x, rows of the dynamics by the state scales
-    state_scale = np.concatenate([1 / scale, 1 / (scale * omega), lag_scale])
+    state_scale = np.concatenate([1 / scale, 1 / (scale * omega), air_scale, lag_scale])
     d = np.tile(np.concatenate([state_scale, cap]), n + 1)
     row_scale = np.tile(1 / state_scale, n)
     a = sparse.vstack([sparse.diags(row_scale) @ dynamics, pin]) @ sparse.diags(d)
@@ -240,7 +200,7 @@ def _assemble(
     weights = np.concatenate([[h[0] / 2], (h[:-1] + h[1:]) / 2, [h[-1] / 2]])
     diag = np.zeros((n + 1, m))
     diag[:, :6] = 2 * weights[:, None]
-    diag[-1, :12] += 2 * settings.terminal_weight
+    diag[-1, :12] += 2 * settings.terminal_weight  # the table's motion; the air's slow part is its own rest
     diag[:, nx:] = 2 * settings.effort_weight * weights[:, None]
     return _QP(sparse.diags(diag.ravel()).tocsc(), a.tocsc(), b, sparse.vstack(rows_c).tocsc(),
                np.concatenate(lower), np.concatenate(upper), d)
@@ -296,11 +256,6 @@ def feedforward_optimal(
     settings = settings or OptimalSettings()
     if not scenario.actuators:
         raise ScenarioError("actuators: the scenario has no [[actuators]] for feedforward")
-    if scenario.is_pneumatic:
-        raise ScenarioError(
-            "isolators: optimal feedforward models spring-damper isolators (its QP has no chamber pressures "
-            "yet); use the allocation method for pneumatic tables"
-        )
     began = time.perf_counter()
     acts = scenario.actuators
     n_a = len(acts)
@@ -309,10 +264,11 @@ def feedforward_optimal(
     n = h.size
     lin = linearise(scenario)
     path = quasi_static_path(scenario)
-    data = _stage_data(scenario, lin, path, knots)
+    data = stage_data(scenario, lin, path, knots)
     lagged = [k for k, a in enumerate(acts) if a.bandwidth is not None]
     tau = np.array([1.0 / (2 * math.pi * acts[k].bandwidth) for k in lagged])  # type: ignore[operator]
-    interval = _interval_function(n_a, tau, lagged)
+    n_air = 0 if lin.air is None else len(lin.air.names)
+    interval = interval_function(n_a, tau, lagged, n_air)
 
     # normalise each signal by the passive run's deviation from the quasi-static path
     passive = Simulator(scenario).run()
@@ -321,15 +277,20 @@ def feedforward_optimal(
     floor = np.repeat([1e-3 * max(deviation[:3].max(), 1e-12), 1e-3 * max(deviation[3:].max(), 1e-12)], 3)
     scale = 1.0 / np.maximum(deviation, floor)
     omega = float(np.median(np.abs(lin.eigenvalues)))
+    air_scale = None
+    if n_air:  # the chamber pressures by the passive run's deviation from the path's [Pa]
+        quasi_static = lin.equilibrium.state[13:] + path.pressures(passive.t)
+        air_dev = np.max(np.abs(passive.states[:, 13:] - quasi_static), axis=0)
+        air_scale = np.maximum(air_dev, 1e-3 * max(air_dev.max(), 1e-6))
 
     cap = np.array([a.max_force for a in acts])
     qp = _assemble(interval, len(lagged), h, data, scale, omega, cap, cap[lagged], [a.max_rate for a in acts],
-                   settings)
+                   settings, air_scale)
     if progress:
         print(f"  optimal feedforward: {n + 1} knots over {knots[-1]:.3g} s, {qp.p.shape[0]} variables ...",
               flush=True)
     z, status, iterations, ok = _solve(qp, settings)
-    forces = z.reshape(n + 1, -1)[:, 12 + len(lagged):].T
+    forces = z.reshape(n + 1, -1)[:, 12 + n_air + len(lagged):].T
     n_vars = int(qp.p.shape[0])
     elapsed = time.perf_counter() - began
     info = {"status": status, "iterations": iterations,

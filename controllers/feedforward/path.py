@@ -28,7 +28,7 @@ from isolator.simulation.simulator import Simulator
 
 from .wrench import allocation_matrix, reaction_wrench
 
-__all__ = ["QS_SPACING", "PathDemand", "QuasiStaticPath", "path_demand", "quasi_static_path"]
+__all__ = ["QS_SPACING", "AirDemand", "PathDemand", "QuasiStaticPath", "path_demand", "quasi_static_path"]
 
 #: spacing of the static equilibria that trace the quasi-static path [s]
 QS_SPACING = 0.02
@@ -37,6 +37,22 @@ QS_SPACING = 0.02
 def _orientations(rot0: np.ndarray, rotation_vectors: np.ndarray) -> np.ndarray:
     """``exp([phi]x) R0`` for rotation vectors (N, 3), shape (N, 3, 3)."""
     return Rotation.from_rotvec(rotation_vectors).as_matrix() @ rot0
+
+
+def _piecewise(segments: list[tuple[float, float, CubicSpline]], t: np.ndarray, sel: np.ndarray, nu: int,
+               width: int) -> np.ndarray:
+    """Per-stretch splines at ``t`` (stretch picked by ``sel``), held before the first and after the last."""
+    out = np.zeros((t.size, width))
+    for k, (a, b, spline) in enumerate(segments):
+        last = k == len(segments) - 1
+        mask = (sel >= a) & ((sel < b) | last)
+        if k == 0:
+            mask |= sel < a
+        if mask.any():
+            out[mask] = spline(np.clip(t[mask], a, b), nu)
+            if nu > 0:  # held before the first and after the last stretch
+                out[mask & ((t < a) | (t > b))] = 0.0
+    return out
 
 
 @dataclass(frozen=True)
@@ -49,25 +65,29 @@ class QuasiStaticPath:
         Per stretch between profile breakpoints: start, end [s] and a spline of
         the six signals (displacement [m], rotation vector [rad]) from the
         initial equilibrium.
+    air : list of (float, float, CubicSpline), optional
+        Pneumatic tables: the same for the chamber pressures' change from the
+        initial equilibrium [Pa] (the model's pressure states, in order), the
+        air each group holds at the start kept.
     """
 
     segments: list[tuple[float, float, CubicSpline]]
+    air: list[tuple[float, float, CubicSpline]] | None = None
 
     def __call__(self, t: np.ndarray, piece_time: np.ndarray | None = None, nu: int = 0) -> np.ndarray:
         """Signals (nu = 0) or their ``nu``-th time derivative at ``t``, shape (N, 6)."""
         t = np.asarray(t, dtype=float)
         sel = t if piece_time is None else np.asarray(piece_time, dtype=float)
-        out = np.zeros((t.size, 6))
-        for k, (a, b, spline) in enumerate(self.segments):
-            last = k == len(self.segments) - 1
-            mask = (sel >= a) & ((sel < b) | last)
-            if k == 0:
-                mask |= sel < a
-            if mask.any():
-                out[mask] = spline(np.clip(t[mask], a, b), nu)
-                if nu > 0:  # held before the first and after the last stretch
-                    out[mask & ((t < a) | (t > b))] = 0.0
-        return out
+        return _piecewise(self.segments, t, sel, nu, 6)
+
+    def pressures(self, t: np.ndarray, piece_time: np.ndarray | None = None, nu: int = 0) -> np.ndarray:
+        """Chamber pressures' change from the start [Pa] (nu = 0) or its ``nu``-th time derivative,
+        shape (N, n_air); (N, 0) for spring-damper tables."""
+        t = np.asarray(t, dtype=float)
+        sel = t if piece_time is None else np.asarray(piece_time, dtype=float)
+        if self.air is None:
+            return np.zeros((t.size, 0))
+        return _piecewise(self.air, t, sel, nu, self.air[0][2].c.shape[-1])
 
 
 def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiStaticPath:
@@ -86,7 +106,7 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
     t_end = scenario.simulation.duration
     stop = scenario.stop_time if math.isfinite(scenario.stop_time) else t_end
     cuts = sorted({0.0, *[b for b in scenario.breakpoints if 0 < b < min(stop, t_end)], min(stop, t_end)})
-    segments = []
+    segments, pressures = [], []
     for a, b in itertools.pairwise(cuts):
         if b <= a:
             continue
@@ -100,9 +120,51 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
             states = np.array([closed_rest_states(model, p, qk, air)[0] for qk in q])
         signals = table_signals(states, start.state).T
         segments.append((a, b, CubicSpline(knots, signals, axis=0)))
+        if air is not None:
+            pressures.append((a, b, CubicSpline(knots, states[:, 13:] - start.state[13:], axis=0)))
     if not segments:  # nothing moves
         segments.append((0.0, t_end, CubicSpline([0.0, max(t_end, 1.0)], np.zeros((2, 6)), axis=0)))
-    return QuasiStaticPath(segments)
+        if air is not None:
+            width = start.state.size - 13
+            pressures.append((0.0, t_end, CubicSpline([0.0, max(t_end, 1.0)], np.zeros((2, width)), axis=0)))
+    return QuasiStaticPath(segments, pressures if air is not None else None)
+
+
+@dataclass(frozen=True)
+class AirDemand:
+    """A pneumatic table's chamber pressures along its quasi-static path (valves closed).
+
+    With ``e`` the pressures' deviation from the path's quasi-static pressures
+    ``p_qs`` [Pa], the force balance gains ``+ Kp e`` and
+
+    ``e' = Pd d + Pv d' + Pp e + rate``,  ``rate = Pv z_qs' - p_qs'``:
+
+    moving the table along its path at ``z_qs'`` squeezes the chambers at once
+    (``Pv z_qs'``; at rest on the path the pressures do not change), while the
+    quasi-static pressures, every group's chambers at one pressure, change only
+    at ``p_qs'``; the difference drives the air off the path.
+
+    ``Pp`` is taken at the path's rate: a chamber's squeeze ``-n p A s'/V`` is
+    proportional to its pressure, so about the moving path ``de'/de`` gains
+    ``diag(Pv z_qs' / p_qs)`` (at rest it has not). Small beside the orifices'
+    and lines' flows, but the groups' air is a marginal mode: left out, the
+    linear model's air drifts over a move (tens of Pa over the tests' 0.8 m
+    stroke on air springs, a micrometre or two of heave).
+
+    Attributes
+    ----------
+    kp : ndarray (N, 6, n_air)
+    pd, pv : ndarray (N, n_air, 6)
+    pp : ndarray (N, n_air, n_air)
+    rate : ndarray (N, n_air)
+        ``r`` [Pa/s]
+    """
+
+    kp: np.ndarray
+    pd: np.ndarray
+    pv: np.ndarray
+    pp: np.ndarray
+    rate: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -119,6 +181,9 @@ class PathDemand:
     mass, damping, stiffness : ndarray (N, 6, 6)
         The exact model linearised on the path, the carriages where (and as
         fast as) they are: the coupling terms change as a carriage crosses.
+    air : AirDemand, optional
+        Pneumatic tables: the chamber pressures' part, linearised about the
+        path's quasi-static pressures.
     """
 
     wrench: np.ndarray
@@ -126,12 +191,16 @@ class PathDemand:
     mass: np.ndarray
     damping: np.ndarray
     stiffness: np.ndarray
+    air: AirDemand | None = None
 
 
 def path_demand(
     scenario: Scenario, lin: LinearModel, path: QuasiStaticPath, times: np.ndarray, sides: np.ndarray
 ) -> PathDemand:
     """The cancelling wrench and the linearised table along the quasi-static path.
+
+    Pneumatic tables are linearised about the path's quasi-static pressures
+    (each group's air as at the start).
 
     Parameters
     ----------
@@ -148,15 +217,33 @@ def path_demand(
     for i, carriage in enumerate(scenario.carriages):
         q, v, _ = carriage.profile.evaluate(times, sides)
         c[i], c[n + i] = q, v
+    gauge = np.repeat(lin.equilibrium.pose[6:, None], times.size, axis=1)
+    if layout.pneumatic is not None and path.air is not None:  # every group's chambers at one pressure
+        gauge = gauge + path.pressures(times, sides)[:, [g[0] for g in layout.pneumatic.groups]].T
     pose = np.vstack([lin.equilibrium.pose[:3, None] + signals[:, :3].T,
-                      Rotation.from_matrix(rot).as_euler("ZYX")[:, ::-1].T,
-                      np.repeat(lin.equilibrium.pose[6:, None], times.size, axis=1)])  # pneumatic: rest pressures
+                      Rotation.from_matrix(rot).as_euler("ZYX")[:, ::-1].T, gauge])
     mapped = build_linearisation(layout).map(times.size, "serial")
-    mass, damping, stiffness = (
-        np.asarray(m, dtype=float).reshape(6, times.size, 6).transpose(1, 0, 2)
-        for m in mapped(pose, c, layout.pack(scenario))[:3]
-    )
+    mats = [np.asarray(m, dtype=float) for m in mapped(pose, c, layout.pack(scenario))]
+    mass, damping, stiffness = (_stacked(m, times.size) for m in mats[:3])
     accel, rate = path(times, sides, 2), path(times, sides, 1)
     wrench = reaction_wrench(scenario, times, sides, rot)
     wrench += np.einsum("nij,nj->ni", mass, accel) + np.einsum("nij,nj->ni", damping, rate)
-    return PathDemand(wrench, allocation_matrix(scenario, rot), mass, damping, stiffness)
+    air = None
+    if layout.pneumatic is not None:
+        kp, pd, pv, pp = (_stacked(m, times.size) for m in mats[7:11])
+        squeeze = np.einsum("nij,nj->ni", pv, rate)  # Pv z_qs': the chambers squeezed at the path's rate
+        pressure_rate = squeeze.copy()
+        pressures = lin.equilibrium.state[None, 13:]
+        if path.air is not None:
+            pressure_rate -= path.pressures(times, sides, 1)
+            pressures = pressures + path.pressures(times, sides)
+        # the squeeze term -n p A s'/V is proportional to the chamber's pressure: at the path's rate it adds
+        # Pv z_qs' / p to Pp (without it the groups' air drifts in the linear model)
+        pp = pp + np.einsum("ni,ij->nij", squeeze / pressures, np.eye(pp.shape[1]))
+        air = AirDemand(kp, pd, pv, pp, pressure_rate)
+    return PathDemand(wrench, allocation_matrix(scenario, rot), mass, damping, stiffness, air)
+
+
+def _stacked(mapped: np.ndarray, count: int) -> np.ndarray:
+    """A mapped casadi output (rows, count * columns) as (count, rows, columns)."""
+    return mapped.reshape(mapped.shape[0], count, -1).transpose(1, 0, 2)

@@ -11,7 +11,8 @@ from controllers import profiles as po
 from controllers.feedforward import compare_feedforward, feedforward_allocation, feedforward_optimal
 from controllers.profiles import ModelVariant
 from controllers.profiles.transcription import variant_data
-from isolator import Scenario, ScenarioError, Simulator, linearise, load_scenario, scenario_from_dict, transmissibility
+from isolator import Scenario, Simulator, linearise, load_scenario, scenario_from_dict, transmissibility
+from isolator.scenario.definitions import SIGNALS
 from isolator.scenario.pneumatic import PneumaticIsolator
 
 NOMINAL = (ModelVariant(),)
@@ -97,5 +98,18 @@ def test_feedforward_on_a_pneumatic_table_is_measured_about_each_runs_air():
     reduction = comparison.reduction_db()
     assert reduction["x"] < -20.0  # the carriage's reaction along x is cancelled
     assert reduction["ry"] < -6.0
-    with pytest.raises(ScenarioError, match="optimal feedforward models spring-damper isolators"):
-        feedforward_optimal(s)
+    # the optimal feedforward carries the chamber pressures in its QP: it cancels what the air does as the
+    # table follows its path (about -56, -12, -45 dB in x, z, ry here, valves leveling during the move;
+    # without the chamber states it does no better than the allocation: -30, -3, -10 dB)
+    optimal = compare_feedforward(s, feedforward_optimal(s))
+    assert optimal.feedforward.info["status"] in ("Solved", "AlmostSolved")
+    better = optimal.reduction_db()
+    passive = optimal.deviation_peak("passive")
+    largest = {"r": max(passive[k] for k in ("rx", "ry", "rz")), "t": max(passive[k] for k in "xyz")}
+    moving = [k for k in SIGNALS if passive[k] > 1e-3 * largest["r" if k.startswith("r") else "t"]]
+    assert set(moving) == {"x", "z", "ry"}
+    for k in moving:
+        assert better[k] <= reduction[k], (k, better[k], reduction[k])
+    assert better["x"] < -45.0
+    assert better["ry"] < -38.0
+    assert better["z"] < -8.0
