@@ -108,7 +108,7 @@ class FeedforwardComparison:
         ]
         for k in SIGNALS:
             sp, sc = self.settling["passive"][k], self.settling["controlled"][k]
-            unit = "urad" if k.startswith("r") else "um"
+            unit = "µrad" if k.startswith("r") else "µm"
             lines.append(
                 f"{k:>6}  {dp[k] * 1e6:>7.4g} {unit:<4}  {dc[k] * 1e6:>7.4g} {unit:<4}  {red[k]:>6.1f} dB  "
                 f"{'-' if sp is None else f'{sp:.4g} s':>16}  {'-' if sc is None else f'{sc:.4g} s':>8}"

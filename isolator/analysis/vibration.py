@@ -1,7 +1,7 @@
 """Vibration criteria: the table's one-third-octave velocity from a floor spectrum, and its VC class.
 
-The generic vibration criterion curves (VC-A 50 um/s, halving per letter to
-VC-G 0.78 um/s) are one-third-octave band RMS velocities that a point must
+The generic vibration criterion curves (VC-A 50 µm/s, halving per letter to
+VC-G 0.78 µm/s) are one-third-octave band RMS velocities that a point must
 stay below in every band from 1 to 80 Hz. Here the floor's spectrum (band
 velocities or a velocity PSD per world axis) is passed through the
 linearised table: the table's velocity PSD in direction ``d`` at a point is
@@ -139,7 +139,7 @@ class VibrationCriteria:
         ax.set_ylim(bottom, top)
         ax.set_xlim(self.centres[0] / 1.2, self.centres[-1] * 1.4)
         ax.set_xlabel("one-third-octave band centre frequency [Hz]")
-        ax.set_ylabel("RMS velocity in the band [um/s]")
+        ax.set_ylabel("RMS velocity in the band [µm/s]")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(fontsize=8, loc="lower left")
         ax.set_title(title or f"Vibration criteria: floor {self.floor_class}, table {self.table_class}")
