@@ -174,7 +174,7 @@ def _plot_response(study: ProfileStudy) -> None:
 def _plot_times(study: ProfileStudy) -> None:
     names = list(study.methods)
     x = np.arange(len(names))
-    fig, ax = plt.subplots(figsize=(12, 5))
+    fig, (ax, bx) = plt.subplots(1, 2, figsize=(14, 5), width_ratios=(3, 2))
     moves = [study.methods[n].move_time for n in names]
     settles = [nan_if_none(study.methods[n].settling_time_max) for n in names]
     ax.bar(x, moves, color="tab:blue", label="move")
@@ -184,11 +184,16 @@ def _plot_times(study: ProfileStudy) -> None:
                 fontsize=8)
     ax.set_xticks(x, names, rotation=20)
     ax.set_ylabel("time from the move's command [s]")
-    ax.set_ylim(min(moves) * 0.9, max(m + (0 if np.isnan(s) else s) for m, s in zip(moves, settles,
-                                                                                         strict=True)) * 1.08)
-    ax.set_title("Cycle time = move + 5 % settling, per profile method (nominal model)")
-    ax.legend()
-    ax.grid(True, axis="y", alpha=0.3)
+    ax.set_ylim(0, max(m + (0 if np.isnan(s) else s) for m, s in zip(moves, settles, strict=True)) * 1.12)
+    ax.set_title("Cycle time = move + 5 % settling (nominal model)")
+    ax.legend(loc="lower right")
+    bx.bar(x, settles, color="tab:red")
+    bx.set_xticks(x, names, rotation=20)
+    bx.set_ylabel("5 % settling time after the stop [s]")
+    bx.set_ylim(0, max((v for v in settles if not np.isnan(v)), default=1.0) * 1.12 or 1.0)
+    bx.set_title("Settling alone")
+    for axis in (ax, bx):
+        axis.grid(True, axis="y", alpha=0.3)
     fig.tight_layout()
     save_figure(fig, study.folder / "times.png")
 
