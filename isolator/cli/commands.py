@@ -134,6 +134,8 @@ def _modes(args: argparse.Namespace) -> int:
     figure_path(args.plot, "--plot")
     figure_path(args.travel, "--travel")
     scenario, lin = _linearised(args)
+    if args.travel and not scenario.carriages:
+        raise ParameterError(f"--travel: the scenario '{scenario.name}' has no [[carriages]] to travel")
     result = modes(lin)
     if args.plot:
         save_figure(result.plot(title=f"Modes of {scenario.name}"), args.plot)

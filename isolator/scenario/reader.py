@@ -6,6 +6,7 @@ with the key path, for example ``carriages[1].profile.acceleration: must be > 0`
 
 from __future__ import annotations
 
+import difflib
 from collections.abc import Mapping
 from importlib import resources
 from pathlib import Path
@@ -72,8 +73,9 @@ def resolve_scenario_path(spec: str | Path | None) -> Path:
     name = path.name[:-5] if path.name.endswith(".toml") else path.name
     if name in bundled and not path.exists():
         return bundled[name]
-    known = ", ".join(sorted(bundled))
-    raise ScenarioError(f"{spec}: no such scenario file (bundled scenarios: {known})")
+    close = difflib.get_close_matches(name, sorted(bundled), n=1, cutoff=0.8)
+    hint = f"did you mean '{close[0]}'? " if close else ""
+    raise ScenarioError(f"{spec}: no such scenario file ({hint}bundled scenarios: {', '.join(sorted(bundled))})")
 
 
 def load_scenario(spec: str | Path | None = None) -> Scenario:

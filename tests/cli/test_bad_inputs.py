@@ -132,6 +132,9 @@ def _options(tmp: Path) -> list[tuple[list[str], tuple[str, ...]]]:
         (["study", "tradeoff", "--out", str(tmp / "s"), "--frequency", "nan"], ("--frequency",)),
         (["optimise-profile", base, "--max-move-time-increase", "-1"], ("max_move_time_increase",)),
         ([], ("COMMAND", "isolator --help")),
+        (["simulate", "paper-table-3-3"], ("paper-table-3-3: no such scenario", "did you mean 'paper-table-3-2'?")),
+        (["modes", base, "--travel", str(tmp / "t.png")], ("--travel", "no [[carriages]]")),
+        (["simulate", base, "--bogus"], ("--bogus", "isolator simulate --help")),
     ]
 
 
