@@ -114,7 +114,7 @@ class DenseStepper:
         signals : ndarray (samples - 1, 6)
         states : ndarray (samples - 1, n_states)
         """
-        signals, _, polynomials = self.run_slots(x0, plan, inputs, p, reference, with_states=True)
+        signals, _, _, polynomials = self.run_slots(x0, plan, inputs, p, reference, with_states=True)
         assert polynomials is not None
         return signals[plan.sample_slots], self.states(plan, polynomials)
 
@@ -126,7 +126,8 @@ class DenseStepper:
         p: np.ndarray,
         reference: np.ndarray,
         with_states: bool = False,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        final: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """One run, or ``lanes`` runs sharing ``plan`` and ``inputs``, before the samples are picked out.
 
         Parameters
@@ -138,31 +139,40 @@ class DenseStepper:
             As for :meth:`run`.
         with_states : bool
             Also return each step's dense-output polynomial.
+        final : ndarray (6,), optional
+            The target the deviations are measured from (``(lanes, 6)`` for stacked runs; default 0).
 
         Returns
         -------
         signals : ndarray (plan.steps x per_step, 6)
-            At every step's used sample slots (``plan.sample_slots`` picks the samples out;
-            the unused slots hold no values).
+            At every step's used slots (``plan.sample_slots`` picks the samples out, the first
+            ``plan.probes`` slots of a step are its probes; the unused slots hold no values).
         peaks : ndarray (plan.steps, 6)
-            max |signal| over each step's samples (0 for a step without one; NaN propagates).
+            max |signal| over each step's probes (its samples for a plan without probes;
+            0 for a step without one; NaN propagates).
+        deviations : ndarray (plan.steps, 6)
+            max |signal - final| over the same slots.
         polynomials : ndarray (plan.steps, degree + 1, n_states) or None
             Each step's start state and dense-output coefficients (see :meth:`states`);
             None unless ``with_states``.
         """
         stacked = np.ndim(x0) == 2
         x0, p, reference = (np.atleast_2d(np.asarray(a, dtype=float)) for a in (x0, p, reference))
+        target = np.zeros((x0.shape[0], 6)) if final is None else np.atleast_2d(np.asarray(final, dtype=float))
         if x0.shape[0] != self.lanes:
             raise ValueError(f"{x0.shape[0]} runs given to a stepper of {self.lanes} lanes")
         if self.driver is not None:
-            signals, peaks, polynomials = self.driver.run(x0, plan, inputs, p, reference, with_states)
+            signals, peaks, deviations, polynomials = self.driver.run(
+                x0, plan, inputs, p, reference, with_states, target
+            )
         else:
             assert self.graph is not None
-            runs = [self.graph.run(x0[i], plan, inputs, p[i], reference[i], with_states) for i in range(self.lanes)]
-            signals = np.stack([r[0] for r in runs], axis=-1)
-            peaks = np.stack([r[1] for r in runs], axis=-1)
-            polys = [r[2] for r in runs]
+            runs = [self.graph.run(x0[i], plan, inputs, p[i], reference[i], with_states, target[i])
+                    for i in range(self.lanes)]
+            signals, peaks, deviations = (np.stack([r[j] for r in runs], axis=-1) for j in range(3))  # type: ignore[misc]
+            polys = [r[3] for r in runs]
             polynomials = None if polys[0] is None else np.stack(polys, axis=-1)  # type: ignore[arg-type]
         if stacked:
-            return signals, peaks, polynomials
-        return signals[..., 0], peaks[..., 0], None if polynomials is None else polynomials[..., 0]
+            return signals, peaks, deviations, polynomials
+        return (signals[..., 0], peaks[..., 0], deviations[..., 0],
+                None if polynomials is None else polynomials[..., 0])

@@ -142,7 +142,7 @@ class Dop853Driver:
         self.library = compiled_library(self.name, driver_source(self.name, model, signals, lanes), FLAGS, "c++")
         fn = getattr(ctypes.CDLL(str(self.library)), self.name)
         fn.restype = ctypes.c_int
-        fn.argtypes = [ctypes.c_int, ctypes.c_int] + [ctypes.c_void_p] * 10
+        fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int] + [ctypes.c_void_p] * 12
         self._fn = fn
 
     def run(
@@ -153,7 +153,8 @@ class Dop853Driver:
         p: np.ndarray,
         reference: np.ndarray,
         with_states: bool = False,
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        final: np.ndarray | None = None,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """Step ``lanes`` runs through ``plan``.
 
         Parameters
@@ -168,34 +169,41 @@ class Dop853Driver:
             The states the signals are measured from.
         with_states : bool
             Also return each step's dense-output polynomial.
+        final : ndarray (lanes, 6), optional
+            The target of the deviations (default zero).
 
         Returns
         -------
         signals : ndarray (plan.steps x per_step, 6, lanes)
             At every step's used sample slots (the others are not written).
         peaks : ndarray (plan.steps, 6, lanes)
-            max |signal| over each step's samples (0 for a step without one; NaN propagates).
+            max |signal| over each step's probes (``plan.probes``; over its samples for a plan
+            without probes; 0 for a step without one; NaN propagates).
+        deviations : ndarray (plan.steps, 6, lanes)
+            max |signal - final| over the same slots.
         polynomials : ndarray (plan.steps, degree + 1, n_states, lanes) or None
             Each step's start state and dense-output coefficients.
         """
         steps, m, nx = plan.steps, plan.per_step, self.model.n_states
-        lanes = [np.ascontiguousarray(np.asarray(a, dtype=float).T) for a in (x0, p, reference)]
+        target = np.zeros((self.lanes, 6)) if final is None else np.asarray(final, dtype=float)
+        lanes = [np.ascontiguousarray(np.asarray(a, dtype=float).T) for a in (x0, p, reference, target)]
         shared = [np.ascontiguousarray(a, dtype=float) for a in (inputs, plan.length, plan.first, plan.fraction)]
         # the compiled loop trusts these sizes
-        expected = [(nx, self.lanes), (self.n_parameters, self.lanes), (nx, self.lanes)]
+        expected = [(nx, self.lanes), (self.n_parameters, self.lanes), (nx, self.lanes), (6, self.lanes)]
         if [a.shape for a in lanes] != expected or shared[0].shape[1:] != (STAGES, self.n_inputs) or any(
             a.shape[0] < steps for a in shared
         ):
             raise ValueError(f"{self.name}: arrays of the wrong shape for {self.lanes} lanes and {steps} steps")
         signals = np.empty((steps * m, 6, self.lanes))
         peaks = np.empty((steps, 6, self.lanes))
+        deviations = np.empty((steps, 6, self.lanes))
         degree = dop853_tableau().dense.shape[1]
         polys = np.empty((steps, degree + 1, nx, self.lanes)) if with_states else None
-        x, par, ref = lanes
+        x, par, ref, fin = lanes
         u, h, first, frac = shared
         self._fn(
-            steps, m, x.ctypes.data, u.ctypes.data, h.ctypes.data, first.ctypes.data, frac.ctypes.data,
-            par.ctypes.data, ref.ctypes.data, signals.ctypes.data, peaks.ctypes.data,
-            None if polys is None else polys.ctypes.data,
+            steps, m, plan.probes, x.ctypes.data, u.ctypes.data, h.ctypes.data, first.ctypes.data,
+            frac.ctypes.data, par.ctypes.data, ref.ctypes.data, fin.ctypes.data, signals.ctypes.data,
+            peaks.ctypes.data, deviations.ctypes.data, None if polys is None else polys.ctypes.data,
         )
-        return signals, peaks, polys
+        return signals, peaks, deviations, polys

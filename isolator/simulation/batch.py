@@ -4,9 +4,8 @@ The runs' static equilibria are solved side by side; each run gets its own
 DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
 with single runs). Runs that share a plan are stepped ``LANES`` at a time, one
 per SIMD lane of the compiled loop (:mod:`isolator.numerics.dop853_driver`), in worker
-threads, in blocks of runs whose settling metrics are then computed together.
-Each run returns only what the metrics need: its peaks (taken in the compiled
-steps) and its signals from the carriages' stop on.
+threads; each pack's metrics come from its dense output as a single run's do
+(:mod:`isolator.simulation.dense_metrics`), four runs at once.
 """
 
 from __future__ import annotations
@@ -22,8 +21,9 @@ from isolator.errors import ParameterError, SimulationError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
+from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.response import Response
-from isolator.simulation.settling import signal_settling
+from isolator.simulation.settling import signal_bands, still_signals
 from isolator.simulation.stepping import Method, check_turn, dense_stepper, hold_time, rk4_stepper
 from isolator.simulation.time_grid import TimeGrid
 
@@ -141,8 +141,6 @@ def run_batch(
             rk4_stepper(sim.model, method.substeps)
     stepper = dense_stepper(sim.model, LANES)
     t = sim.grid.samples
-    stop = sim.stop_time
-    tail_from = max(1, min(int(np.searchsorted(t, stop - 1e-12)), t.size - 1))
     finals = np.zeros((n, 6))
     stops = ends[0] is not None
     if stops:
@@ -160,17 +158,22 @@ def run_batch(
         failures[i] = message
         peak[i] = np.nan
 
-    def pack(runs: list[int], tails: np.ndarray) -> list[int]:
-        """Step ``runs`` (one plan, at most LANES) side by side; their peaks, and the signals
-        from the stop on of those that did not diverge (returned) into ``tails`` (runs, 6, samples)."""
+    rule = sim.scenario.settling
+
+    def pack(runs: list[int]) -> None:
+        """Step ``runs`` (one plan, at most LANES) side by side; their peaks and settling times."""
         method = methods[runs[0]]
         plan = method.plan
         assert plan is not None
         lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
         x0 = np.array([starts[i].state for i in lanes])
-        raw, step_peaks, _ = stepper.run_slots(x0, plan, plan_inputs[method.plan_key], params[lanes], x0)
-        tops = np.max(step_peaks, axis=0).T  # NaN propagates
-        good: list[int] = []
+        raw, step_peaks, deviations, polys = stepper.run_slots(
+            x0, plan, plan_inputs[method.plan_key], params[lanes], x0, with_states=True, final=finals[lanes]
+        )
+        assert polys is not None
+        dense = DenseRuns(plan, raw, step_peaks, deviations, polys, x0, sim.model.variant.signals)
+        tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time,
+                                       lambda top: signal_bands(rule, top), holds[lanes])
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]
             try:
@@ -182,13 +185,10 @@ def run_batch(
             except SimulationError as exc:
                 failed(i, exc)
                 continue
-            tails[len(good)] = raw[plan.sample_slots[tail_from - 1 :], :, lane].T
-            good.append(i)
-        return good
+            settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
 
     def task(runs: list[int]) -> None:
-        """A thread's share: RK4 runs one by one, DOP853 runs in packs of one plan; then the
-        DOP853 runs' settling together."""
+        """A thread's share: RK4 runs one by one, DOP853 runs in packs of one plan."""
         for i in runs:
             if methods[i].plan is None:
                 try:
@@ -199,16 +199,8 @@ def run_batch(
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
         stepped = [i for i in runs if methods[i].plan is not None]
-        tails = np.empty((len(stepped), 6, t.size - tail_from))
-        dense: list[int] = []
         for lo in range(0, len(stepped), LANES):
-            dense += pack(stepped[lo : lo + LANES], tails[len(dense) :])
-        if dense:
-            rows = np.array(dense)
-            settling[rows] = signal_settling(
-                t[tail_from:], tails[: rows.size], finals[rows] if stops else None, sim.stop_time,
-                sim.scenario.settling, holds[rows], peak[rows],
-            )[0]
+            pack(stepped[lo : lo + LANES])
         done[0] += len(runs)
         if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
             print(f"  batch: {done[0]}/{n} runs", flush=True)

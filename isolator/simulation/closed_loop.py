@@ -14,7 +14,7 @@ from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.actuation import ForceHistory, applied_forces
 from isolator.simulation.stepping import rk4_stepper
-from isolator.simulation.time_grid import TimeGrid, stage_times
+from isolator.simulation.time_grid import TimeGrid, internal_rate, stage_times
 
 __all__ = ["FeedbackLaw", "controller_period", "run_closed_loop"]
 
@@ -25,7 +25,8 @@ class FeedbackLaw(Protocol):
     Attributes
     ----------
     sample_rate : float
-        [Hz]; must divide the simulation's output sample rate.
+        [Hz]; must divide the rate the simulation steps at (its output sample rate, raised by a whole
+        factor to 1 kHz or more: :func:`isolator.simulation.time_grid.internal_rate`).
     """
 
     sample_rate: float
@@ -43,13 +44,15 @@ class FeedbackLaw(Protocol):
 
 
 def controller_period(scenario: Scenario, feedback: FeedbackLaw) -> int:
-    """Output samples per controller tick."""
-    ratio = scenario.simulation.sample_rate / float(feedback.sample_rate)
-    period = round(ratio)
+    """Nodes of the regular internal grid per controller tick."""
+    rate, factor = internal_rate(scenario.simulation)
+    ratio = rate / float(feedback.sample_rate)
+    period = round(ratio) if math.isfinite(ratio) else 0
     if not (math.isfinite(ratio) and period >= 1 and abs(ratio - period) <= 1e-9 * ratio):
+        steps = "" if factor == 1 else f" x {factor}, the rate the simulation steps at ({rate:.6g} Hz)"
         raise ParameterError(
             f"feedback: the controller's sample rate {feedback.sample_rate:.6g} Hz must divide the "
-            f"scenario's simulation.sample_rate ({scenario.simulation.sample_rate:.6g} Hz)"
+            f"scenario's simulation.sample_rate ({scenario.simulation.sample_rate:.6g} Hz){steps}"
         )
     return period
 
@@ -89,8 +92,8 @@ def run_closed_loop(
     times, mid = stage_times(grid, substeps)
     # the feedforward command before saturation and lag
     commanded = None if forces is None else forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, -1)
-    sample_index = np.cumsum(grid.is_sample) - 1
-    ticks = grid.is_sample & (sample_index % period == 0)
+    regular = grid.regular
+    ticks = regular & ((np.cumsum(regular) - 1) % period == 0)
     stepper = rk4_stepper(model, substeps)
     steps = np.diff(grid.nodes)
     n_a = layout.n_actuators

@@ -13,12 +13,14 @@ __all__ = [
     "SettlingResult",
     "last_outside",
     "settling_metrics",
+    "settling_results",
     "settling_time",
     "settling_times",
     "signal_bands",
     "signal_peaks",
     "signal_settling",
     "still_signals",
+    "unavailable_reason",
 ]
 
 #: peaks below this are numerical noise: such a signal does not move [m or rad]
@@ -116,10 +118,15 @@ def settling_times(
 
 def _unavailable(t: np.ndarray, stop_time: float) -> str:
     """Why a run over times ``t`` [s] shows no settling at all ("" when it can)."""
+    return unavailable_reason(float(t[-1]), stop_time)
+
+
+def unavailable_reason(end: float, stop_time: float) -> str:
+    """Why a run ending at ``end`` [s] shows no settling at all ("" when it can)."""
     if math.isinf(stop_time):
         return "a carriage never stops (sine profile): no settling time"
-    if stop_time > t[-1]:
-        return f"the run ends at {t[-1]:g} s, before the carriages stop at {stop_time:g} s"
+    if stop_time > end:
+        return f"the run ends at {end:g} s, before the carriages stop at {stop_time:g} s"
     return ""
 
 
@@ -134,6 +141,7 @@ def last_outside(
     stop_time: float,
     band: np.ndarray,
     hold: float | np.ndarray = 0.0,
+    interpolate: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """The settling rule on stacked signals: the core of :func:`settling_time`.
 
@@ -149,6 +157,10 @@ def last_outside(
         [s].
     hold : float or ndarray (...)
         [s].
+    interpolate : bool
+        Place the instant the signal enters the band for good between the last sample outside
+        and the next one, where ``|s - final| - band`` interpolated linearly is zero (False: the
+        last sample outside).
 
     Returns
     -------
@@ -164,10 +176,21 @@ def last_outside(
     if not outside.shape[-1]:
         zero = np.zeros(outside.shape[:-1])
         return zero, zero
-    last = t[first:][outside.shape[-1] - 1 - np.argmax(outside[..., ::-1], axis=-1)]
+    index = outside.shape[-1] - 1 - np.argmax(outside[..., ::-1], axis=-1)
+    last = t[first:][index]
     never = ~outside.any(axis=-1)
-    short = t[-1] - last
-    times = np.where(never, 0.0, last - stop_time)
+    crossing = last
+    if interpolate and outside.shape[-1] > 1:
+        after_t = t[first:]
+        following = np.minimum(index + 1, after_t.size - 1)
+        gap = np.abs(after - np.asarray(final, float)[..., None]) - np.asarray(band, float)[..., None]
+        g0 = np.take_along_axis(gap, index[..., None], axis=-1)[..., 0]
+        g1 = np.take_along_axis(gap, following[..., None], axis=-1)[..., 0]
+        with np.errstate(all="ignore"):
+            weight = np.clip(np.where(g0 - g1 > 0, g0 / (g0 - g1), 0.0), 0.0, 1.0)
+        crossing = last + (after_t[following] - last) * weight
+    short = t[-1] - crossing
+    times = np.where(never, 0.0, crossing - stop_time)
     unsettled = ~never & ((last >= t[-1]) | (short < hold))
     return np.where(unsettled, np.nan, times), np.where(never, 0.0, short)
 
@@ -203,6 +226,7 @@ def signal_settling(
     settling: Settling,
     hold: float | np.ndarray,
     peaks: np.ndarray,
+    interpolate: bool = False,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Settling times of the six table signals of one run or stacked runs, as numbers.
 
@@ -222,6 +246,8 @@ def signal_settling(
         [s], as in :func:`settling_time`.
     peaks : ndarray (..., 6)
         max |signal| over the whole run [m or rad].
+    interpolate : bool
+        As for :func:`last_outside`.
 
     Returns
     -------
@@ -236,7 +262,9 @@ def signal_settling(
     else:
         target = np.zeros(peaks.shape) if final is None else np.asarray(final, dtype=float)
         bands = np.maximum(signal_bands(settling, peaks), 1e-300)
-        times, short = last_outside(t, signals, target, stop_time, bands, np.asarray(hold, dtype=float)[..., None])
+        times, short = last_outside(
+            t, signals, target, stop_time, bands, np.asarray(hold, dtype=float)[..., None], interpolate
+        )
     if final is not None:
         times = np.where(still_signals(settling, peaks), 0.0, times)
     return times, short
@@ -250,16 +278,25 @@ def settling_metrics(
     settling: Settling,
     hold: float = 0.0,
     peaks: np.ndarray | None = None,
+    interpolate: bool = False,
 ) -> dict[str, SettlingResult]:
     """Settling of each of the six table signals, keyed by name (``SIGNALS``).
 
-    ``peaks`` (max |signal| per row), when the caller has them already.
+    ``peaks`` (max |signal| per row), when the caller has them already; ``interpolate`` as for
+    :func:`last_outside`.
     """
     if peaks is None:
         peaks = signal_peaks(signals)
-    times, short = signal_settling(t, signals, final, stop_time, settling, hold, peaks)
-    still = still_signals(settling, peaks) if final is not None else np.zeros(len(SIGNALS), dtype=bool)
-    why = _unavailable(t, stop_time)
+    times, short = signal_settling(t, signals, final, stop_time, settling, hold, peaks, interpolate)
+    return settling_results(times, short, peaks, final is not None, settling, _unavailable(t, stop_time))
+
+
+def settling_results(
+    times: np.ndarray, short: np.ndarray, peaks: np.ndarray, stops: bool, settling: Settling, why: str = ""
+) -> dict[str, SettlingResult]:
+    """Per signal name: the numbers of :func:`signal_settling` (one run) as :class:`SettlingResult`
+    (``stops``: the carriages stop; ``why``: the run shows no settling at all, and why)."""
+    still = still_signals(settling, peaks) if stops else np.zeros(len(SIGNALS), dtype=bool)
     bands = signal_bands(settling, peaks)
     out: dict[str, SettlingResult] = {}
     for i, name in enumerate(SIGNALS):

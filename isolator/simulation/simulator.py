@@ -13,12 +13,14 @@ from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
+from isolator.numerics.step_plan import PROBES
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_duration
 from isolator.simulation.actuation import ForceHistory, applied_forces
 from isolator.simulation.batch import BatchResult, run_batch
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
+from isolator.simulation.dense_metrics import DenseRuns, run_metrics
 from isolator.simulation.leveling import PneumaticResult, pneumatic_result
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
@@ -146,7 +148,8 @@ class Simulator:
         omega = max(omega_max, self._forcing, 1e-12)
         key = max(0, math.ceil(8 * math.log2(MAX_DENSE_STEP * omega / DENSE_STEP_ANGLE)))
         if key not in self._plans:
-            self._plans[key] = step_plan(self.grid.samples, self._breakpoints, MAX_DENSE_STEP * 2.0 ** (-key / 8))
+            self._plans[key] = step_plan(self.grid.samples, self._breakpoints, MAX_DENSE_STEP * 2.0 ** (-key / 8),
+                                         end=self.grid.nodes[-1], probes=PROBES)
         plan = self._plans[key]
         if plan.evaluations >= 4 * substeps * (self.grid.nodes.size - 1):
             return Method(substeps)
@@ -258,17 +261,24 @@ class Simulator:
         ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
         grid = self.grid
         n = len(self.scenario.carriages)
+        final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
+        if final is not None and feedback is not None:
+            final = np.asarray(feedback.final(final), dtype=float)
+        hold = hold_time(end)
         if forces is None and feedback is None and method.plan is not None:
             plan = method.plan
-            raw, step_peaks, polynomials = dense_stepper(self.model).run_slots(
-                start.state, plan, self.plan_inputs(method, p), p, start.state, with_states=True
+            raw, step_peaks, deviations, polynomials = dense_stepper(self.model).run_slots(
+                start.state, plan, self.plan_inputs(method, p), p, start.state, with_states=True, final=final
             )
             assert polynomials is not None
-            peaks: np.ndarray | None = np.max(step_peaks, axis=0)
             if not np.all(np.isfinite(polynomials)):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
             signals = with_start(raw[plan.sample_slots])
+            runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
+                              polynomials[..., None], start.state[None, :], self.model.variant.signals)
+            metrics = run_metrics(runs, final, self.stop_time, self.scenario.settling, hold, self.grid.samples,
+                                  signals)
             x0, dense = start.state, polynomials
 
             def history() -> np.ndarray:
@@ -286,18 +296,16 @@ class Simulator:
                     self.scenario, self.layout, self.model, grid, self.grid_inputs(substeps), p, start, substeps,
                     forces, feedback,
                 )
-            states = np.vstack([start.state, stepped])[grid.is_sample]
+            every = np.vstack([start.state, stepped])
             at_samples = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
-            bad = ~np.all(np.isfinite(states), axis=1)
+            bad = ~np.all(np.isfinite(every), axis=1)
             if bad.any():
-                raise SimulationError(f"the run diverged: non-finite state at t = {grid.samples[np.argmax(bad)]:.4g} s")
-            signals = self.signals(states, start)
-            peaks = None
+                raise SimulationError(f"the run diverged: non-finite state at t = {grid.nodes[np.argmax(bad)]:.4g} s")
+            states = every[grid.is_sample]
+            on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
+            signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
+            metrics = self._metrics(on_grid, final, hold)
         t = grid.samples
-        final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
-        if final is not None and feedback is not None:
-            final = np.asarray(feedback.final(final), dtype=float)
-        metrics = self._metrics(signals, final, end, peaks)
         pneumatic = None
         if self.scenario.is_pneumatic:
             run_states = history if states is None else (lambda: states)
@@ -305,7 +313,7 @@ class Simulator:
 
             def pneumatic() -> PneumaticResult:
                 return pneumatic_result(self.scenario, self.model, p, t, run_states(), signals, start, peaks_all,
-                                        hold_time(end))
+                                        hold)
 
         return Response(
             name=self.scenario.name,
@@ -324,20 +332,13 @@ class Simulator:
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
         )
 
-    def _metrics(
-        self,
-        signals: np.ndarray,
-        final: np.ndarray | None,
-        end: Equilibrium | None,
-        peaks: np.ndarray | None = None,
-        first: int = 0,
-    ) -> dict[str, SettlingResult]:
-        """Settling of the six signals (6, samples from sample ``first`` on) of a run without NaN;
-        ``peaks`` over the whole run when the samples are not all there."""
-        t = self.grid.samples[first:]
-        peaks = signal_peaks(signals) if peaks is None else peaks
+    def _metrics(self, signals: np.ndarray, final: np.ndarray | None, hold: float) -> dict[str, SettlingResult]:
+        """Settling of the six signals (6, nodes) of an RK4 run without NaN, on every node of the internal
+        grid (the instant a signal enters its band interpolated between two nodes)."""
+        t = self.grid.nodes
+        peaks = signal_peaks(signals)
         check_turn(peaks, t, signals)
-        return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold_time(end), peaks)
+        return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold, peaks, True)
 
     def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``

@@ -1,13 +1,20 @@
 """The integration grid of a run and the model's inputs on it.
 
-The time grid is the union of the output sample times and the profiles'
-breakpoints, so no step straddles a jump in a carriage's acceleration. The
-carriages' coordinates are evaluated (in numpy) at every stage time with the
-polynomial piece of the interval, i.e. one-sided at breakpoints.
+The time grid RK4 steps on (runs with actuator forces or feedback, or with
+breakpoints so dense that RK4 is cheaper than DOP853) is a regular grid at the
+*internal rate* -- the output sample rate times the least whole number that
+brings it to ``INTERNAL_RATE`` or more, so every output sample is a node --
+with the profiles' breakpoints and the run's end (``simulation.duration``)
+added, so no step straddles a jump in a carriage's acceleration. Metrics are
+taken on all its nodes, so they do not depend on the output rate (exactly so
+for output rates that divide ``INTERNAL_RATE``: 5, 50, 1000 Hz give one
+grid). The carriages' coordinates are evaluated (in numpy) at every stage time
+with the polynomial piece of the interval, i.e. one-sided at breakpoints.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -16,7 +23,19 @@ import numpy as np
 from isolator.model.parameters import ParameterLayout
 from isolator.scenario.definitions import Scenario, SimulationSettings
 
-__all__ = ["TimeGrid", "grid_breakpoints", "inputs_at", "model_inputs", "stage_times", "time_grid"]
+__all__ = [
+    "INTERNAL_RATE",
+    "TimeGrid",
+    "grid_breakpoints",
+    "inputs_at",
+    "internal_rate",
+    "model_inputs",
+    "stage_times",
+    "time_grid",
+]
+
+#: the least rate [Hz] of the grid RK4 steps on; the output rate is raised by a whole factor to reach it
+INTERNAL_RATE = 1000.0
 
 
 @dataclass(frozen=True)
@@ -29,10 +48,19 @@ class TimeGrid:
         Grid times [s], increasing, from 0 to the duration.
     is_sample : ndarray of bool
         Which nodes are output samples.
+    is_regular : ndarray of bool, optional
+        Which nodes are on the regular grid at the internal rate (not breakpoints or the end);
+        None: the samples.
     """
 
     nodes: np.ndarray
     is_sample: np.ndarray
+    is_regular: np.ndarray | None = None
+
+    @property
+    def regular(self) -> np.ndarray:
+        """Which nodes are on the regular internal grid."""
+        return self.is_sample if self.is_regular is None else self.is_regular
 
     @cached_property
     def samples(self) -> np.ndarray:
@@ -48,7 +76,7 @@ def grid_breakpoints(settings: SimulationSettings, breakpoints: tuple[float, ...
     grid, forces files that step there) agrees on the instant.
     """
     samples = settings.sample_times()
-    inside = np.array([b for b in breakpoints if 0.0 < b < samples[-1]], dtype=float)
+    inside = np.array([b for b in breakpoints if 0.0 < b < settings.duration], dtype=float)
     if inside.size:
         index = np.clip(np.rint(inside * settings.sample_rate).astype(int), 0, samples.size - 1)
         nearest = samples[index]
@@ -56,15 +84,35 @@ def grid_breakpoints(settings: SimulationSettings, breakpoints: tuple[float, ...
     return np.unique(inside)
 
 
+def internal_rate(settings: SimulationSettings) -> tuple[float, int]:
+    """The rate [Hz] RK4 steps at and the nodes per output interval (see the module's description)."""
+    factor = max(1, math.ceil(INTERNAL_RATE / settings.sample_rate * (1 - 1e-12)))
+    return settings.sample_rate * factor, factor
+
+
 def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> TimeGrid:
-    """The settings' output samples merged with breakpoints [s]."""
+    """The regular grid at the internal rate (holding the output samples) merged with the
+    breakpoints and the run's end [s]."""
     samples = settings.sample_times()
+    rate, factor = internal_rate(settings)
+    count = int(np.floor(settings.duration * rate * (1 + 1e-12))) + 1
+    regular = np.arange(count) / rate
+    regular[::factor][: samples.size] = samples[: regular[::factor].size]  # the samples' own times
+    flags = np.zeros(count, bool)
+    flags[: (samples.size - 1) * factor + 1 : factor] = True
     extra = grid_breakpoints(settings, breakpoints)
-    extra = extra[~np.isin(extra, samples)]
-    nodes = np.concatenate([samples, extra])
-    flags = np.concatenate([np.ones(samples.size, bool), np.zeros(extra.size, bool)])
+    if extra.size:  # within round-off of a regular node: that node
+        index = np.clip(np.rint(extra * rate).astype(int), 0, count - 1)
+        near = np.abs(regular[index] - extra) <= 1e-9 * np.maximum(1.0, extra)
+        extra = np.unique(np.where(near, regular[index], extra))
+    if settings.duration > regular[-1] * (1 + 1e-12) + 1e-12:
+        extra = np.append(extra, settings.duration)
+    extra = extra[~np.isin(extra, regular)]
+    nodes = np.concatenate([regular, extra])
+    is_sample = np.concatenate([flags, np.zeros(extra.size, bool)])
+    is_regular = np.concatenate([np.ones(count, bool), np.zeros(extra.size, bool)])
     order = np.argsort(nodes, kind="stable")
-    return TimeGrid(nodes[order], flags[order])
+    return TimeGrid(nodes[order], is_sample[order], is_regular[order])
 
 
 def stage_times(grid: TimeGrid, substeps: int) -> tuple[np.ndarray, np.ndarray]:

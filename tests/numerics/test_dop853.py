@@ -141,17 +141,24 @@ def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
     signals = signal_function(sim.model.variant, sim.model.n_states)
     lanes = DenseStepper(sim.model, signals, lanes=4)
     assert lanes.native
-    sig, peaks, polys = lanes.run_slots(x0, plan, inputs, params, x0, with_states=True)
-    assert sig.shape[-1] == peaks.shape[-1] == polys.shape[-1] == 4
+    finals = np.array([[1e-4, -2e-6, 3e-6, 0.0, 1e-5, -1e-6]] * 4) * np.arange(1, 5)[:, None]
+    sig, peaks, deviations, polys = lanes.run_slots(x0, plan, inputs, params, x0, with_states=True, final=finals)
+    assert sig.shape[-1] == peaks.shape[-1] == deviations.shape[-1] == polys.shape[-1] == 4
     evaluated = DenseStepper(sim.model, signals, compile=False)
     for lane in range(4):
-        ref_sig, ref_peaks, ref_polys = evaluated.run_slots(
-            x0[lane], plan, inputs, params[lane], x0[lane], with_states=True
+        ref_sig, ref_peaks, ref_deviations, ref_polys = evaluated.run_slots(
+            x0[lane], plan, inputs, params[lane], x0[lane], with_states=True, final=finals[lane]
         )
         scale = np.abs(ref_sig[plan.sample_slots]).max()
         assert scale > 1e-6  # the runs move
         assert np.allclose(sig[plan.sample_slots, :, lane], ref_sig[plan.sample_slots], rtol=0, atol=1e-10 * scale)
         assert np.allclose(peaks[..., lane], ref_peaks, rtol=0, atol=1e-10 * scale)
+        assert np.allclose(deviations[..., lane], ref_deviations, rtol=0, atol=1e-10 * scale)
+        # peaks and deviations are over the probes: 1/8 .. 8/8 of each step
+        probes = sig[: plan.steps * plan.per_step, :, lane].reshape(plan.steps, plan.per_step, 6)[:, : plan.probes]
+        assert np.allclose(peaks[..., lane], np.abs(probes).max(axis=1), rtol=0, atol=1e-13 * scale)
+        assert np.allclose(deviations[..., lane], np.abs(probes - finals[lane]).max(axis=1), rtol=0,
+                           atol=1e-13 * scale)
         # the states at the samples (the dense output's high coefficients are sums that cancel)
         ours, theirs = (DenseStepper.states(plan, q) for q in (polys[..., lane], ref_polys))
         assert np.allclose(ours, theirs, rtol=0, atol=1e-9 * np.abs(theirs).max(axis=0))

@@ -68,8 +68,10 @@ def test_a_batch_gives_the_single_runs_metrics():
     batch = sim.run_batch(stiffness, damping, workers=2)
     for i, (k, c) in enumerate(zip(stiffness, damping, strict=True)):
         single = sim.run(p=sim.scaled_parameters(k, c))
-        assert batch.settling_time_max[i] == pytest.approx(single.settling_time_max, abs=1e-12)
-        assert np.allclose(batch.settling_time[i], list(single.settling_time.values()), rtol=0, atol=1e-12)
+        # the settling instants are roots on the dense output, their bands 5 % of peaks that round
+        # differently in four lanes (below): ~1e-11 s
+        assert batch.settling_time_max[i] == pytest.approx(single.settling_time_max, abs=1e-9)
+        assert np.allclose(batch.settling_time[i], list(single.settling_time.values()), rtol=0, atol=1e-9)
         # four runs per SIMD call round differently from one (fast-math): ~1e-16 m on a 2e-6 m peak
         assert np.allclose(batch.peak[i], list(single.peak.values()), rtol=1e-9, atol=0)
 
@@ -106,7 +108,7 @@ def test_a_batch_names_the_run_that_turns_too_far_or_records_it():
     assert np.all(np.isnan(batch.peak[2]))
     single = sim.run(p=sim.scaled_parameters(0.9, 1.0))
     expected = [np.nan if v is None else v for v in single.settling_time.values()]
-    assert np.allclose(batch.settling_time[3], expected, rtol=0, atol=1e-12, equal_nan=True)
+    assert np.allclose(batch.settling_time[3], expected, rtol=0, atol=1e-9, equal_nan=True)
     assert np.allclose(batch.peak[3], list(single.peak.values()), rtol=1e-9)
     with pytest.raises(ParameterError, match="diverged: must be"):
         sim.run_batch([1.0], [1.0], diverged="ignore")

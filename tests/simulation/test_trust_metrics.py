@@ -5,11 +5,14 @@ Each test here failed on the code before the fix it guards.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
-from conftest import base_dict, make
+from conftest import active_dict, asymmetric_3d_dict, base_dict, make
 from isolator import Simulator
 from isolator.errors import ScenarioError
+from isolator.simulation.actuation import ForceHistory
+from isolator.simulation.settling import settling_metrics
 
 
 # -- a run shorter than the motion ------------------------------------------------------
@@ -43,3 +46,67 @@ def test_the_whole_scenario_validator_names_the_duration_too():
     short = scenario.with_changes(simulation=type(scenario.simulation)(duration=2.0, sample_rate=1000.0))
     with pytest.raises(ScenarioError, match=r"simulation\.duration"):
         validate_scenario(short)
+
+
+# -- metrics that do not depend on the output sample rate --------------------------------
+def _at_rate(data: dict, rate: float) -> dict:
+    out = {**data, "simulation": {**data["simulation"], "sample_rate": rate}}
+    return out
+
+
+def _metrics(response) -> tuple[np.ndarray, np.ndarray]:
+    times = np.array([np.nan if v is None else v for v in response.settling_time.values()])
+    return np.array(list(response.peak.values())), times
+
+
+@pytest.mark.parametrize("case", ["base", "asymmetric"])
+def test_peaks_and_settling_are_the_same_at_5_50_and_1000_hz_output(case):
+    data = base_dict() if case == "base" else asymmetric_3d_dict(duration=6.0)
+    runs = [_metrics(Simulator(make(_at_rate(data, rate))).run()) for rate in (5.0, 50.0, 1000.0)]
+    for peaks, times in runs[:2]:
+        np.testing.assert_allclose(peaks, runs[2][0], rtol=1e-9, atol=1e-15)  # rounding: 1e-16 m
+        np.testing.assert_allclose(times, runs[2][1], rtol=0, atol=1e-9)
+    assert np.isfinite(runs[2][1]).sum() >= 3  # the test compares numbers, not only NaNs
+
+
+def test_dense_metrics_match_a_very_fine_output_grid():
+    """The peaks and settling instants from the dense output agree with those of 20 kHz samples
+    (which are right to their 50 us spacing)."""
+    data = base_dict()
+    coarse = Simulator(make(_at_rate(data, 5.0))).run()
+    fine = Simulator(make(_at_rate(data, 20000.0))).run()
+    sampled = settling_metrics(fine.t, fine.signals, fine.final, fine.stop_time, make(data).settling)
+    for name, result in coarse.settling.items():
+        assert result.peak == pytest.approx(sampled[name].peak, rel=1e-7)
+        if result.time is not None and result.time > 0:
+            assert result.time == pytest.approx(sampled[name].time, abs=1e-4)
+            # and the instant is the band's edge: the signal is on it to the interpolation's accuracy
+            t_cross = fine.stop_time + result.time
+            i = int(np.argmin(np.abs(fine.t - t_cross)))
+            k = list(coarse.settling).index(name)
+            assert abs(abs(fine.signals[k, i] - fine.final[k]) - result.band) < 0.05 * result.band
+
+
+def test_actuator_runs_step_on_an_internal_grid_whatever_the_output_rate():
+    data = active_dict()
+    runs = []
+    for rate in (5.0, 50.0, 1000.0):
+        scenario = make(_at_rate(data, rate))
+        names = tuple(a.name for a in scenario.actuators)
+        t = np.array([0.0, 0.3, 0.3, 0.6, 0.6, 3.0])
+        force = np.zeros((len(names), t.size))
+        force[2] = [0.0, 0.0, 200.0, 200.0, 0.0, 0.0]  # a 0.3 s push on z0
+        runs.append(_metrics(Simulator(scenario).run(forces=ForceHistory(t, force, names))))
+    for peaks, times in runs[:2]:
+        np.testing.assert_allclose(peaks, runs[2][0], rtol=1e-9, atol=1e-15)  # rounding: 1e-16 m
+        np.testing.assert_allclose(times, runs[2][1], rtol=0, atol=1e-9)
+
+
+def test_a_batch_gives_the_single_runs_metrics_at_a_coarse_output_rate():
+    data = _at_rate(base_dict(), 5.0)
+    sim = Simulator(make(data))
+    batch = sim.run_batch([0.7, 1.0, 1.6], [2.0, 1.0, 0.7])
+    for i, (k, c) in enumerate(((0.7, 2.0), (1.0, 1.0), (1.6, 0.7))):
+        peaks, times = _metrics(sim.run(p=sim.scaled_parameters(k, c)))
+        np.testing.assert_allclose(batch.peak[i], peaks, rtol=1e-9, atol=1e-15)
+        np.testing.assert_allclose(batch.settling_time[i], times, rtol=0, atol=1e-9, equal_nan=True)

@@ -34,19 +34,23 @@ static inline void dense_row(const V K[ST][NX], double h, int j, V coef[DEG][NX]
   DOP853_DENSE
 }
 
-/* steps: steps of the plan; per: sample slots per step; x0 (NX, LANES); u (steps, ST, NU);
-   hs, first (steps); frac (steps, per), -1 for an unused slot; p (parameters, LANES); ref (NX, LANES).
-   Out: sig (steps * per, 6, LANES) at the used slots; peak (steps, 6, LANES) max |signal| over each
-   step's samples (NaN propagates); poly, unless null, (steps, DEG + 1, NX, LANES): each step's start
-   state and dense-output coefficients. */
-extern "C" int DOP853_NAME(int steps, int per, const double* x0, const double* u, const double* hs,
+/* steps: steps of the plan; per: sample slots per step; probes: the leading slots of each step the
+   peaks are taken over (0: every used slot); x0 (NX, LANES); u (steps, ST, NU); hs, first (steps);
+   frac (steps, per), -1 for an unused slot; p (parameters, LANES); ref (NX, LANES); fin (6, LANES): the
+   target the deviations are measured from.
+   Out: sig (steps * per, 6, LANES) at the used slots; peak (steps, 6, LANES) max |signal| and dev
+   (steps, 6, LANES) max |signal - fin| over each step's peak slots (NaN propagates); poly, unless null,
+   (steps, DEG + 1, NX, LANES): each step's start state and dense-output coefficients. */
+extern "C" int DOP853_NAME(int steps, int per, int probes, const double* x0, const double* u, const double* hs,
                            const double* first, const double* frac, const double* p, const double* ref,
-                           double* sig, double* peak, double* poly) {
+                           const double* fin, double* sig, double* peak, double* dev, double* poly) {
   static const int rows[NROWS + 1] = {DOP853_ROWS};
   static const int others[NOTHERS + 1] = {DOP853_OTHERS};
   V x[NX], xi[NX], xn[NX], xs[NX], K[ST][NX], coef[DEG][NX];
   const V* P = (const V*)p;
   const V* R = (const V*)ref;
+  const V* F = (const V*)fin;
+  const int counted = probes > 0 ? probes : per;
   for (int j = 0; j < NX; ++j) { x[j] = ((const V*)x0)[j]; xs[j] = 0.0; }
 #if LANES > 1
   V ub[ST * NU + 1];
@@ -64,8 +68,8 @@ extern "C" int DOP853_NAME(int steps, int per, const double* x0, const double* u
     else for (int j = 0; j < NX; ++j) K[0][j] = K[END][j];
     DOP853_STAGES
     for (int r = 0; r < NROWS; ++r) dense_row(K, h, rows[r], coef);
-    V top[6];
-    for (int k = 0; k < 6; ++k) top[k] = 0.0;
+    V top[6], off[6];
+    for (int k = 0; k < 6; ++k) { top[k] = 0.0; off[k] = 0.0; }
     for (int m = 0; m < per; ++m) {
       const double f = frac[(long)s * per + m];
       if (f < 0.0) continue;
@@ -77,9 +81,11 @@ extern "C" int DOP853_NAME(int steps, int per, const double* x0, const double* u
       }
       V* out = (V*)sig + ((long)s * per + m) * 6;
       signals(xs, R, out);
-      for (int k = 0; k < 6; ++k) top[k] = worst(top[k], fabs(out[k]));
+      if (m < counted) {
+        for (int k = 0; k < 6; ++k) { top[k] = worst(top[k], fabs(out[k])); off[k] = worst(off[k], fabs(out[k] - F[k])); }
+      }
     }
-    for (int k = 0; k < 6; ++k) ((V*)peak)[(long)s * 6 + k] = top[k];
+    for (int k = 0; k < 6; ++k) { ((V*)peak)[(long)s * 6 + k] = top[k]; ((V*)dev)[(long)s * 6 + k] = off[k]; }
     if (poly) {
       for (int r = 0; r < NOTHERS; ++r) dense_row(K, h, others[r], coef);
       V* out = (V*)poly + (long)s * (DEG + 1) * NX;
