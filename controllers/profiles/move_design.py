@@ -151,10 +151,11 @@ class MoveDesign:
         if not isinstance(self.limits, DriveLimits):
             raise ParameterError(f"limits: must be DriveLimits, got {type(self.limits).__name__}")
         check_value("t0", self.t0, "t0", ParameterError)  # the optimiser may leave it a hair below 0
+        jerks = {"jerk": self.jerk} if self.shape == "scurve" else {}
+        if self.shape == "scurve" and self.deceleration_jerk is not None:
+            jerks["deceleration_jerk"] = self.deceleration_jerk
         check_arguments(start=self.start, stroke=self.stroke, velocity=self.velocity,
-                        acceleration=self.acceleration, deceleration=self.deceleration,
-                        jerk=self.jerk if self.shape == "scurve" else None,
-                        deceleration_jerk=self.deceleration_jerk if self.shape == "scurve" else None)
+                        acceleration=self.acceleration, deceleration=self.deceleration, **jerks)
 
     # -- the parameter vector -----------------------------------------------------
     @property

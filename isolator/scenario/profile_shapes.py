@@ -115,7 +115,7 @@ def trapezoid(
     triangular with peak speed ``sqrt(2 |stroke| a d / (a + d))``.
     """
     check_arguments(start=start, stroke=stroke, velocity=velocity, acceleration=acceleration, t0=t0,
-                    deceleration=deceleration)
+                    **({} if deceleration is None else {"deceleration": deceleration}))
     dec = acceleration if deceleration is None else deceleration
     distance = abs(stroke)
     sign = 1.0 if stroke >= 0 else -1.0
@@ -170,8 +170,10 @@ def scurve(
     deceleration_jerk : float, optional
         Jerk of the braking phase [m/s^3]; defaults to ``jerk``.
     """
+    optional = {k: v for k, v in (("deceleration", deceleration), ("deceleration_jerk", deceleration_jerk))
+                if v is not None}
     check_arguments(start=start, stroke=stroke, velocity=velocity, acceleration=acceleration, jerk=jerk, t0=t0,
-                    deceleration=deceleration, deceleration_jerk=deceleration_jerk)
+                    **optional)
     dec = acceleration if deceleration is None else deceleration
     jerk_down = jerk if deceleration_jerk is None else deceleration_jerk
     distance = abs(stroke)

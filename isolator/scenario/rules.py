@@ -279,8 +279,7 @@ def profile_values(profile: Profile, key: str) -> Iterator[tuple[str, object]]:
 def check_arguments(error: type[IsolatorError] = ParameterError, /, **values: object) -> None:
     """Arguments of a profile builder by the rules of the profile keys they are (``velocity``, ``t0``, ...)."""
     for name, value in values.items():
-        if value is not None:
-            check_value(f"carriages.profile.{name}", value, name, error)
+        check_value(f"carriages.profile.{name}", value, name, error)
 
 
 def scenario_values(scenario: Scenario) -> Iterator[tuple[str, object]]:
