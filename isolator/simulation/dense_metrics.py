@@ -72,7 +72,8 @@ class DenseRuns:
     def at(self, t: np.ndarray, lane: np.ndarray) -> np.ndarray:
         """The six signals (6, K) of runs ``lane`` (K,) at times ``t`` (K,) [s], from the dense output."""
         step, s = self.plan.locate(t)
-        c = self.polynomials[step, :, :, lane]  # (K, degree + 1, n_states)
+        one = self.polynomials.shape[-1] == 1  # one run: a contiguous gather
+        c = self.polynomials[..., 0][step] if one else self.polynomials[step, :, :, lane]  # (K, degree + 1, states)
         x = c[:, -1]
         for j in range(c.shape[1] - 2, -1, -1):
             x = c[:, j] + s[:, None] * x
@@ -101,19 +102,19 @@ def _indices(shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
     return (np.broadcast_to(np.arange(shape[0])[:, None], shape), np.broadcast_to(np.arange(shape[1])[None, :], shape))
 
 
-def dense_peaks(runs: DenseRuns) -> np.ndarray:
-    """max |s| of each signal over each run (6, R), refined about the largest probe."""
-    top = np.max(runs.peaks, axis=0)
-    if not np.all(np.isfinite(top)):
-        return top
+def _peak_window(runs: DenseRuns) -> tuple[np.ndarray, np.ndarray]:
+    """Each signal's largest probe (6, R) and the times (6, R, PEAK_POINTS) [s] spanning its neighbours."""
     plan = runs.plan
+    top = np.max(runs.peaks, axis=0)
     step = np.argmax(runs.peaks, axis=0)
     j = np.argmax(np.abs(runs.probe_values(step)), axis=-1)
-    centre = runs.probe_time(step, j)
     spread = (plan.length[step] / plan.probes)[..., None] * np.linspace(-1.0, 1.0, PEAK_POINTS)
-    t = np.clip(centre[..., None] + spread, 0.0, plan.end)
-    lanes = np.broadcast_to(np.arange(top.shape[1])[None, :, None], t.shape)
-    values = np.abs(runs.own_rows(runs.at(t.ravel(), lanes.ravel())))  # (6, R, points)
+    return top, np.clip(runs.probe_time(step, j)[..., None] + spread, 0.0, plan.end)
+
+
+def _refined_peak(top: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The largest |s| (6, R) from the probes' ``top`` and |s| at the window's points (6, R, PEAK_POINTS):
+    the vertex of a parabola through the largest point and its neighbours."""
     i = np.clip(np.argmax(values, axis=-1), 1, PEAK_POINTS - 2)[..., None]
     a, b, c = (np.take_along_axis(values, i + d, axis=-1)[..., 0] for d in (-1, 0, 1))
     curvature = a - 2.0 * b + c
@@ -121,6 +122,56 @@ def dense_peaks(runs: DenseRuns) -> np.ndarray:
         vertex = np.where(curvature < 0.0, b - (a - c) ** 2 / (8.0 * curvature), b)
     best = np.max(values, axis=-1)
     return np.maximum(top, np.maximum(best, np.minimum(vertex, best * (1 + 1e-6))))
+
+
+def dense_peaks(runs: DenseRuns) -> np.ndarray:
+    """max |s| of each signal over each run (6, R), refined about the largest probe."""
+    top, t = _peak_window(runs)
+    if not np.all(np.isfinite(top)):
+        return top
+    lanes = np.broadcast_to(np.arange(top.shape[1])[None, :, None], t.shape)
+    return _refined_peak(top, np.abs(runs.own_rows(runs.at(t.ravel(), lanes.ravel()))))
+
+
+def _entry_interval(
+    runs: DenseRuns, target: np.ndarray, band: np.ndarray, stop_time: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Per signal and run (6, R): the probe interval ``ta`` (outside) .. ``tb`` (inside) [s] of the last
+    entry into the band after the stop, whether the signal is outside at or after the stop at all, and
+    whether it is still outside at the run's end."""
+    plan, per, steps = runs.plan, runs.plan.per_step, runs.plan.steps
+    first = int(np.searchsorted(plan.start[:steps], stop_time - 1e-9 * max(1.0, stop_time), side="left"))
+    out = runs.deviations[first:steps] > band  # (after, 6, R)
+    after = out.any(axis=0)
+    last = np.full(band.shape, max(first - 1, 0))  # meaningful where ``after``
+    if out.shape[0]:
+        last = first + out.shape[0] - 1 - np.argmax(out[::-1], axis=0)
+    k, r = _indices(band.shape)
+    if first > 0:
+        at_stop = np.abs(runs.slots[(first - 1) * per + plan.probes - 1, k, r] - target) > band
+    else:
+        at_stop = np.abs(target) > band  # the signals start at zero
+    outside = np.abs(runs.probe_values(last) - target[..., None]) > band[..., None]
+    j = plan.probes - 1 - np.argmax(outside[..., ::-1], axis=-1)
+    ta = np.where(after, runs.probe_time(last, j), stop_time)
+    nxt_step = np.where(after, np.where(j < plan.probes - 1, last, last + 1), first)
+    nxt_j = np.where(after & (j < plan.probes - 1), j + 1, 0)
+    at_end = nxt_step >= steps
+    tb = np.where(at_end, plan.end, runs.probe_time(np.minimum(nxt_step, steps - 1), nxt_j))
+    return ta, tb, after | at_stop, at_end
+
+
+def _crossing(t: np.ndarray, values: np.ndarray, target: np.ndarray, band: np.ndarray) -> np.ndarray:
+    """Where ``|s - target| - band`` at times ``t`` (6, R, points) last falls to zero, interpolated (6, R)."""
+    gap = np.abs(values - target[..., None]) - band[..., None]
+    outside = gap > 0.0
+    i = np.minimum(CROSSING_POINTS - 1 - np.argmax(outside[..., ::-1], axis=-1), CROSSING_POINTS - 2)
+    i = np.where(outside.any(axis=-1), i, 0)[..., None]
+    g0, g1 = (np.take_along_axis(gap, i + d, axis=-1)[..., 0] for d in (0, 1))
+    t0, t1 = (np.take_along_axis(t, i + d, axis=-1)[..., 0] for d in (0, 1))
+    with np.errstate(all="ignore"):
+        weight = np.clip(np.where(g0 - g1 > 0.0, g0 / (g0 - g1), 0.0), 0.0, 1.0)
+    return t0 + (t1 - t0) * weight
 
 
 def dense_metrics(
@@ -131,6 +182,10 @@ def dense_metrics(
     hold: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Peaks and settling of ``R`` runs from their dense output.
+
+    The entry interval is first chosen with the bands of the probes' peaks, and the points of both
+    refinements are evaluated in one call; where the refined peaks' bands choose another interval
+    (rarely: the band grows by the refinement), its points are evaluated again.
 
     Parameters
     ----------
@@ -153,48 +208,32 @@ def dense_metrics(
     short : ndarray (R, 6)
         How long before the run's end each signal was last outside its band [s].
     """
-    peaks = dense_peaks(runs).T
-    lanes = peaks.shape[0]
-    if not np.isfinite(stop_time) or not np.all(np.isfinite(peaks)):
-        return peaks, np.full(peaks.shape, np.nan), np.zeros(peaks.shape)
-    plan, per, steps = runs.plan, runs.plan.per_step, runs.plan.steps
-    end = plan.end
+    top, tp = _peak_window(runs)
+    lanes = top.shape[1]
+    if not np.isfinite(stop_time) or not np.all(np.isfinite(top)):
+        return dense_peaks(runs).T, np.full((lanes, 6), np.nan), np.zeros((lanes, 6))
     target = np.zeros((6, lanes)) if final is None else np.asarray(final, dtype=float).T
-    band = np.asarray(bands_of(peaks), dtype=float).T  # (6, R)
-    first = int(np.searchsorted(plan.start[:steps], stop_time - 1e-9 * max(1.0, stop_time), side="left"))
-    out = runs.deviations[first:steps] > band  # (after, 6, R)
-    after = out.any(axis=0)
-    last = np.full(band.shape, max(first - 1, 0))  # meaningful where ``after``
-    if out.shape[0]:
-        last = first + out.shape[0] - 1 - np.argmax(out[::-1], axis=0)
-    k, r = _indices(band.shape)
-    if first > 0:
-        at_stop = np.abs(runs.slots[(first - 1) * per + plan.probes - 1, k, r] - target) > band
-    else:
-        at_stop = np.abs(target) > band  # the signals start at zero
-    # the probe interval (ta outside, tb inside) holding the last entry into the band
-    j = plan.probes - 1 - np.argmax((np.abs(runs.probe_values(last) - target[..., None]) > band[..., None])[..., ::-1],
-                                     axis=-1)
-    ta = np.where(after, runs.probe_time(last, j), stop_time)
-    nxt_step = np.where(after, np.where(j < plan.probes - 1, last, last + 1), first)
-    nxt_j = np.where(after & (j < plan.probes - 1), j + 1, 0)
-    at_end = nxt_step >= steps  # still outside at the run's end
-    tb = np.where(at_end, end, runs.probe_time(np.minimum(nxt_step, steps - 1), nxt_j))
-    t = ta[..., None] + (tb - ta)[..., None] * np.linspace(0.0, 1.0, CROSSING_POINTS)
-    values = runs.own_rows(runs.at(t.ravel(), np.broadcast_to(r[..., None], t.shape).ravel()))
-    gap = np.abs(values - target[..., None]) - band[..., None]
-    i = np.minimum(CROSSING_POINTS - 1 - np.argmax((gap > 0.0)[..., ::-1], axis=-1), CROSSING_POINTS - 2)
-    i = np.where((gap > 0.0).any(axis=-1), i, 0)[..., None]
-    g0, g1 = (np.take_along_axis(gap, i + d, axis=-1)[..., 0] for d in (0, 1))
-    t0, t1 = (np.take_along_axis(t, i + d, axis=-1)[..., 0] for d in (0, 1))
-    with np.errstate(all="ignore"):
-        weight = np.clip(np.where(g0 - g1 > 0.0, g0 / (g0 - g1), 0.0), 0.0, 1.0)
-    crossing = t0 + (t1 - t0) * weight
-    moves = after | at_stop
+    guess = np.asarray(bands_of(top.T), dtype=float).T
+    ta, tb, _, _ = _entry_interval(runs, target, guess, stop_time)
+    tc = ta[..., None] + (tb - ta)[..., None] * np.linspace(0.0, 1.0, CROSSING_POINTS)
+    _, r = _indices(top.shape)
+    both = np.concatenate([tp, tc], axis=-1)
+    values = runs.own_rows(runs.at(both.ravel(), np.broadcast_to(r[..., None], both.shape).ravel()))
+    peaks = _refined_peak(top, np.abs(values[..., :PEAK_POINTS]))
+    band = np.asarray(bands_of(peaks.T), dtype=float).T  # (6, R)
+    ta2, tb2, moves, at_end = _entry_interval(runs, target, band, stop_time)
+    at_points = values[..., PEAK_POINTS:]
+    again = (ta2 != ta) | (tb2 != tb)
+    if again.any():  # the refined band chose another interval: its points
+        tc = ta2[..., None] + (tb2 - ta2)[..., None] * np.linspace(0.0, 1.0, CROSSING_POINTS)
+        fresh = runs.own_rows(runs.at(tc.ravel(), np.broadcast_to(r[..., None], tc.shape).ravel()))
+        at_points = np.where(again[..., None], fresh, at_points)
+    crossing = _crossing(tc, at_points, target, band)
+    end = runs.plan.end
     short = np.where(moves, np.where(at_end, 0.0, end - crossing), 0.0)
     time = np.where(moves, crossing - stop_time, 0.0)
     unsettled = moves & (at_end | (short < np.asarray(hold, dtype=float)[None, :]))
-    return peaks, np.where(unsettled, np.nan, time).T, short.T
+    return peaks.T, np.where(unsettled, np.nan, time).T, short.T
 
 
 def run_metrics(
