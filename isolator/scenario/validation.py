@@ -13,6 +13,7 @@ import numpy as np
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
+from isolator.scenario.rules import check_scenario_values
 
 __all__ = [
     "check_carriage_tree",
@@ -166,6 +167,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     ScenarioError
         The first check that fails, naming its key.
     """
+    check_scenario_values(scenario)
     check_isolator_layout(scenario.isolators)
     check_carriage_tree(scenario.carriages)
     check_unique_names([a.name for a in scenario.actuators], "actuators")
