@@ -4,14 +4,15 @@
   x, z, ry stay;
 - every mass, stiffness and damping times one factor (the box inertia follows) leaves the response as it is;
 - carriages that never move leave the table at rest;
-- the metrics do not depend on the output sample rate.
+- the metrics do not depend on the output sample rate (5 Hz, 50 Hz, 1 kHz: peaks and settling instants
+  from the integrator's dense output).
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from hypothesis import Phase, assume, given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 from scenario_strategies import mirrored, scaled, scenario_dicts
 
@@ -69,12 +70,10 @@ def test_scaling_every_mass_stiffness_and_damping_changes_nothing(data, factor):
 @given(scenario_dicts(moving=False, min_carriages=1))
 def test_carriages_that_never_move_leave_the_table_at_rest(data):
     r = _run(data)
-    assert np.abs(r.signals).max() < 1e-12
+    assert np.abs(r.signals).max() < 1e-10  # the static equilibrium's own residual (~1e-12 m), nothing more
 
 
-@pytest.mark.xfail(strict=False, reason="issue 15 item 2: peaks and settling found on the integrator's dense "
-                                        "output (another change); until then they follow the output grid")
-@settings(RUNS, phases=[Phase.explicit, Phase.reuse, Phase.generate])  # no shrinking while it is expected to fail
+@RUNS
 @given(scenario_dicts(min_carriages=1, duration=6.0))
 def test_metrics_do_not_depend_on_the_output_sample_rate(data):
     fine = _run({**data, "simulation": {**data["simulation"], "sample_rate": 1000.0}})
