@@ -31,6 +31,8 @@ __all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_l
 #: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
 #: infinity still propagate, so a diverging run is still detected); -march=native is safe because
 #: the cache key includes the CPU's identity
+#: how libraries are linked (part of the cache key): compiled with FLAGS, linked without -ffast-math
+LINK = "link: -shared -fPIC -lm, no fast-math start-up"
 FLAGS = ("-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared")
 
 
@@ -91,7 +93,7 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     if compiler is None:
         raise RuntimeError(f"no {language.upper()} compiler found (set {'CC' if language == 'c' else 'CXX'})")
     digest = hashlib.sha256(
-        (source + " ".join(flags) + ca.CasadiMeta.version() + compiler + _cpu_identity()).encode()
+        (source + " ".join(flags) + ca.CasadiMeta.version() + compiler + _cpu_identity() + LINK).encode()
     ).hexdigest()[:20]
     folder = cache_dir()
     folder.mkdir(parents=True, exist_ok=True)
@@ -104,17 +106,24 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
             src.write_text(source)
             fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
             os.close(fd)
+            obj = folder / f"{name}-{digest}.o"
             try:
-                done = subprocess.run([compiler, *flags, "-o", tmp_so, str(src), "-lm"], capture_output=True, text=True)
-                if done.returncode != 0:
-                    lines = done.stderr.splitlines()
-                    errors = [ln for ln in lines if "error" in ln] or lines or [""]
-                    raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
+                # compile with the flags, link without them: -ffast-math at link time would add the start-up
+                # code that switches the whole process to flushing subnormal numbers to zero
+                compile_flags = [f for f in flags if f != "-shared"]
+                for step in ([compiler, *compile_flags, "-c", "-o", str(obj), str(src)],
+                             [compiler, "-shared", "-fPIC", "-o", tmp_so, str(obj), "-lm"]):
+                    done = subprocess.run(step, capture_output=True, text=True)
+                    if done.returncode != 0:
+                        lines = done.stderr.splitlines()
+                        errors = [ln for ln in lines if "error" in ln] or lines or [""]
+                        raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
                 os.replace(tmp_so, target)
             finally:
                 if os.path.exists(tmp_so):
                     os.unlink(tmp_so)
                 src.unlink(missing_ok=True)
+                obj.unlink(missing_ok=True)
     return target
 
 
