@@ -2,16 +2,15 @@
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from isolator.errors import UnstableTableError
 from isolator.model.cache import get_model
-from isolator.model.equilibrium import RockingStiffness, rocking_stiffness, static_equilibrium
+from isolator.model.equilibrium import RockingStiffness
 from isolator.model.parameters import ParameterLayout
+from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.scenario.definitions import Scenario
 
 __all__ = ["StabilityReport", "stability"]
@@ -36,7 +35,7 @@ class StabilityReport:
     @property
     def worst(self) -> int:
         """Index of the configuration with the smallest margin."""
-        return int(np.argmin([r.margin for r in self.rocking]))
+        return tipping_verdict(self.positions, self.rocking)[1]
 
     @property
     def margin(self) -> float:
@@ -50,14 +49,12 @@ class StabilityReport:
 
     @property
     def stable(self) -> bool:
-        return self.margin > 0.0
+        """The one criterion (:func:`isolator.model.tipping.tipping_verdict`) simulations refuse by."""
+        return tipping_verdict(self.positions, self.rocking)[0]
 
     def describe(self) -> str:
-        """One line: stable or not, the margin, where."""
-        r = self.rocking[self.worst]
-        where = ", ".join(f"{q:.4g}" for q in self.positions[self.worst]) or "no carriages"
-        verdict = "stable" if self.stable else "UNSTABLE: the table would tip"
-        return f"{verdict}; smallest {r.describe()}, with the carriages at [{where}] m"
+        """One line: stable or not, the margin, where (what a refused simulation says too)."""
+        return tipping_verdict(self.positions, self.rocking)[2]
 
     def to_dict(self) -> dict[str, Any]:
         r = self.rocking[self.worst]
@@ -84,23 +81,5 @@ def stability(scenario: Scenario) -> StabilityReport:
         Never raises for an unstable table: it reports the negative margin.
     """
     layout = ParameterLayout.of(scenario)
-    model = get_model(layout, "exact")
-    p = layout.pack(scenario)
-    t_end = scenario.simulation.duration
-    levels = []
-    for carriage in scenario.carriages:
-        lo, hi = carriage.profile.position_range(t_end)
-        levels.append(sorted({lo, 0.5 * (lo + hi), hi}))
-    configs = [scenario.initial_positions()]
-    finals = scenario.final_positions()
-    if finals is not None:
-        configs.append(finals)
-    configs += [np.array(combo, dtype=float) for combo in itertools.product(*levels)] if levels else []
-    rocking = []
-    for q in configs:
-        try:
-            pose = static_equilibrium(model, p, q, check=False).pose
-        except UnstableTableError:  # no equilibrium near upright: judge the upright pose
-            pose = np.zeros(6)
-        rocking.append(rocking_stiffness(model, p, q, pose))
-    return StabilityReport(np.array(configs).reshape(len(configs), -1), tuple(rocking))
+    configs = travel_configurations(scenario)
+    return StabilityReport(configs, rocking_over(get_model(layout, "exact"), layout.pack(scenario), configs))

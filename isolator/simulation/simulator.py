@@ -8,10 +8,11 @@ from typing import Literal
 
 import numpy as np
 
-from isolator.errors import ParameterError, SimulationError
+from isolator.errors import ParameterError, SimulationError, UnstableTableError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
+from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.numerics.step_plan import PROBES
 from isolator.scenario.definitions import SIGNALS, Scenario
@@ -86,6 +87,7 @@ class Simulator:
         self._plans: dict[int, StepPlan] = {}
         self._staged: dict[tuple[int, bytes], np.ndarray] = {}
         self._sample_inputs: np.ndarray | None = None
+        self._tipping: dict[bytes, str] = {}
         drives = [c.profile for c in scenario.carriages]
         drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
         self._forcing = max((abs(d.omega) for d in drives if isinstance(d, SineProfile)), default=0.0)
@@ -154,6 +156,16 @@ class Simulator:
         if plan.evaluations >= 4 * substeps * (self.grid.nodes.size - 1):
             return Method(substeps)
         return Method(substeps, plan, key)
+
+    def check_tipping(self, p: np.ndarray) -> None:
+        """Refuse what ``isolator stability`` calls unstable, in its words (:mod:`isolator.model.tipping`)."""
+        key = np.asarray(p, dtype=float).tobytes()
+        if key not in self._tipping:
+            configs = travel_configurations(self.scenario)
+            stable, _, line = tipping_verdict(configs, rocking_over(get_model(self.layout, "exact"), p, configs))
+            self._tipping = {**dict(list(self._tipping.items())[-63:]), key: "" if stable else line}
+        if self._tipping[key]:
+            raise UnstableTableError(self._tipping[key])
 
     def grid_inputs(self, substeps: int) -> np.ndarray:
         """The model's inputs at every RK4 stage of the grid, ``substeps`` steps per interval (cached)."""
@@ -230,6 +242,7 @@ class Simulator:
         RK4 on the sample grid, the controller ticking between intervals.
         """
         p = self.parameter_vector(changes) if p is None else self.layout.checked(p, "p")
+        self.check_tipping(p)
         start, end = self.equilibria(p)
         method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
         return self.run_method(p, start, end, method, forces, feedback)

@@ -110,3 +110,32 @@ def test_a_batch_gives_the_single_runs_metrics_at_a_coarse_output_rate():
         peaks, times = _metrics(sim.run(p=sim.scaled_parameters(k, c)))
         np.testing.assert_allclose(batch.peak[i], peaks, rtol=1e-9, atol=1e-15)
         np.testing.assert_allclose(batch.settling_time[i], times, rtol=0, atol=1e-9, equal_nan=True)
+
+
+# -- stability and simulation agree near the tipping limit ---------------------------------
+def _tipping_dict(height: float) -> dict:
+    data = base_dict()
+    data["carriages"] = []
+    data["table"] = {"mass": 4400.0, "inertia": [400.0, 1500.0, 1800.0]}
+    for iso in data["isolators"]:
+        iso["position"][2] = -height
+    return data
+
+
+@pytest.mark.parametrize("factor", [1 - 1e-3, 1 - 1e-6, 1 + 1e-9, 1 + 1e-6, 1 + 1e-3])
+def test_simulate_refuses_exactly_what_stability_calls_unstable_in_its_words(factor):
+    from isolator.analysis.stability import stability
+    from isolator.errors import UnstableTableError
+
+    reference = make(_tipping_dict(0.2))
+    weight = reference.gravity * reference.total_mass
+    critical = sum(iso.stiffness[2] * iso.position[1] ** 2 for iso in reference.isolators) / weight  # W h = sum kz y^2
+    scenario = make(_tipping_dict(factor * critical))
+    report = stability(scenario)
+    assert report.stable == (factor < 1)
+    if report.stable:
+        assert Simulator(scenario).run().t.size > 1  # it simulates
+    else:
+        with pytest.raises(UnstableTableError) as refused:
+            Simulator(scenario).run()
+        assert str(refused.value) == report.describe()
