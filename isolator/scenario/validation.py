@@ -19,6 +19,8 @@ __all__ = [
     "check_carriage_tree",
     "check_duration",
     "check_isolator_layout",
+    "check_motion",
+    "check_phases",
     "check_pneumatics",
     "check_strokes",
     "check_unique_names",
@@ -112,6 +114,39 @@ def check_duration(scenario: Scenario) -> None:
             )
 
 
+#: the shortest profile phase a run resolves, relative to max(1 s, its time): shorter ones are float noise
+SHORTEST_PHASE = 1e-12
+
+
+def check_phases(scenario: Scenario) -> None:
+    """Every phase of every carriage's profile that changes the speed long enough for the run to resolve
+    (an impulsive move whose pulse would be lost refuses, naming the profile and the shortest phase it
+    can have; a phase of rounding length that changes nothing is harmless)."""
+    for i, carriage in enumerate(scenario.carriages):
+        knots = np.asarray(carriage.profile.breakpoints, dtype=float)
+        if knots.size < 2:
+            continue
+        phases = np.diff(knots)
+        limit = SHORTEST_PHASE * np.maximum(1.0, knots[1:])
+        mid = 0.5 * (knots[1:] + knots[:-1])
+        profile = carriage.profile
+        change = np.abs(profile.evaluate(knots[1:], mid)[1] - profile.evaluate(knots[:-1], mid)[1])
+        speed = float(np.max(np.abs(profile.evaluate(knots, knots)[1]), initial=0.0))
+        short = (phases < limit) & (change > 1e-6 * max(speed, 1e-12)) | (phases < 0)
+        if short.any():
+            k = int(np.argmax(short))
+            raise ScenarioError(
+                f"carriages[{i}].profile: a phase of {phases[k]:.3g} s at t = {knots[k]:.6g} s is too short to "
+                f"resolve (at least {limit[k]:.3g} s); lower the acceleration or jerk"
+            )
+
+
+def check_motion(scenario: Scenario) -> None:
+    """What a run needs of the carriages' motion: :func:`check_duration` and :func:`check_phases`."""
+    check_duration(scenario)
+    check_phases(scenario)
+
+
 def rest_gauge_pressures(scenario: Scenario, positions: np.ndarray | None = None) -> np.ndarray:
     """Gauge pressure of each leveling group holding the table level at its rest pose [Pa], (groups,).
 
@@ -172,7 +207,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_carriage_tree(scenario.carriages)
     check_unique_names([a.name for a in scenario.actuators], "actuators")
     check_unique_names([pt.name for pt in scenario.points], "points")
-    check_duration(scenario)
+    check_motion(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)
     return scenario

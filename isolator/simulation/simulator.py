@@ -17,7 +17,7 @@ from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.numerics.step_plan import PROBES
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
-from isolator.scenario.validation import check_duration
+from isolator.scenario.validation import check_motion
 from isolator.simulation.actuation import ForceHistory, applied_forces
 from isolator.simulation.batch import BatchResult, run_batch
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
@@ -72,7 +72,7 @@ class Simulator:
     """
 
     def __init__(self, scenario: Scenario, model: str = "exact") -> None:
-        check_duration(scenario)
+        check_motion(scenario)
         self.scenario = scenario
         self.layout = ParameterLayout.of(scenario)
         self.model = get_model(self.layout, model)

@@ -76,11 +76,17 @@ def grid_breakpoints(settings: SimulationSettings, breakpoints: tuple[float, ...
     grid, forces files that step there) agrees on the instant.
     """
     samples = settings.sample_times()
-    inside = np.array([b for b in breakpoints if 0.0 < b < settings.duration], dtype=float)
+    inside = np.unique(np.array([b for b in breakpoints if 0.0 < b < settings.duration], dtype=float))
     if inside.size:
         index = np.clip(np.rint(inside * settings.sample_rate).astype(int), 0, samples.size - 1)
         nearest = samples[index]
-        inside = np.where(np.abs(nearest - inside) <= 1e-9 * np.maximum(1.0, inside), nearest, inside)
+        tolerance = 1e-9 * np.maximum(1.0, inside)
+        # a breakpoint with another within the tolerance keeps its time: snapping would merge the two
+        # and drop the short phase between them (an impulsive move)
+        crowded = np.zeros(inside.size, bool)
+        crowded[1:] |= np.diff(inside) <= 2 * tolerance[1:]
+        crowded[:-1] |= np.diff(inside) <= 2 * tolerance[:-1]
+        inside = np.where((np.abs(nearest - inside) <= tolerance) & ~crowded, nearest, inside)
     return np.unique(inside)
 
 
@@ -101,9 +107,11 @@ def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> T
     flags = np.zeros(count, bool)
     flags[: (samples.size - 1) * factor + 1 : factor] = True
     extra = grid_breakpoints(settings, breakpoints)
-    if extra.size:  # within round-off of a regular node: that node
+    if extra.size:  # within round-off of a regular node: that node (unless another breakpoint is as near)
         index = np.clip(np.rint(extra * rate).astype(int), 0, count - 1)
         near = np.abs(regular[index] - extra) <= 1e-9 * np.maximum(1.0, extra)
+        near[1:] &= np.diff(extra) > 2e-9 * np.maximum(1.0, extra[1:])
+        near[:-1] &= np.diff(extra) > 2e-9 * np.maximum(1.0, extra[:-1])
         extra = np.unique(np.where(near, regular[index], extra))
     if settings.duration > regular[-1] * (1 + 1e-12) + 1e-12:
         extra = np.append(extra, settings.duration)

@@ -139,3 +139,32 @@ def test_simulate_refuses_exactly_what_stability_calls_unstable_in_its_words(fac
         with pytest.raises(UnstableTableError) as refused:
             Simulator(scenario).run()
         assert str(refused.value) == report.describe()
+
+
+# -- impulsive moves ----------------------------------------------------------------------
+def _impulsive(acceleration: float, active: bool = False) -> dict:
+    data = active_dict() if active else base_dict()
+    data["carriages"][0]["profile"] = {"type": "trapezoid", "start": -0.4, "stroke": 0.8, "velocity": 0.4,
+                                       "acceleration": acceleration, "t0": 0.2}
+    data["simulation"]["duration"] = 3.0
+    return data
+
+
+@pytest.mark.parametrize("active", [False, True])
+def test_an_impulsive_move_keeps_its_pulse(active):
+    """A phase of 4e-11 s (1e10 m/s^2) delivers the same momentum as one of 4e-7 s: the same response
+    (it used to be merged with the breakpoint next to it and lost)."""
+    responses = []
+    for acceleration in (1e6, 1e10):
+        scenario = make(_impulsive(acceleration, active))
+        names = tuple(a.name for a in scenario.actuators)
+        forces = ForceHistory(np.array([0.0, 3.0]), np.zeros((len(names), 2)), names) if active else None
+        responses.append(Simulator(scenario).run(forces=forces))
+    slow, fast = (np.array(list(r.peak.values())) for r in responses)
+    np.testing.assert_allclose(fast, slow, rtol=1e-5, atol=1e-15)
+
+
+def test_a_phase_too_short_to_resolve_is_refused_naming_the_profile():
+    expected = r"carriages\[0\]\.profile: a phase of 4e-14 s at t = 0\.2 s .*at least 1e-12 s"
+    with pytest.raises(ScenarioError, match=expected):
+        Simulator(make(_impulsive(1e13))).run()
