@@ -23,6 +23,7 @@ from isolator.simulation.batch import BatchResult, run_batch
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
 from isolator.simulation.dense_metrics import DenseRuns, run_metrics
 from isolator.simulation.leveling import PneumaticResult, pneumatic_result
+from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
 from isolator.simulation.settling import SettlingResult, settling_metrics, signal_peaks
@@ -73,6 +74,7 @@ class Simulator:
 
     def __init__(self, scenario: Scenario, model: str = "exact") -> None:
         check_motion(scenario)
+        check_run_memory(scenario)  # a grid the machine cannot hold: one clear error, not numpy's
         self.scenario = scenario
         self.layout = ParameterLayout.of(scenario)
         self.model = get_model(self.layout, model)
