@@ -52,6 +52,7 @@ from isolator.scenario.profile_shapes import samples, scurve, segments, shaped, 
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 from isolator.scenario.reader import bundled_scenarios, load_scenario, scenario_from_dict
 from isolator.scenario.tables import load_spectrum
+from isolator.simulation.band import Band
 from isolator.simulation.batch import BatchResult
 from isolator.simulation.leveling import PneumaticResult
 from isolator.simulation.response import Response
@@ -66,6 +67,7 @@ __all__ = [
     "VC_CLASSES",
     "Actuator",
     "Air",
+    "Band",
     "BatchResult",
     "Capillary",
     "Carriage",

@@ -142,7 +142,7 @@ def _profiles(args: argparse.Namespace) -> int:
     from studies.profiles import run_profile_study
 
     variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
-    profiles = run_profile_study(args.out, _scenario(args, None), variants)
+    profiles = run_profile_study(args.out, _scenario(args, None), variants, source=args.scenario)
     for name, m in profiles.methods.items():
         settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
         print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")

@@ -3,13 +3,16 @@ units and Markdown tables, and ``report.md`` itself."""
 
 from __future__ import annotations
 
+import json
 import math
 from collections.abc import Callable, Iterable
 from pathlib import Path
+from typing import Any
 
-from isolator import SIGNALS
+from isolator import SIGNALS, Band
 
 __all__ = [
+    "band_lines",
     "fmt",
     "largest",
     "micro_unit",
@@ -17,6 +20,7 @@ __all__ = [
     "progress_printer",
     "table_header",
     "table_row",
+    "write_json",
     "write_report",
 ]
 
@@ -78,3 +82,32 @@ def write_report(folder: Path, lines: Iterable[str], name: str = "report.md") ->
     path = folder / name
     path.write_text("\n".join(lines) + "\n")
     return path
+
+
+def write_json(folder: Path, data: Any, name: str = "results.json") -> Path:
+    """Write ``data`` as indented JSON to ``folder / name``; return its path."""
+    path = folder / name
+    path.write_text(json.dumps(_plain(data), indent=2, allow_nan=False) + "\n")
+    return path
+
+
+def _plain(value: Any) -> Any:
+    """JSON types: NaN and infinities become null, numpy numbers floats."""
+    if isinstance(value, dict):
+        return {str(k): _plain(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [_plain(v) for v in value]
+    if isinstance(value, bool) or value is None or isinstance(value, str | int):
+        return value
+    number = float(value)
+    return number if math.isfinite(number) else None
+
+
+def band_lines(band: Band, why: str, scenario: str = "SCENARIO") -> list[str]:
+    """The report's statement of a (resolved) settling band: how it was chosen and why, its six
+    half-widths, and the command that reproduces a settling time in it."""
+    widths = ", ".join(f"{k} {v * 1e6:.4g} {micro_unit(k)[1]}" for k, v in band.widths.items())
+    return [
+        f"Settling band: {band.how()}: ±({widths}). {why}",
+        f"Reproduce a settling time in this band: `isolator simulate {scenario} --band {band.option()}`.",
+    ]

@@ -13,15 +13,16 @@ from collections.abc import Callable
 
 import numpy as np
 
-from isolator import IsolatorError, Scenario, Simulator
+from isolator import Band, IsolatorError, Scenario, Simulator
 
 __all__ = ["pneumatic_note", "pneumatic_settling"]
 
 
 def pneumatic_settling(
-    sim: Simulator, stiffness: np.ndarray, damping: np.ndarray, say: Callable[[str], None]
-) -> tuple[np.ndarray, dict[int, str]]:
-    """Settling about the leveling table [s] per design (NaN where a run cannot show it), and why runs failed.
+    sim: Simulator, stiffness: np.ndarray, damping: np.ndarray, say: Callable[[str], None], band: Band | None = None
+) -> tuple[np.ndarray, dict[int, str], np.ndarray]:
+    """Settling about the leveling table [s] per design (NaN where a run cannot show it), why runs failed, and
+    each design's band's six half-widths [m, rad] (NaN: no run).
 
     Parameters
     ----------
@@ -31,21 +32,26 @@ def pneumatic_settling(
         (:func:`isolator.simulation.scaling.scaled_parameter_sets`).
     say : callable
         Progress lines.
+    band : Band, optional
+        The settling band (default: the scenario's rule).
     """
     out = np.full(stiffness.size, np.nan)
+    widths = np.full((stiffness.size, 6), np.nan)
     failures: dict[int, str] = {}
     params = sim.scaled_parameter_sets(stiffness, damping)
     step = max(1, stiffness.size // 10)
     for r, p in enumerate(params):
         try:
-            value = sim.run(p=p).dynamic_settling_time_max
+            run = sim.run(p=p, band=band)
         except IsolatorError as exc:
             failures[r] = str(exc)
             continue
+        value = run.dynamic_settling_time_max
         out[r] = np.nan if value is None else value
+        widths[r] = run.band.half_widths
         if (r + 1) % step == 0 or r + 1 == stiffness.size:
             say(f"  runs: {r + 1}/{stiffness.size}")
-    return out, failures
+    return out, failures, widths
 
 
 def pneumatic_note(scenario: Scenario) -> list[str]:

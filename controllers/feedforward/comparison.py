@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -11,7 +12,7 @@ import numpy as np
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.simulation.leveling import quasi_static_signals
 from isolator.simulation.response import Response
-from isolator.simulation.settling import settling_time
+from isolator.simulation.settling import Band
 from isolator.simulation.simulator import Simulator
 
 from .allocation import Feedforward, feedforward_allocation
@@ -26,12 +27,14 @@ def path_deviation(run: Response, quasi_static: np.ndarray) -> dict[str, float]:
     return dict(zip(SIGNALS, (float(v) for v in dev), strict=True))
 
 
-def settling_in_band(run: Response, band: dict[str, float]) -> dict[str, float | None]:
-    """Settling time per signal [s] of a run in a given band per signal [m or rad], about the run's
-    final value (None where the run cannot show it)."""
-    final = run.final if run.final is not None else np.zeros(6)
-    return {k: settling_time(run.t, run.signals[i], float(final[i]), run.stop_time, max(band[k], 1e-300))[0]
-            for i, k in enumerate(SIGNALS)}
+def settling_in_band(run: Response, band: Band | Mapping[str, float]) -> dict[str, float | None]:
+    """Settling time per signal [s] of a run in a given band (a :class:`Band`, or six half-widths by
+    signal [m or rad]), about the run's final value (None where the run cannot show it).
+
+    Measured as the simulator measures its own band (``Response.with_band``: on the dense output or the
+    internal grid), so ``isolator simulate --band`` with the band's half-widths gives the same numbers."""
+    chosen = band if isinstance(band, Band) else Band.absolute(band)
+    return run.with_band(chosen).settling_time
 
 
 @dataclass(frozen=True)
@@ -45,8 +48,8 @@ class FeedforwardComparison:
         The quasi-static path at the samples [m, rad]. Pneumatic tables: the
         rest with the air the passive run's groups hold at each sample (the
         valves move air, so each run has its own).
-    band : dict of str to float
-        Per signal: 5 % of the passive run's peak [m or rad].
+    band : Band
+        5 % of the passive run's peaks (kind ``baseline``), its six half-widths [m or rad].
     settling : dict of str to dict
         ``passive`` and ``controlled``: settling time per signal [s] (None if
         the run cannot show it) in that band.
@@ -56,7 +59,7 @@ class FeedforwardComparison:
     passive: Response
     controlled: Response
     quasi_static: np.ndarray
-    band: dict[str, float]
+    band: Band
     settling: dict[str, dict[str, float | None]]
     feedforward: Feedforward
     controlled_quasi_static: np.ndarray | None = None
@@ -89,7 +92,7 @@ class FeedforwardComparison:
                 "settling_time": self.settling[which],
                 "settling_time_max": self.settling_time_max(which),
             }
-        out["band"] = self.band
+        out["band"] = self.band.to_dict()
         out["reduction_db"] = self.reduction_db()
         out["max_force"] = self.feedforward.max_force
         if self.feedforward.info:
@@ -103,6 +106,7 @@ class FeedforwardComparison:
         lines = [
             f"{self.passive.name}: feedforward by {self.feedforward.method} (deviation from the quasi-static path; "
             "settling band 5 % of the passive peak)",
+            self.band.describe(),
             f"{'signal':>6}  {'passive dev.':>12}  {'with ff':>12}  {'change':>9}  "
             f"{'settling passive':>16}  {'with ff':>8}",
         ]
@@ -128,7 +132,7 @@ def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = No
     sim = Simulator(scenario)
     passive = sim.run()
     controlled = sim.run(forces=ff.forces)
-    band = {k: 0.05 * v for k, v in passive.peak.items()}
+    band = Band.of_baseline("passive", passive.peak)
     settling = {"passive": settling_in_band(passive, band), "controlled": settling_in_band(controlled, band)}
     if not scenario.is_pneumatic:
         return FeedforwardComparison(passive, controlled, ff.path(passive.t).T, band, settling, ff)

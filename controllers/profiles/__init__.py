@@ -14,6 +14,7 @@ the profile optimisation through the time-varying model: :mod:`.optimisation`
 
 from __future__ import annotations
 
+from .export import write_scenario_profiles
 from .input_shaping import SHAPERS, ExcitedMode, Shaper, dominant_modes, residual_vibration, shaped_scenario, shaper
 from .move_design import (
     DEFAULT_JERK_RAMP,
@@ -66,4 +67,5 @@ __all__ = [
     "time_optimal_scenario",
     "with_moves",
     "write_scenario",
+    "write_scenario_profiles",
 ]

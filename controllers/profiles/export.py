@@ -10,7 +10,7 @@ from isolator.scenario.reader import resolve_scenario_path
 
 from .move_design import MoveDesign
 
-__all__ = ["write_scenario"]
+__all__ = ["write_scenario", "write_scenario_profiles"]
 
 
 def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], path: str | Path) -> Path:
@@ -39,6 +39,35 @@ def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], pat
         if carriage.get("name") in by_name:
             carriage["profile"] = by_name[carriage["name"]].profile().settings
     data["name"] = f"{data.get('name', origin.stem)}-optimised"
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target, "wb") as handle:
+        tomli_w.dump(data, handle)
+    return target
+
+
+def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str | Path, name: str) -> Path | None:
+    """Write the source scenario file with every carriage's profile taken from ``scenario`` (same carriages,
+    by name) under the name ``name``; None (nothing written) when a profile has no scenario-file keys (an
+    input-shaped or time-optimal profile is a piecewise polynomial)."""
+    profiles = {}
+    for carriage in scenario.carriages:
+        try:
+            profiles[carriage.name] = carriage.profile.settings
+        except (AttributeError, ValueError):
+            return None
+    import tomllib
+
+    import tomli_w
+
+    origin = resolve_scenario_path(source)
+    with open(origin, "rb") as handle:
+        data = tomllib.load(handle)
+    _absolute_files(data, origin.parent)
+    for carriage in data.get("carriages", []):
+        if carriage.get("name") in profiles:
+            carriage["profile"] = profiles[carriage["name"]]
+    data["name"] = name
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
     with open(target, "wb") as handle:

@@ -23,6 +23,7 @@ from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import bundled_scenarios, load_scenario
+from isolator.simulation.band import Band, parse_half_widths
 
 __all__ = ["register"]
 
@@ -44,6 +45,12 @@ def register(sub: Any) -> None:
     sim.add_argument("--json", action="store_true", help="print a JSON summary instead of the table")
     sim.add_argument("--forces", type=Path, metavar="FILE.csv",
                      help="actuator forces file (t and one column per actuator, N)")
+    band = sim.add_mutually_exclusive_group()
+    band.add_argument("--band", metavar="x=M,y=M,z=M,rx=RAD,ry=RAD,rz=RAD",
+                      help="settling band: six absolute half-widths [m, rad], e.g. a study's 'band' column "
+                      "(default: the scenario's [settling] rule, 5 percent of each signal's own peak)")
+    band.add_argument("--band-json", type=Path, metavar="FILE.json",
+                      help="settling band from a JSON file: a study's band object (or an object with a 'band' key)")
 
     sim.set_defaults(handler=_simulate)
 
@@ -186,6 +193,22 @@ def _criteria(args: argparse.Namespace) -> int:
     return report(args.json, result.to_dict(), text, [("figure", args.plot)])
 
 
+def _band_option(args: argparse.Namespace) -> Band | None:
+    """The band of ``--band`` or ``--band-json`` (None: the scenario's rule)."""
+    if args.band is not None:
+        return parse_half_widths(args.band, "--band")
+    if args.band_json is None:
+        return None
+    try:
+        data = json.loads(Path(args.band_json).read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else type(exc).__name__
+        raise ParameterError(f"--band-json: cannot read '{args.band_json}': {reason}") from None
+    if isinstance(data, dict) and isinstance(data.get("band"), dict):
+        data = data["band"]
+    return Band.from_dict(data, "--band-json")
+
+
 def _simulate(args: argparse.Namespace) -> int:
     from isolator.simulation.simulator import Simulator
 
@@ -200,7 +223,7 @@ def _simulate(args: argparse.Namespace) -> int:
     check_run_memory(scenario)
     if plot is None and not args.json:
         plot = figure_path(Path(f"{scenario.name}.png"), "--plot")
-    response = Simulator(scenario, args.model).run(forces=forces)
+    response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args))
     if out:
         response.to_csv(out)
     leveling = None

@@ -23,7 +23,7 @@ from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.response import Response
-from isolator.simulation.settling import signal_bands, still_signals
+from isolator.simulation.settling import Band, signal_bands, still_signals
 from isolator.simulation.stepping import Method, check_turn, dense_stepper, hold_time, rk4_stepper
 from isolator.simulation.time_grid import TimeGrid
 
@@ -49,12 +49,24 @@ class BatchResult:
         [m or rad]; NaN for a run that diverged.
     failures : mapping of int to str
         Why each diverged run failed, by run index (with ``diverged="record"``).
+    band : Band
+        How the band was chosen (the scenario's ``[settling]`` rule unless given).
+    half_widths : ndarray (runs, 6)
+        The band each run's settling time is measured in [m or rad] (own bands: per run; NaN for a run
+        that diverged).
     """
 
     settling_time: np.ndarray
     settling_time_max: np.ndarray
     peak: np.ndarray
     failures: Mapping[int, str] = field(default_factory=dict)
+    band: Band = field(default_factory=Band)
+    half_widths: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+
+    def run_band(self, i: int) -> Band:
+        """The band of run ``i``, resolved (its six half-widths)."""
+        return Band(self.band.kind, self.band.fraction, self.band.baseline,
+                    tuple(float(v) for v in self.half_widths[i]))
 
 
 class BatchSimulator(Protocol):
@@ -79,7 +91,8 @@ class BatchSimulator(Protocol):
 
     def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray: ...
 
-    def run_method(self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, method: Method) -> Response: ...
+    def run_method(self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, method: Method, *,
+                   band: Band | None = None) -> Response: ...
 
 
 def run_batch(
@@ -89,6 +102,7 @@ def run_batch(
     workers: int = 2,
     progress: bool = False,
     diverged: Literal["raise", "record"] = "raise",
+    band: Band | None = None,
 ) -> BatchResult:
     """Runs of ``sim``'s scenario with every isolator's stiffness and damping scaled per run.
 
@@ -106,6 +120,8 @@ def run_batch(
         A run that diverges (or turns the table past 0.2 rad) stops the batch with
         :class:`SimulationError` ("raise"), or gets NaN metrics and its reason in
         ``BatchResult.failures`` ("record", for sweeps into soft designs).
+    band : Band, optional
+        The settling band (default: the scenario's ``[settling]`` rule).
 
     Returns
     -------
@@ -125,8 +141,9 @@ def run_batch(
         raise ParameterError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
     params = sim.scaled_parameter_sets(stiffness, damping)
     n = params.shape[0]
+    rule = Band.from_settling(sim.scenario.settling) if band is None else band
     if n == 0:
-        return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)))
+        return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)), {}, rule)
     starts, ends = sim.equilibria_of(params)
     methods: list[Method] = [
         sim.method_for(max(s.max_frequency, e.max_frequency if e else 0.0)) for s, e in zip(starts, ends, strict=True)
@@ -157,8 +174,6 @@ def run_batch(
             raise SimulationError(message) from None
         failures[i] = message
         peak[i] = np.nan
-
-    rule = sim.scenario.settling
 
     def pack(runs: list[int]) -> None:
         """Step ``runs`` (one plan, at most LANES) side by side; their peaks and settling times."""
@@ -192,7 +207,7 @@ def run_batch(
         for i in runs:
             if methods[i].plan is None:
                 try:
-                    metrics = sim.run_method(params[i], starts[i], ends[i], methods[i]).settling
+                    metrics = sim.run_method(params[i], starts[i], ends[i], methods[i], band=rule).settling
                 except SimulationError as exc:
                     failed(i, exc)
                     continue
@@ -215,7 +230,7 @@ def run_batch(
         list(pool.map(task, tasks))
     with np.errstate(all="ignore"):
         worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
-    return BatchResult(settling, worst, peak, dict(sorted(failures.items())))
+    return BatchResult(settling, worst, peak, dict(sorted(failures.items())), rule, rule.resolve(peak))
 
 
 def _scale(values: Sequence[float], i: int) -> float:

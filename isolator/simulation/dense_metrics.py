@@ -30,7 +30,7 @@ import numpy as np
 
 from isolator.numerics.step_plan import StepPlan
 from isolator.scenario.definitions import Settling
-from isolator.simulation.settling import SettlingResult, settling_results, signal_bands, unavailable_reason
+from isolator.simulation.settling import Band, SettlingResult, settling_results, signal_bands, unavailable_reason
 from isolator.simulation.stepping import check_turn
 
 __all__ = ["CROSSING_POINTS", "PEAK_POINTS", "DenseRuns", "dense_metrics", "run_metrics"]
@@ -240,7 +240,7 @@ def run_metrics(
     runs: DenseRuns,
     final: np.ndarray | None,
     stop_time: float,
-    rule: Settling,
+    rule: Band | Settling,
     hold: float,
     samples: np.ndarray,
     signals: np.ndarray,

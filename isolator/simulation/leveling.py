@@ -30,6 +30,7 @@ from isolator.model.equilibrium import Equilibrium, air_in_groups, closed_rest_s
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.simulation.band import Band
 from isolator.simulation.settling import SettlingResult, settling_metrics
 
 __all__ = [
@@ -248,8 +249,10 @@ def pneumatic_result(
     start: Equilibrium,
     peaks: np.ndarray,
     hold: float,
+    band: Band | None = None,
 ) -> PneumaticResult:
-    """Pressures, heights, leveling times and the dynamic settling of a pneumatic run's samples."""
+    """Pressures, heights, leveling times and the dynamic settling of a pneumatic run's samples (in ``band``,
+    default the scenario's ``[settling]`` rule, resolved on the run's ``peaks``)."""
     air = scenario.air
     if air is None:
         raise ValueError("pneumatic_result: not a pneumatic scenario")
@@ -277,7 +280,7 @@ def pneumatic_result(
     if after.size and final_q is not None:
         quasi[:, after] = quasi_static_signals(model, p, t[after], states[after], final_q, start.state)
     dynamic = settling_metrics(t, np.where(np.isnan(quasi), signals, signals - quasi), np.zeros(6), stop,
-                               scenario.settling, hold, peaks)
+                               scenario.settling if band is None else band, hold, peaks)
     names = tuple(iso.name for iso in scenario.isolators if isinstance(iso, PneumaticIsolator))
     return PneumaticResult(
         isolator_names=names,

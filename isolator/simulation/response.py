@@ -5,7 +5,7 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -13,7 +13,7 @@ import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
-from isolator.simulation.settling import SettlingResult
+from isolator.simulation.settling import Band, SettlingResult
 
 __all__ = ["Response"]
 
@@ -46,6 +46,9 @@ class Response:
         final positions (None when a carriage never stops).
     settling : dict of str to SettlingResult
         Per signal: settling time [s] (or None with a reason), peak, band.
+    band : Band
+        The band the settling times are measured in, resolved on this run (its
+        six half-widths); :meth:`with_band` measures the run in another.
     state_history : ndarray (N, n_states) or callable
         The model's state at the samples, or a function computing it (read
         :attr:`states`).
@@ -63,11 +66,22 @@ class Response:
     stop_time: float
     final: np.ndarray | None
     settling: dict[str, SettlingResult]
+    band: Band
     state_history: np.ndarray | Callable[[], np.ndarray] = field(repr=False)
     actuator_names: tuple[str, ...] = ()
     actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
     deadbands: dict[str, float] = field(default_factory=dict, repr=False)
+    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(
+        default=None, repr=False, compare=False)
+
+    def with_band(self, band: Band) -> Response:
+        """The same run measured in another settling band (on the same dense output or internal grid as its
+        own metrics, so the numbers equal those of a run given ``band`` from the start)."""
+        if self.remeasure is None:
+            raise ValueError("with_band: this response keeps no way to measure it again")
+        settling, resolved, pneumatic = self.remeasure(band)
+        return replace(self, settling=settling, band=resolved, pneumatic_result=pneumatic)
 
     @property
     def pneumatic(self) -> PneumaticResult | None:
@@ -143,6 +157,7 @@ class Response:
             "settling_time": {k: num(v) for k, v in self.settling_time.items()},
             "settling_time_max": num(self.settling_time_max),
             "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
+            "band": self.band.to_dict(),
             **({} if self.pneumatic is None else self.pneumatic.to_dict()),
         }
 
@@ -187,6 +202,7 @@ class Response:
             "settling time (largest): "
             + (f"{tmax:.4g} s" if tmax is not None else "not available")
         )
+        lines.append(self.band.describe())
         for k, r in self.settling.items():
             if r.reason and r.reason != "does not move":
                 lines.append(f"  {k}: {r.reason}")
@@ -246,11 +262,11 @@ class Response:
         axes[0, 0].set_title("rotations")
         axes[0, 1].set_title("translations")
         tmax = self.settling_time_max
-        st = f"5 % settling {tmax:.3g} s after the stop" if tmax is not None else "settling: n/a"
-        fig.suptitle(f"{self.name}: table response ({self.model} model); {st}")
+        st = f"settling {tmax:.3g} s after the stop" if tmax is not None else "settling: n/a"
+        fig.suptitle(f"{self.name}: table response ({self.model} model); {st}\nband: {self.band.how()} (shaded)")
         handles = [
             plt.Line2D([], [], color="tab:blue", label="table motion"),
-            plt.Rectangle((0, 0), 1, 1, color="tab:green", alpha=0.15, label="settling band"),
+            plt.Rectangle((0, 0), 1, 1, color="tab:green", alpha=0.15, label=f"settling band ({self.band.kind})"),
             plt.Line2D([], [], color="0.5", ls=":", label="carriages stop"),
             plt.Line2D([], [], color="tab:red", ls="--", label="settled"),
         ]

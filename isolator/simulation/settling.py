@@ -8,8 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS, Settling
+from isolator.simulation.band import MOTION_FLOOR, Band, as_band
 
 __all__ = [
+    "MOTION_FLOOR",
+    "Band",
     "SettlingResult",
     "last_outside",
     "settling_metrics",
@@ -22,9 +25,6 @@ __all__ = [
     "still_signals",
     "unavailable_reason",
 ]
-
-#: peaks below this are numerical noise: such a signal does not move [m or rad]
-MOTION_FLOOR = 1e-13
 
 
 @dataclass(frozen=True)
@@ -195,20 +195,14 @@ def last_outside(
     return np.where(unsettled, np.nan, times), np.where(never, 0.0, short)
 
 
-def signal_bands(settling: Settling, peaks: np.ndarray) -> np.ndarray:
-    """Band half-widths [m or rad] of the six signals (..., 6) with these peaks (``Settling.band``)."""
-    peaks = np.asarray(peaks, dtype=float)
-    if settling.tolerance is not None:
-        per_signal = np.array([settling.band(name, 0.0) for name in SIGNALS])
-        return np.broadcast_to(per_signal, peaks.shape).copy()
-    return float(settling.fraction) * peaks  # type: ignore[arg-type]
+def signal_bands(rule: Band | Settling, peaks: np.ndarray) -> np.ndarray:
+    """Band half-widths [m or rad] of the six signals (..., 6) with these own peaks (:meth:`Band.resolve`)."""
+    return as_band(rule).resolve(peaks)
 
 
-def still_signals(settling: Settling, peaks: np.ndarray) -> np.ndarray:
-    """Which signals do not move (peak at numerical noise, band relative to the peak): settled at 0."""
-    if settling.tolerance is not None:
-        return np.zeros(np.shape(peaks), dtype=bool)
-    return np.asarray(peaks) <= MOTION_FLOOR
+def still_signals(rule: Band | Settling, peaks: np.ndarray) -> np.ndarray:
+    """Which signals do not move (own peak at numerical noise): settled at 0 whatever the band."""
+    return as_band(rule).still(peaks)
 
 
 def signal_peaks(signals: np.ndarray) -> np.ndarray:
@@ -223,7 +217,7 @@ def signal_settling(
     signals: np.ndarray,
     final: np.ndarray | None,
     stop_time: float,
-    settling: Settling,
+    settling: Band | Settling,
     hold: float | np.ndarray,
     peaks: np.ndarray,
     interpolate: bool = False,
@@ -240,8 +234,8 @@ def signal_settling(
         Final equilibrium values (None: a carriage never stops; 0 is the target).
     stop_time : float
         [s].
-    settling : Settling
-        The scenario's band rule.
+    settling : Band or Settling
+        The band (or the scenario's ``[settling]`` rule).
     hold : float or ndarray (...)
         [s], as in :func:`settling_time`.
     peaks : ndarray (..., 6)
@@ -275,7 +269,7 @@ def settling_metrics(
     signals: np.ndarray,
     final: np.ndarray | None,
     stop_time: float,
-    settling: Settling,
+    settling: Band | Settling,
     hold: float = 0.0,
     peaks: np.ndarray | None = None,
     interpolate: bool = False,
@@ -292,7 +286,7 @@ def settling_metrics(
 
 
 def settling_results(
-    times: np.ndarray, short: np.ndarray, peaks: np.ndarray, stops: bool, settling: Settling, why: str = ""
+    times: np.ndarray, short: np.ndarray, peaks: np.ndarray, stops: bool, settling: Band | Settling, why: str = ""
 ) -> dict[str, SettlingResult]:
     """Per signal name: the numbers of :func:`signal_settling` (one run) as :class:`SettlingResult`
     (``stops``: the carriages stop; ``why``: the run shows no settling at all, and why)."""

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Literal
 
 import numpy as np
@@ -26,7 +26,7 @@ from isolator.simulation.leveling import PneumaticResult, pneumatic_result
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
-from isolator.simulation.settling import SettlingResult, settling_metrics, signal_peaks
+from isolator.simulation.settling import Band, SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
     MAX_DENSE_STEP,
@@ -209,6 +209,7 @@ class Simulator:
         p: np.ndarray | None = None,
         forces: ForceHistory | None = None,
         feedback: FeedbackLaw | None = None,
+        band: Band | None = None,
     ) -> Response:
         """Simulate once.
 
@@ -224,6 +225,9 @@ class Simulator:
         feedback : FeedbackLaw, optional
             A sampled controller: its command, held between ticks, is added to
             ``forces`` before saturation and lag.
+        band : Band, optional
+            The settling band (default: the scenario's ``[settling]`` rule, :meth:`Band.from_settling`);
+            ``Response.with_band`` measures the same run in another.
 
         Returns
         -------
@@ -247,7 +251,7 @@ class Simulator:
         self.check_tipping(p)
         start, end = self.equilibria(p)
         method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        return self.run_method(p, start, end, method, forces, feedback)
+        return self.run_method(p, start, end, method, forces, feedback, band)
 
     def _with_forces(self, inputs: np.ndarray, substeps: int, forces: ForceHistory | None) -> np.ndarray:
         """The inputs with the actuators' applied forces at every stage time."""
@@ -271,6 +275,7 @@ class Simulator:
         method: Method,
         forces: ForceHistory | None = None,
         feedback: FeedbackLaw | None = None,
+        band: Band | None = None,
     ) -> Response:
         """One run from the equilibria ``start`` (and ``end``, None if a carriage never stops) with
         ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
@@ -292,8 +297,9 @@ class Simulator:
             signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
                               polynomials[..., None], start.state[None, :], self.model.variant.signals)
-            metrics = run_metrics(runs, final, self.stop_time, self.scenario.settling, hold, self.grid.samples,
-                                  signals)
+            def measure(rule: Band) -> dict[str, SettlingResult]:
+                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals)
+
             x0, dense = start.state, polynomials
 
             def history() -> np.ndarray:
@@ -319,16 +325,23 @@ class Simulator:
             states = every[grid.is_sample]
             on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
             signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
-            metrics = self._metrics(on_grid, final, hold)
-        t = grid.samples
-        pneumatic = None
-        if self.scenario.is_pneumatic:
-            run_states = history if states is None else (lambda: states)
-            peaks_all = np.array([metrics[k].peak for k in SIGNALS])
 
-            def pneumatic() -> PneumaticResult:
-                return pneumatic_result(self.scenario, self.model, p, t, run_states(), signals, start, peaks_all,
-                                        hold)
+            def measure(rule: Band) -> dict[str, SettlingResult]:
+                return self._metrics(on_grid, final, hold, rule)
+
+        t = grid.samples
+        run_states = history if states is None else (lambda: states)
+
+        def remeasure(rule: Band) -> tuple[dict[str, SettlingResult], Band, Callable[[], PneumaticResult] | None]:
+            metrics = measure(rule)
+            peaks_all = np.array([metrics[k].peak for k in SIGNALS])
+            resolved = rule.resolved(peaks_all)
+            if not self.scenario.is_pneumatic:
+                return metrics, resolved, None
+            return metrics, resolved, lambda: pneumatic_result(self.scenario, self.model, p, t, run_states(), signals,
+                                                               start, peaks_all, hold, resolved)
+
+        metrics, resolved, pneumatic = remeasure(Band.from_settling(self.scenario.settling) if band is None else band)
 
         return Response(
             name=self.scenario.name,
@@ -340,6 +353,8 @@ class Simulator:
             stop_time=self.stop_time,
             final=final,
             settling=metrics,
+            band=resolved,
+            remeasure=remeasure,
             state_history=history if states is None else states,
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
@@ -347,13 +362,14 @@ class Simulator:
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
         )
 
-    def _metrics(self, signals: np.ndarray, final: np.ndarray | None, hold: float) -> dict[str, SettlingResult]:
+    def _metrics(self, signals: np.ndarray, final: np.ndarray | None, hold: float,
+                 rule: Band) -> dict[str, SettlingResult]:
         """Settling of the six signals (6, nodes) of an RK4 run without NaN, on every node of the internal
         grid (the instant a signal enters its band interpolated between two nodes)."""
         t = self.grid.nodes
         peaks = signal_peaks(signals)
         check_turn(peaks, t, signals)
-        return settling_metrics(t, signals, final, self.stop_time, self.scenario.settling, hold, peaks, True)
+        return settling_metrics(t, signals, final, self.stop_time, rule, hold, peaks, True)
 
     def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``
@@ -368,35 +384,14 @@ class Simulator:
         workers: int = 2,
         progress: bool = False,
         diverged: Literal["raise", "record"] = "raise",
+        band: Band | None = None,
     ) -> BatchResult:
-        """Many runs with isolator stiffness and damping scaled per run (:func:`~isolator.simulation.batch.run_batch`).
-
-        Parameters
-        ----------
-        stiffness, damping : sequence of float
-            Scale factors on every isolator's stiffness and damping, one per run.
-        workers : int
-            Threads (the compiled stepping releases the GIL).
-        progress : bool
-            Print a progress line every 10 %.
-        diverged : {"raise", "record"}
-            Stop at a diverging run, or give it NaN metrics and its reason in ``failures``.
-        """
-        return run_batch(self, stiffness, damping, workers, progress, diverged)
+        """Many runs with every isolator's stiffness and damping scaled by a factor per run; the arguments
+        and the result as for :func:`~isolator.simulation.batch.run_batch`."""
+        return run_batch(self, stiffness, damping, workers, progress, diverged, band)
 
 
 def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, float] | None = None) -> Response:
-    """Simulate a scenario's carriage transients from the initial static equilibrium.
-
-    Parameters
-    ----------
-    scenario : Scenario
-    model : {"exact", "paper"}
-    changes : mapping, optional
-        Parameter values by name (see :attr:`ParameterLayout.names`).
-
-    Returns
-    -------
-    Response
-    """
+    """Simulate a scenario's carriage transients from the initial static equilibrium (``model`` "exact" or
+    "paper"; ``changes``: parameter values by name, :attr:`ParameterLayout.names`)."""
     return Simulator(scenario, model).run(changes)

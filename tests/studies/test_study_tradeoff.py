@@ -121,3 +121,36 @@ def test_the_command_runs_the_quick_study(tmp_path, capsys):
     assert "transmissibility at 8 Hz" in (tmp_path / "report.md").read_text()
     assert main(["study", "tradeoff", "--out", str(tmp_path), "--frequency", "0"]) == 2
     assert capsys.readouterr().err.strip() == "isolator: error: --frequency: must be a finite frequency > 0 Hz, got 0.0"
+
+
+def test_each_designs_settling_time_is_reproduced_in_the_band_beside_it(paper_study, capsys):
+    """Each design is judged in its own 5 % band (``band`` column); ``Simulator.run(p=..., band=...)``
+    reproduces any design, ``isolator simulate --band`` the scenario's own design."""
+    import json
+
+    from isolator import Band
+    from isolator.simulation.band import parse_half_widths
+
+    study = paper_study
+    sc = study.scenario
+    with open(study.folder / "designs.csv") as handle:
+        rows = list(csv.DictReader(handle))
+    assert study.band.kind == "own"
+    sim = Simulator(replace(sc, simulation=replace(sc.simulation, duration=study.duration)))
+    for i, j in ((0, 0), (3, 3)):
+        row = rows[i * study.damping.size + j]
+        band = parse_half_widths(row["band"])
+        np.testing.assert_allclose(band.half_widths, study.half_widths[i, j], rtol=1e-15)
+        run = sim.run(p=sim.scaled_parameters(study.stiffness[i], study.damping[j]), band=band)
+        assert run.settling_time_max == pytest.approx(float(row["settling_time_max_s"]), rel=1e-5)
+        assert run.settling_time_max == pytest.approx(study.settling_time[i, j], abs=1e-9)
+        # a neighbour's band gives another number: the band matters
+        other = Band.absolute(study.half_widths[(i + 1) % 4, (j + 1) % 4])
+        assert sim.run(p=sim.scaled_parameters(study.stiffness[i], study.damping[j]),
+                       band=other).settling_time_max != pytest.approx(study.settling_time[i, j], abs=1e-6)
+    nominal = study.nominal()
+    cell = rows[nominal[0] * study.damping.size + nominal[1]]["band"]
+    assert main(["simulate", "paper-table-3-2", "--json", "--band", cell]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert data["settling_time_max"] == pytest.approx(study.settling_time[nominal], abs=1e-6)
+    assert "--band x=" in (study.folder / "report.md").read_text()
