@@ -377,7 +377,7 @@ def _run_designs(scenario: Scenario, duration: float, params: list[np.ndarray], 
             else:
                 assert pneumatic is not None
                 into.record(where[n], duration, response.settling_time_max, pneumatic.dynamic_settling_time_max,
-                            pneumatic.leveling_time, bool(pneumatic.supply_exhausted))
+                            pneumatic.leveling_time, bool(pneumatic.supply_exhausted), response.band.half_widths)
             with lock:
                 done[0] += 1
                 if total >= 10 and done[0] % max(1, total // 10) == 0:

@@ -94,6 +94,9 @@ class Transients:
         Length of the run the figures are from [s] (NaN: not run).
     failures : dict
         ``(i, j) -> reason`` for runs that diverged.
+    band : ndarray (..., 6)
+        The band both settling times are measured in, per design: 5 % of that run's own peaks (the
+        scenario's ``[settling]`` rule), six half-widths [m, rad] (NaN: not run).
     """
 
     settling: np.ndarray
@@ -103,17 +106,20 @@ class Transients:
     exhausted: np.ndarray
     duration: np.ndarray
     failures: dict[tuple[int, int], str] = field(default_factory=dict)
+    band: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 6)))
 
     @classmethod
     def empty(cls, shape: tuple[int, int]) -> Transients:
         """Nothing run yet on a grid of ``shape``."""
         return cls(np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, np.nan), np.zeros(shape, bool),
-                   np.zeros(shape, bool), np.full(shape, np.nan))
+                   np.zeros(shape, bool), np.full(shape, np.nan), {}, np.full((*shape, 6), np.nan))
 
     def record(self, ij: tuple[int, int], duration: float, contract: float | None, dynamic: float | None,
-               levels: dict[str, float | None], exhausted: bool) -> None:
-        """One run's figures (None: not settled / not level)."""
+               levels: dict[str, float | None], exhausted: bool, band: tuple[float, ...] | None = None) -> None:
+        """One run's figures (None: not settled / not level) and its band's half-widths [m, rad]."""
         self.failures.pop(ij, None)
+        if self.band.shape[:-1] == self.settling.shape:
+            self.band[ij] = math.nan if band is None else band
         self.duration[ij] = duration
         self.contract_settling[ij] = math.nan if contract is None else contract
         self.settling[ij] = math.nan if dynamic is None else dynamic

@@ -9,10 +9,14 @@ from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
 from isolator import SIGNALS, Band
 
 __all__ = [
+    "band_cell",
     "band_lines",
+    "design_band",
     "fmt",
     "largest",
     "micro_unit",
@@ -111,3 +115,16 @@ def band_lines(band: Band, why: str, scenario: str = "SCENARIO") -> list[str]:
         f"Settling band: {band.how()}: ±({widths}). {why}",
         f"Reproduce a settling time in this band: `isolator simulate {scenario} --band {band.option()}`.",
     ]
+
+
+def design_band(rule: Band, half_widths: np.ndarray) -> Band | None:
+    """The band ``rule`` resolved to one design's six half-widths [m, rad] (None: NaN, no run)."""
+    if not np.all(np.isfinite(half_widths)):
+        return None
+    return Band(rule.kind, rule.fraction, rule.baseline, tuple(float(v) for v in half_widths))
+
+
+def band_cell(rule: Band, half_widths: np.ndarray) -> str:
+    """A design's band as ``isolator simulate --band`` takes it (``x=...,rz=...``, m and rad), or ""."""
+    band = design_band(rule, half_widths)
+    return "" if band is None else band.option()

@@ -42,8 +42,8 @@ from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import transmissibility
 
 from .figures import log_mesh_edges, plain_log_axis, save_figure
-from .reporting import band_lines, output_folder, progress_printer, table_header, write_report
-from .tradeoff_designs import design_band, write_designs_csv
+from .reporting import band_lines, design_band, output_folder, progress_printer, table_header, write_report
+from .tradeoff_designs import write_designs_csv
 from .tradeoff_pneumatic import pneumatic_note, pneumatic_settling
 
 __all__ = ["TradeoffStudy", "pareto_front", "run_tradeoff_study"]

@@ -7,22 +7,9 @@ from typing import Any
 
 import numpy as np
 
-from isolator import Band
+from .reporting import band_cell
 
-__all__ = ["band_cell", "design_band", "write_designs_csv"]
-
-
-def design_band(rule: Band, half_widths: np.ndarray) -> Band | None:
-    """The band ``rule`` resolved to one design's six half-widths [m, rad] (None: NaN, no run)."""
-    if not np.all(np.isfinite(half_widths)):
-        return None
-    return Band(rule.kind, rule.fraction, rule.baseline, tuple(float(v) for v in half_widths))
-
-
-def band_cell(rule: Band, half_widths: np.ndarray) -> str:
-    """A design's band as ``isolator simulate --band`` takes it (``x=...,rz=...``, m and rad), or ""."""
-    band = design_band(rule, half_widths)
-    return "" if band is None else band.option()
+__all__ = ["write_designs_csv"]
 
 
 def _status(study: Any, i: int, j: int) -> str:

@@ -218,3 +218,25 @@ def test_the_command_runs_the_quick_study(tmp_path, capsys):
     assert "needs pneumatic isolators" in capsys.readouterr().err
     assert main(["study", "pneumatic", "--out", str(tmp_path), "--frequency", "0"]) == 2
     assert capsys.readouterr().err.strip() == "isolator: error: --frequency: must be a finite frequency > 0 Hz, got 0.0"
+
+
+def test_each_designs_settling_times_are_reproduced_in_the_band_beside_them(paper_study):
+    """Each design is judged in its own 5 % band (the ``band`` column of ``designs.csv``); the command line
+    has no orifice option, so ``Simulator.run(p=..., band=...)`` reproduces a design."""
+    from isolator.simulation.band import parse_half_widths
+
+    study = paper_study
+    sc = study.scenario
+    with open(study.folder / "designs.csv") as handle:
+        rows = list(csv.DictReader(handle))
+    assert "Settling band: the scenario's `[settling]` rule" in (study.folder / "report.md").read_text()
+    for i, j in ((0, 0), (2, 2)):
+        row = rows[i * study.ratios.size + j]
+        band = parse_half_widths(row["band"])
+        sim = Simulator(replace(sc, simulation=replace(sc.simulation, duration=float(study.runs.duration[i, j]))))
+        run = sim.run(p=_parameters(sim, study.diameters[i], study.ratios[j]), band=band)
+        assert run.band.half_widths == band.half_widths
+        assert run.pneumatic.dynamic_settling_time_max == pytest.approx(study.settling_time[i, j], abs=1e-12)
+        assert float(row["dynamic_settling_time_s"]) == pytest.approx(study.settling_time[i, j], rel=1e-5)
+        assert run.settling_time_max == pytest.approx(study.contract_settling_time[i, j], abs=1e-12, nan_ok=True) \
+            if run.settling_time_max is not None else math.isnan(study.contract_settling_time[i, j])
