@@ -32,6 +32,7 @@ from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 
 __all__ = [
+    "MAGNITUDE",
     "RULES",
     "UNIT_TOLERANCE",
     "Rule",
@@ -46,6 +47,8 @@ __all__ = [
     "scenario_values",
 ]
 
+#: the largest size of any number of a scenario (SI units); squares of larger ones overflow in the equations
+MAGNITUDE = 1e15
 #: how far a unit vector's length may be from 1 (the reader normalises within it)
 UNIT_TOLERANCE = 1e-6
 #: the polytropic exponent's allowed range (isothermal .. a little above diatomic adiabatic)
@@ -79,6 +82,9 @@ class Rule:
         """Why ``value`` breaks the rule (None: it does not)."""
         if not math.isfinite(value):
             return f"must be finite, got {value}"
+        if abs(value) > MAGNITUDE:
+            return f"must be at most {MAGNITUDE:g} in size (SI units: beyond any table, and the equations overflow), " \
+                   f"got {value:g}"
         low, high = self.low, self.high
         if low is not None and high is not None and not (low <= value <= high):
             return f"must be in [{low:g}, {high:g}], got {value:g}"

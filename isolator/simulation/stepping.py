@@ -10,7 +10,7 @@ from functools import lru_cache
 import casadi as ca
 import numpy as np
 
-from isolator.errors import SimulationError
+from isolator.errors import ScenarioError, SimulationError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
 from isolator.model.signals import signal_function
@@ -22,9 +22,11 @@ from isolator.numerics.rk4 import Stepper
 __all__ = [
     "DENSE_STEP_ANGLE",
     "MAX_DENSE_STEP",
+    "MAX_STEPS",
     "MAX_TURN",
     "STEP_ANGLE",
     "Method",
+    "check_step_count",
     "check_turn",
     "clear_caches",
     "dense_stepper",
@@ -126,3 +128,19 @@ def hold_time(end: Equilibrium | None) -> float:
     im = np.abs(np.imag(end.eigenvalues))
     im = im[im > 1e-6]
     return float(2 * math.pi / im.min()) if im.size else 0.0
+
+
+#: the most integration steps one run may take
+MAX_STEPS = 2e7
+
+
+def check_step_count(omega: float, duration: float, angle: float) -> None:
+    """Refuse a run whose fastest eigenvalue ``omega`` [1/s] needs more than :data:`MAX_STEPS` explicit steps
+    of ``|lambda| h <= angle`` over ``duration`` [s] (a stiffness or damping far beyond a real isolator's)."""
+    steps = duration * omega / angle
+    if not math.isfinite(steps) or steps > MAX_STEPS:
+        raise ScenarioError(
+            f"isolators: the table's fastest mode (|lambda| = {omega:.3g} 1/s) needs about {steps:.3g} integration "
+            f"steps for this {duration:g} s run (at most {MAX_STEPS:g}): a stiffness or damping far beyond a real "
+            "isolator's, or much too light a table"
+        )
