@@ -40,7 +40,10 @@ class Response:
     q : ndarray (n, N)
         Carriage coordinates [m].
     stop_time : float
-        When the last carriage stops [s] (inf: never).
+        When the last carriage stops [s] (inf: never), a time on the run's clock.
+    move_start : float
+        When the first carriage starts moving [s]; the move time is
+        ``stop_time - move_start``, not the stop time.
     final : ndarray (6,) or None
         The signals' static equilibrium values with the carriages at their
         final positions (None when a carriage never stops).
@@ -72,6 +75,7 @@ class Response:
     actuator_forces: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)), repr=False)
     pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
     deadbands: dict[str, float] = field(default_factory=dict, repr=False)
+    move_start: float = 0.0
     remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(
         default=None, repr=False, compare=False)
 
@@ -144,13 +148,15 @@ class Response:
     def to_dict(self) -> dict[str, Any]:
         """Summary as plain JSON-ready types (the ``isolator simulate --json`` object)."""
 
-        def num(v: float | None) -> float | None:
+        def num(v: float | None) -> float | None:  # full precision: JSON is read back (--band-json)
             return None if v is None or not math.isfinite(v) else float(v)
 
         return {
             "name": self.name,
             "model": self.model,
+            "move_start": num(self.move_start),
             "stop_time": num(self.stop_time),
+            "move_time": num(self.stop_time - self.move_start),
             "signals": list(SIGNALS),
             "peak": {k: num(v) for k, v in self.peak.items()},
             "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
@@ -186,8 +192,11 @@ class Response:
     def summary(self) -> str:
         """A text table of peaks, final values and settling times per signal."""
         lines = [
-            f"{self.name} ({self.model} model), carriages stop at "
-            + ("never (sine)" if math.isinf(self.stop_time) else f"{self.stop_time:.4g} s"),
+            f"{self.name} ({self.model} model): "
+            + (f"the carriages move from t = {self.move_start:.4g} s and never stop (a sine)"
+               if math.isinf(self.stop_time) else
+               f"the carriages move from t = {self.move_start:.4g} s to their stop at t = {self.stop_time:.4g} s "
+               f"(move time {self.stop_time - self.move_start:.4g} s)"),
             f"{'signal':>6}  {'peak':>12}  {'final':>12}  {'settling [s]':>12}",
         ]
         for i, k in enumerate(SIGNALS):
@@ -237,9 +246,15 @@ class Response:
         """
         import matplotlib.pyplot as plt
 
+        zoom = None
         if fig is None:
-            fig, _ = plt.subplots(3, 2, figsize=(11, 7.5), sharex=True, constrained_layout=True)
-        axes = np.asarray(fig.axes).reshape(3, 2)
+            fig = plt.figure(figsize=(11, 10), constrained_layout=True)
+            grid = fig.add_gridspec(4, 2, height_ratios=(1, 1, 1, 1.1))
+            first = fig.add_subplot(grid[0, 0])
+            for row, col in ((0, 1), (1, 0), (1, 1), (2, 0), (2, 1)):
+                fig.add_subplot(grid[row, col], sharex=first)
+            zoom = fig.add_subplot(grid[3, :]) if self.final is not None and math.isfinite(self.stop_time) else None
+        axes = np.asarray(fig.axes[:6]).reshape(3, 2)
         for row in range(3):
             for col, name in enumerate((SIGNALS[3 + row], SIGNALS[row])):
                 ax = axes[row, col]
@@ -272,4 +287,26 @@ class Response:
         ]
         if label is None:
             axes[0, 1].legend(handles=handles, loc="upper left", fontsize=8)
+        if zoom is not None:
+            self._plot_residual(zoom)
         return fig
+
+    def _plot_residual(self, ax: Any) -> None:
+        """After the stop, each signal's distance from its final value in units of its band: the residual
+        vibration, readable even when a quasi-static tilt dwarfs it; settled below 1."""
+        if self.final is None:
+            return
+        after = self.t >= self.stop_time
+        for i, name in enumerate(SIGNALS):
+            band = self.settling[name].band
+            if band <= 0 or self.settling[name].reason == "does not move":
+                continue
+            ax.semilogy(self.t[after] - self.stop_time, np.abs(self.signals[i, after] - self.final[i]) / band,
+                        lw=1.0, label=name)
+        ax.axhline(1.0, color="k", ls="--", lw=1.2, label="band edge")
+        ax.set_ylim(1e-3, None)
+        ax.set_xlabel("time after the carriages stop [s]")
+        ax.set_ylabel("|signal - final| / band [-]")
+        ax.set_title("residual vibration after the stop, in units of each signal's settling band (settled below 1)")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(loc="upper right", fontsize=8, ncol=7)

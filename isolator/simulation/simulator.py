@@ -362,6 +362,7 @@ class Simulator:
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
             pneumatic_result=pneumatic,
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
+            move_start=min((b for c in self.scenario.carriages for b in c.profile.breakpoints[:1]), default=0.0),
         )
 
     def _metrics(self, signals: np.ndarray, final: np.ndarray | None, hold: float,
