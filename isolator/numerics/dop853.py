@@ -91,6 +91,19 @@ class DenseStepper:
             out = polynomials[step, j] + s * out
         return polynomials[step, 0] + s * out
 
+    @staticmethod
+    def states_at(plan: StepPlan, polynomials: np.ndarray, times: np.ndarray) -> np.ndarray:
+        """The model's states at any ``times`` [s] within the plan, (N, n_states), from the steps' dense
+        output (``polynomials`` as :meth:`states` takes them)."""
+        count = polynomials.shape[0]
+        starts = np.asarray(plan.start, dtype=float)[:count]
+        step = np.clip(np.searchsorted(starts, times, side="right") - 1, 0, count - 1)
+        s = ((np.asarray(times, dtype=float) - starts[step]) / np.asarray(plan.length, dtype=float)[step])[:, None]
+        out = polynomials[step, -1]
+        for j in range(polynomials.shape[1] - 2, 0, -1):
+            out = polynomials[step, j] + s * out
+        return np.asarray(polynomials[step, 0] + s * out)
+
     def run(
         self, x0: np.ndarray, plan: StepPlan, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:

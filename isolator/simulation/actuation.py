@@ -23,8 +23,9 @@ import numpy as np
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.tables import read_csv_columns
+from isolator.simulation.time_grid import TimeGrid, stage_times
 
-__all__ = ["ForceHistory", "applied_forces", "load_forces"]
+__all__ = ["ForceHistory", "applied_forces", "load_forces", "with_forces"]
 
 
 @dataclass(frozen=True)
@@ -163,4 +164,27 @@ def applied_forces(
         if step[i]:
             y = ul[i + 1] + (y - ul[i] + slope[i] * tau) * decay[i] - slope[i] * tau
         out[i + 1, lagged] = y
+    return out
+
+
+def with_forces(
+    scenario: Scenario, where: slice, grid: TimeGrid, inputs: np.ndarray, substeps: int, forces: ForceHistory | None
+) -> np.ndarray:
+    """The model's inputs at every RK4 stage time with the actuators' applied forces in their ``where`` slot.
+
+    Raises
+    ------
+    ParameterError
+        ``forces`` is for other actuators than the scenario's.
+    """
+    if forces is None:
+        return inputs
+    names = tuple(a.name for a in scenario.actuators)
+    if forces.names != names:
+        raise ParameterError(f"forces: are for actuators {forces.names}, the scenario has {names}")
+    times, mid = stage_times(grid, substeps)
+    flat = times.ravel()
+    applied = applied_forces(scenario, forces.command(flat, mid.ravel()), flat)
+    out = inputs.copy()
+    out[..., where] = applied.reshape(*times.shape, len(names))
     return out

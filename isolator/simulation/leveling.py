@@ -38,6 +38,7 @@ __all__ = [
     "PneumaticResult",
     "leveling_summary",
     "leveling_time",
+    "metric_grid",
     "plot_leveling",
     "pneumatic_result",
     "quasi_static_signals",
@@ -48,6 +49,20 @@ __all__ = [
 LEVEL_BAND = 1.1
 #: interval [s] at which the quasi-static pose is solved (a cubic spline between)
 QUASI_STATIC_STEP = 0.01
+#: the least rate [Hz] at which leveling times and the settling about the leveling table are read
+METRIC_RATE = 1000.0
+
+
+def metric_grid(samples: np.ndarray, end: float) -> np.ndarray:
+    """The output samples and a grid of :data:`METRIC_RATE` up to ``end`` [s], merged (times [s]; the samples
+    alone when they are as dense; grid times within 1e-9 s of a sample dropped)."""
+    if samples.size > 1 and float(np.max(np.diff(samples))) <= 1.0 / METRIC_RATE * (1 + 1e-9):
+        return samples
+    extra = np.arange(0.0, end, 1.0 / METRIC_RATE)
+    right = np.clip(np.searchsorted(samples, extra), 0, samples.size - 1)
+    left = np.clip(right - 1, 0, samples.size - 1)
+    near = np.minimum(np.abs(extra - samples[right]), np.abs(extra - samples[left])) < 1e-9
+    return np.union1d(samples, extra[~near])
 
 
 @dataclass(frozen=True)
@@ -227,7 +242,7 @@ def quasi_static_signals(
     -----
     Solved every ``QUASI_STATIC_STEP`` and splined between: the air changes slowly.
     """
-    stride = max(1, round(QUASI_STATIC_STEP / max(float(np.min(np.diff(t))), 1e-12))) if t.size > 1 else 1
+    stride = max(1, round(QUASI_STATIC_STEP / max(float(np.median(np.diff(t))), 1e-12))) if t.size > 1 else 1
     picked = np.unique(np.append(np.arange(0, t.size, stride), t.size - 1))
     q = np.asarray(positions, dtype=float)
     contents = air_in_groups(model, states[picked], p)
@@ -250,15 +265,22 @@ def pneumatic_result(
     peaks: np.ndarray,
     hold: float,
     band: Band | None = None,
+    fine: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> PneumaticResult:
-    """Pressures, heights, leveling times and the dynamic settling of a pneumatic run's samples (in ``band``,
-    default the scenario's ``[settling]`` rule, resolved on the run's ``peaks``)."""
+    """Pressures and heights at a pneumatic run's samples; leveling times and the dynamic settling (in
+    ``band``, default the scenario's ``[settling]`` rule, resolved on the run's ``peaks``) read on ``fine``:
+    times [s] and states on a grid of at least :data:`METRIC_RATE` (default: the samples), so that they do
+    not depend on the output rate."""
     air = scenario.air
     if air is None:
         raise ValueError("pneumatic_result: not a pneumatic scenario")
     m = len(scenario.isolators)
     pressures = states[:, 13 : 13 + m].T - air.atmosphere
+    sample_t, sample_heights = t, sensor_heights(scenario, states)
+    t, states = (t, states) if fine is None else fine
+    signals = model.variant.signals(states, start.state) if fine is not None else signals
     heights = sensor_heights(scenario, states)
+    gauge = states[:, 13 : 13 + m].T - air.atmosphere
     stop = scenario.stop_time
     with_valve = [j for j, g in enumerate(scenario.leveling) if g.valve is not None]
     levels: dict[str, float | None] = {}
@@ -270,7 +292,7 @@ def pneumatic_result(
             continue
         levels[group.name] = leveling_time(t, heights[j], stop, valve.deadband)
         wants_air = -heights[j] > valve.deadband
-        full = np.max(pressures[list(group.isolators)], axis=0) >= group.supply
+        full = np.max(gauge[list(group.isolators)], axis=0) >= group.supply
         starved = np.flatnonzero(wants_air & full)
         if starved.size:
             exhausted[group.name] = float(t[starved[0]])
@@ -286,9 +308,9 @@ def pneumatic_result(
         isolator_names=names,
         pressures=pressures,
         group_names=tuple(scenario.leveling[j].name for j in with_valve),
-        heights=heights[with_valve],
+        heights=sample_heights[with_valve],
         leveling_time=levels,
-        quasi_static=quasi,
+        quasi_static=quasi if fine is None else np.array([np.interp(sample_t, t, row, left=np.nan) for row in quasi]),
         dynamic=dynamic,
         supply_exhausted=exhausted,
     )

@@ -8,7 +8,7 @@ from typing import Literal
 
 import numpy as np
 
-from isolator.errors import ParameterError, SimulationError, UnstableTableError
+from isolator.errors import SimulationError, UnstableTableError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
@@ -18,11 +18,11 @@ from isolator.numerics.step_plan import PROBES
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
-from isolator.simulation.actuation import ForceHistory, applied_forces
+from isolator.simulation.actuation import ForceHistory, with_forces
 from isolator.simulation.batch import BatchResult, run_batch
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
 from isolator.simulation.dense_metrics import DenseRuns, run_metrics
-from isolator.simulation.leveling import PneumaticResult, pneumatic_result
+from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic_result
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
@@ -41,7 +41,7 @@ from isolator.simulation.stepping import (
     staged_parameters,
     with_start,
 )
-from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, stage_times, time_grid
+from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
 
 __all__ = [
     "FeedbackLaw",
@@ -255,20 +255,6 @@ class Simulator:
         method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
         return self.run_method(p, start, end, method, forces, feedback, band)
 
-    def _with_forces(self, inputs: np.ndarray, substeps: int, forces: ForceHistory | None) -> np.ndarray:
-        """The inputs with the actuators' applied forces at every stage time."""
-        if forces is None:
-            return inputs
-        names = tuple(a.name for a in self.scenario.actuators)
-        if forces.names != names:
-            raise ParameterError(f"forces: are for actuators {forces.names}, the scenario has {names}")
-        times, mid = stage_times(self.grid, substeps)
-        flat = times.ravel()
-        applied = applied_forces(self.scenario, forces.command(flat, mid.ravel()), flat)
-        out = inputs.copy()
-        out[..., self.layout.actuator_slice] = applied.reshape(*times.shape, len(names))
-        return out
-
     def run_method(
         self,
         p: np.ndarray,
@@ -307,12 +293,17 @@ class Simulator:
             def history() -> np.ndarray:
                 return np.vstack([x0, DenseStepper.states(plan, dense)])
 
+            def fine() -> tuple[np.ndarray, np.ndarray]:  # pneumatic leveling, read at >= 1 kHz
+                times = metric_grid(grid.samples, float(grid.nodes[-1]))
+                return times, np.vstack([x0, DenseStepper.states_at(plan, dense, times[1:])])
+
             states: np.ndarray | None = None
             at_samples = self._at_samples()
         else:
             substeps = method.substeps
             if feedback is None:
-                inputs = self._with_forces(self.grid_inputs(substeps), substeps, forces)
+                inputs = with_forces(self.scenario, self.layout.actuator_slice, self.grid, self.grid_inputs(substeps),
+                                     substeps, forces)
                 stepped = rk4_stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
             else:
                 stepped, inputs = run_closed_loop(
@@ -325,6 +316,7 @@ class Simulator:
             if bad.any():
                 raise SimulationError(f"the run diverged: non-finite state at t = {grid.nodes[np.argmax(bad)]:.4g} s")
             states = every[grid.is_sample]
+            fine = lambda: (grid.nodes, every)  # noqa: E731 the internal grid, >= 1 kHz
             on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
             signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
 
@@ -341,7 +333,7 @@ class Simulator:
             if not self.scenario.is_pneumatic:
                 return metrics, resolved, None
             return metrics, resolved, lambda: pneumatic_result(self.scenario, self.model, p, t, run_states(), signals,
-                                                               start, peaks_all, hold, resolved)
+                                                               start, peaks_all, hold, resolved, fine())
 
         metrics, resolved, pneumatic = remeasure(Band.from_settling(self.scenario.settling) if band is None else band)
 

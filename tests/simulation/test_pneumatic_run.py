@@ -110,3 +110,19 @@ def test_with_valves_the_dynamic_settling_leaves_out_the_leveling(leveled):
     assert np.max(np.abs(result.quasi_static[:, -1] - end)) < 1e-3 * np.max(np.abs(r.signals))
     assert math.isfinite(result.quasi_static[0, -1])
     assert np.all(np.isnan(result.quasi_static[:, r.t < s.stop_time - 1e-9]))
+
+
+def test_leveling_figures_do_not_depend_on_the_output_rate():
+    """Leveling times and the settling about the leveling table are read on a >= 1 kHz grid of the dense
+    output, whatever the output sample rate."""
+    results = []
+    for rate in (5.0, 50.0, 1000.0):
+        data = pneumatic_dict(valves=True, stroke=0.8, duration=16.0)
+        data["simulation"]["sample_rate"] = rate
+        r = simulate(scenario_from_dict(data))
+        assert r.pneumatic is not None
+        results.append((r.pneumatic.leveling_time, r.pneumatic.dynamic_settling_time_max))
+    for levels, dynamic in results[:2]:
+        assert dynamic == pytest.approx(results[-1][1], abs=2e-3)
+        for name, value in levels.items():
+            assert value == pytest.approx(results[-1][0][name], abs=2e-3)
