@@ -98,7 +98,7 @@ def _fig_3_4(scenario: Scenario, path: Path) -> None:
 
 def _fig_3_5(exact: Response, paper: Response, path: Path) -> None:
     fig = exact.plot(label="exact model")
-    axes = np.asarray(fig.axes).reshape(3, 2)
+    axes = np.asarray(fig.axes[:6]).reshape(3, 2)  # the seventh: the exact run's residual after the stop
     for row in range(3):
         for col, name in enumerate((SIGNALS[3 + row], SIGNALS[row])):
             i = SIGNALS.index(name)
