@@ -13,6 +13,7 @@ import numpy as np
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
+from isolator.scenario.windows import Window
 
 __all__ = [
     "SIGNALS",
@@ -227,6 +228,7 @@ class Scenario:
     points: tuple[Point, ...] = ()
     air: Air | None = None
     leveling: tuple[LevelingGroup, ...] = ()
+    windows: tuple[Window, ...] = ()
 
     # -- derived quantities -------------------------------------------------
     @property

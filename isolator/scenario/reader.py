@@ -43,6 +43,7 @@ from isolator.scenario.validation import (
     check_strokes,
     check_unique_names,
 )
+from isolator.scenario.windows_reader import read_windows
 
 __all__ = ["bundled_scenarios", "load_scenario", "load_spectrum", "read_csv_columns", "resolve_scenario_path",
            "scenario_from_dict"]
@@ -154,6 +155,7 @@ def scenario_from_dict(
     )
     top.used.add("points")
     check_unique_names([pt.name for pt in points], "points")
+    windows = read_windows(top, data, [pt.name for pt in points])
     top.finish()
     scenario = Scenario(
         name=name,
@@ -168,6 +170,7 @@ def scenario_from_dict(
         points=points,
         air=air,
         leveling=leveling,
+        windows=windows,
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
     check_strokes(scenario)

@@ -14,6 +14,7 @@ from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
 from isolator.scenario.rules import check_scenario_values
+from isolator.scenario.windows import check_windows
 
 __all__ = [
     "check_carriage_tree",
@@ -207,6 +208,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_carriage_tree(scenario.carriages)
     check_unique_names([a.name for a in scenario.actuators], "actuators")
     check_unique_names([pt.name for pt in scenario.points], "points")
+    check_windows(scenario.windows, [pt.name for pt in scenario.points])
     check_motion(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)

@@ -13,7 +13,9 @@ import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
+from isolator.simulation.points import PointSet
 from isolator.simulation.settling import Band, SettlingResult
+from isolator.simulation.window_settling import WindowResult, plot_windows
 
 __all__ = ["Response"]
 
@@ -58,6 +60,10 @@ class Response:
     actuator_names : tuple of str
     actuator_forces : ndarray (n_actuators, N)
         Forces the actuators applied [N] (after saturation and lag).
+    point_set : PointSet or None
+        The scenario's ``[[points]]`` (read their motion with :meth:`point`).
+    window_result : WindowResult or callable or None
+        With ``[[windows]]``: the window settling (read :attr:`windows`).
     """
 
     name: str
@@ -78,6 +84,68 @@ class Response:
     move_start: float = 0.0
     remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(
         default=None, repr=False, compare=False)
+    point_set: PointSet | None = field(default=None, repr=False)
+    window_result: WindowResult | Callable[[], WindowResult] | None = field(default=None, repr=False, compare=False)
+    point_history: np.ndarray | None = field(default=None, repr=False, compare=False)
+
+    @property
+    def point_names(self) -> tuple[str, ...]:
+        """The scenario's ``[[points]]`` names."""
+        return () if self.point_set is None else self.point_set.names
+
+    @property
+    def point_signals(self) -> np.ndarray:
+        """Every point's world displacement from its position at the initial equilibrium (points, 3, N) [m]
+        (exact rotation of the lever arm); computed from the states on first use."""
+        if self.point_history is None:
+            moved = np.zeros((0, 3, self.t.size)) if self.point_set is None or not self.point_set.names \
+                else self.point_set.displacements(self.states)
+            object.__setattr__(self, "point_history", moved)
+        assert self.point_history is not None
+        return self.point_history
+
+    def point(self, name: str) -> np.ndarray:
+        """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]."""
+        if self.point_set is None:
+            raise KeyError(f"point: unknown '{name}' (this run has no points)")
+        return self.point_signals[self.point_set.index(name)]
+
+    @property
+    def windows(self) -> WindowResult | None:
+        """With ``[[windows]]``: each window's settling time after the stop, read on a >= 1 kHz grid of the
+        dense output (:mod:`isolator.simulation.window_settling`); computed on first use. Else None."""
+        result = self.window_result
+        if callable(result):
+            result = result()
+            object.__setattr__(self, "window_result", result)
+        return result
+
+    @property
+    def window_settling_time(self) -> list[float | None]:
+        """Per ``[[windows]]`` block, in order: settling time after the stop [s] (None: not shown)."""
+        return [] if self.windows is None else list(self.windows.settling_time)
+
+    @property
+    def window_settling_time_max(self) -> float | None:
+        """The largest window settling time [s]; None without windows or when one is not shown."""
+        return None if self.windows is None else self.windows.settling_time_max
+
+    def plot_windows(self, title: str = "") -> Any:
+        """Each window's point deviation from its settled position against time, the window shaded.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+
+        Raises
+        ------
+        ValueError
+            For a run without ``[[windows]]``.
+        """
+        if self.windows is None:
+            raise ValueError("plot_windows: the scenario has no [[windows]]")
+        return plot_windows(self.windows, self.stop_time,
+                            title or f"{self.name}: settling windows ({self.model} model)")
 
     def with_band(self, band: Band) -> Response:
         """The same run measured in another settling band (on the same dense output or internal grid as its
@@ -164,16 +232,23 @@ class Response:
             "settling_time_max": num(self.settling_time_max),
             "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
             "band": self.band.to_dict(),
+            "point_peak": {n: {a: num(float(np.max(np.abs(self.point_signals[i, j])))) for j, a in enumerate("xyz")}
+                           for i, n in enumerate(self.point_names)},
+            **({} if self.windows is None else self.windows.to_dict()),
             **({} if self.pneumatic is None else self.pneumatic.to_dict()),
         }
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``f:<actuator>...`` [N]
-        when actuators applied forces, then for pneumatic runs ``p:<isolator>...`` [Pa] and
+        """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``<point>:x,<point>:y,<point>:z``
+        per ``[[points]]`` entry [m], ``f:<actuator>...`` [N] when actuators applied forces, then for
+        pneumatic runs ``p:<isolator>...`` [Pa] and
         ``h:<group>...`` [m], to ``path``."""
         path = Path(path)
         header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names]]
         columns = [self.t, self.signals.T, self.q.T]
+        if self.point_names:
+            header += [f"{n}:{a}" for n in self.point_names for a in "xyz"]
+            columns.append(self.point_signals.reshape(-1, self.t.size).T)
         if self.actuator_forces.size and np.any(self.actuator_forces):
             header += [f"f:{n}" for n in self.actuator_names]
             columns.append(self.actuator_forces.T)
@@ -215,6 +290,8 @@ class Response:
         for k, r in self.settling.items():
             if r.reason and r.reason != "does not move":
                 lines.append(f"  {k}: {r.reason}")
+        if self.windows is not None:
+            lines += self.windows.summary_lines()
         if self.pneumatic is not None:
             lines += leveling_summary(self.pneumatic)
         return "\n".join(lines)

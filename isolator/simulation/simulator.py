@@ -42,6 +42,7 @@ from isolator.simulation.stepping import (
     with_start,
 )
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
+from isolator.simulation.window_settling import run_points
 
 __all__ = [
     "FeedbackLaw",
@@ -336,6 +337,8 @@ class Simulator:
                                                                start, peaks_all, hold, resolved, fine())
 
         metrics, resolved, pneumatic = remeasure(Band.from_settling(self.scenario.settling) if band is None else band)
+        points, windows = run_points(self.scenario, self.model.kind, start.state, None if end is None else end.state,
+                                     self.stop_time, hold, fine)
 
         return Response(
             name=self.scenario.name,
@@ -353,6 +356,8 @@ class Simulator:
             actuator_names=tuple(a.name for a in self.scenario.actuators),
             actuator_forces=at_samples[:, self.layout.actuator_slice].T,
             pneumatic_result=pneumatic,
+            point_set=points,
+            window_result=windows,
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
             move_start=min((b for c in self.scenario.carriages for b in c.profile.breakpoints[:1]), default=0.0),
         )

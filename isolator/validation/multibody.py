@@ -149,7 +149,8 @@ class MujocoTable:
 
         sites = "".join(
             f'<site name="iso{k}" pos="{_vec(iso.position)}"/>' for k, iso in enumerate(self.isolators)
-        ) + "".join(f'<site name="sensor{j}" pos="{_vec(g.sensor)} 0"/>' for j, g in enumerate(sc.leveling))
+        ) + "".join(f'<site name="sensor{j}" pos="{_vec(g.sensor)} 0"/>' for j, g in enumerate(sc.leveling)) + "".join(
+            f'<site name="point{j}" pos="{_vec(pt.position)}"/>' for j, pt in enumerate(sc.points))
         carriages = "".join(body(i) for i in children.get("table", []))
         return (
             '<mujoco model="isolation-table">'
@@ -254,6 +255,18 @@ class MujocoTable:
     def sensor_heights(self) -> np.ndarray:
         """Each group's sensor height [m]: world z of its site at MuJoCo's current positions."""
         return np.array([self.data.site_xpos[sid][2] for sid in self.sensor_ids])
+
+    def point_positions(self, states: np.ndarray) -> np.ndarray:
+        """World positions (points, 3, N) [m] of the scenario's ``[[points]]`` sites for table states (N, >= 7)
+        (position, quaternion w, x, y, z), by MuJoCo's kinematics."""
+        ids = [self.mj.mj_name2id(self.model, self.mj.mjtObj.mjOBJ_SITE, f"point{j}")
+               for j in range(len(self.scenario.points))]
+        out = np.empty((len(ids), 3, len(states)))
+        for i, y in enumerate(np.asarray(states, dtype=float)):
+            self.data.qpos[0:7] = np.r_[y[0:3], y[3:7] / np.linalg.norm(y[3:7])]
+            self.mj.mj_kinematics(self.model, self.data)
+            out[:, :, i] = [self.data.site_xpos[sid] for sid in ids]
+        return out
 
     def _fill_mass_matrix(self) -> None:
         """Dense joint-space mass matrix (MuJoCo 3 and 4 spell the call differently)."""
