@@ -226,12 +226,16 @@ def _simulate(args: argparse.Namespace) -> int:
     response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args))
     if out:
         response.to_csv(out)
-    leveling = None
+    leveling = windows = None
     if plot is not None:
         use_agg()
         save_figure(response.plot(), plot)
         if response.pneumatic is not None:
             leveling = plot.with_name(f"{plot.stem}-leveling{plot.suffix}")
             save_figure(response.plot_leveling(), leveling)
-    outputs = [("response table", out), ("figure", plot), ("pressures and heights", leveling)]
+        if response.windows is not None:
+            windows = plot.with_name(f"{plot.stem}-windows{plot.suffix}")
+            save_figure(response.plot_windows(), windows)
+    outputs = [("response table", out), ("figure", plot), ("pressures and heights", leveling),
+               ("settling windows", windows)]
     return report(args.json, response.to_dict(), response.summary(), outputs)

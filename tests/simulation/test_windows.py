@@ -187,3 +187,23 @@ def test_short_run_says_so():
     assert r.window_settling_time_max is None
     assert "end of the run" in r.windows.reasons[0]
     assert "not available" in r.summary()
+
+
+def test_cli_writes_the_windows_figure_and_json(tmp_path, capsys):
+    from isolator.cli.app import main
+    from isolator.scenario.reader import bundled_scenarios
+
+    text = bundled_scenarios()["paper-table-3-2"].read_text()
+    text += '\n[[points]]\nname = "probe"\nposition = [0.3, 0.0, 0.45]\n\n[[windows]]\npoint = "probe"\n'
+    text += "translation = 5.0e-7\n"
+    scenario = tmp_path / "probe.toml"
+    scenario.write_text(text)
+    plot = tmp_path / "X.png"
+    assert main(["simulate", str(scenario), "--plot", str(plot)]) == 0
+    assert "settling windows:" in capsys.readouterr().out
+    assert (tmp_path / "X-windows.png").stat().st_size > 10_000
+    assert main(["simulate", str(scenario), "--json"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert len(data["window_settling_time"]) == 1
+    assert data["window_settling_time_max"] == pytest.approx(data["window_settling_time"][0])
+    assert data["window_settling_time_max"] > 0.5
