@@ -100,7 +100,7 @@ class WindowResult:
         lines = []
         for i, (w, st, why) in enumerate(zip(self.windows, self.settling_time, self.reasons, strict=True)):
             value = f"{st:.4g} s after the stop" if st is not None else f"not available ({why})"
-            lines.append(f"window {i} ({w.point}, +-{w.translation * 1e9:.4g} nm on {','.join(w.axes)}): {value}")
+            lines.append(f"window {i} ({w.point}, ±{w.translation * 1e9:.4g} nm on {','.join(w.axes)}): {value}")
         return lines
 
 
@@ -141,7 +141,7 @@ def plot_windows(result: WindowResult, stop_time: float, title: str) -> Any:
         for axis, row in zip(w.axes, dev, strict=True):
             ax.plot(result.t, row * 1e9, lw=1.0, label=f"{w.point}:{axis}")
         h = w.translation * 1e9
-        ax.axhspan(-h, h, color="tab:green", alpha=0.15, lw=0, label=f"window +-{h:.4g} nm")
+        ax.axhspan(-h, h, color="tab:green", alpha=0.15, lw=0, label=f"window ±{h:.4g} nm")
         if math.isfinite(stop_time):
             ax.axvline(stop_time, color="0.5", ls=":", lw=1, label="carriages stop")
             if st is not None:
@@ -154,6 +154,8 @@ def plot_windows(result: WindowResult, stop_time: float, title: str) -> Any:
                      fontsize=9)
         ax.grid(True, alpha=0.3)
         ax.legend(loc="upper right", fontsize=8)
+    if math.isfinite(stop_time) and result.t.size:  # before the stop the point travels with the table's tilt
+        axes[-1, 0].set_xlim(max(float(result.t[0]), stop_time - 0.5), float(result.t[-1]))
     axes[-1, 0].set_xlabel("time [s]")
     fig.suptitle(title)
     return fig

@@ -161,8 +161,8 @@ def test_window_settling_json_summary_and_plot(by_rate, tmp_path):
     assert summary["window_settling_time"] == pytest.approx(r.window_settling_time)
     assert summary["window_settling_time_max"] == pytest.approx(max(r.window_settling_time))
     text = r.summary()
-    assert "window 0 (probe, +-400 nm on x,y,z):" in text
-    assert "window 1 (probe, +-150 nm on z):" in text
+    assert "window 0 (probe, ±400 nm on x,y,z):" in text
+    assert "window 1 (probe, ±150 nm on z):" in text
     fig = r.plot_windows()
     assert len(fig.axes) == 2
     ax = fig.axes[0]
