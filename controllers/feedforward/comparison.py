@@ -142,6 +142,6 @@ def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = No
 
 def run_quasi_static(sim: Simulator, run: Response) -> np.ndarray:
     """Pneumatic runs: the table signals (6, N) of the rest with the air each sample's groups hold,
-    the carriages where they are (:func:`isolator.simulation.leveling.quasi_static_signals`)."""
-    start, _ = sim.equilibria(sim.parameters)
-    return quasi_static_signals(sim.model, sim.parameters, run.t, run.states, run.q.T, start.state)
+    the carriages where they are (:func:`isolator.simulation.leveling.quasi_static_signals`), measured from
+    the run's first state, its initial equilibrium."""
+    return quasi_static_signals(sim.model, sim.parameters, run.t, run.states, run.q.T, run.states[0])

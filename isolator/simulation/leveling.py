@@ -277,10 +277,12 @@ def pneumatic_result(
     m = len(scenario.isolators)
     pressures = states[:, 13 : 13 + m].T - air.atmosphere
     sample_t, sample_heights = t, sensor_heights(scenario, states)
-    t, states = (t, states) if fine is None else fine
-    signals = model.variant.signals(states, start.state) if fine is not None else signals
-    heights = sensor_heights(scenario, states)
-    gauge = states[:, 13 : 13 + m].T - air.atmosphere
+    if fine is not None and fine[0] is not t:  # a finer grid than the samples: read the leveling there
+        t, states = fine
+        signals = model.variant.signals(states, start.state)
+        heights, gauge = sensor_heights(scenario, states), states[:, 13 : 13 + m].T - air.atmosphere
+    else:
+        heights, gauge = sample_heights, pressures
     stop = scenario.stop_time
     with_valve = [j for j, g in enumerate(scenario.leveling) if g.valve is not None]
     levels: dict[str, float | None] = {}
@@ -310,7 +312,7 @@ def pneumatic_result(
         group_names=tuple(scenario.leveling[j].name for j in with_valve),
         heights=sample_heights[with_valve],
         leveling_time=levels,
-        quasi_static=quasi if fine is None else np.array([np.interp(sample_t, t, row, left=np.nan) for row in quasi]),
+        quasi_static=quasi if t is sample_t else np.array([np.interp(sample_t, t, row, left=np.nan) for row in quasi]),
         dynamic=dynamic,
         supply_exhausted=exhausted,
     )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Mapping, Sequence
+from functools import cache
 from typing import Literal
 
 import numpy as np
@@ -269,7 +270,6 @@ class Simulator:
         """One run from the equilibria ``start`` (and ``end``, None if a carriage never stops) with
         ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
         grid = self.grid
-        n = len(self.scenario.carriages)
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
@@ -291,12 +291,15 @@ class Simulator:
 
             x0, dense = start.state, polynomials
 
+            @cache  # the states at the samples, once for the response, leveling and windows
             def history() -> np.ndarray:
                 return np.vstack([x0, DenseStepper.states(plan, dense)])
 
-            def fine() -> tuple[np.ndarray, np.ndarray]:  # pneumatic leveling, read at >= 1 kHz
+            @cache  # leveling and windows, read at >= 1 kHz (the samples themselves when as dense)
+            def fine() -> tuple[np.ndarray, np.ndarray]:
                 times = metric_grid(grid.samples, float(grid.nodes[-1]))
-                return times, np.vstack([x0, DenseStepper.states_at(plan, dense, times[1:])])
+                return times, history() if times is grid.samples else np.vstack(
+                    [x0, DenseStepper.states_at(plan, dense, times[1:])])
 
             states: np.ndarray | None = None
             at_samples = self._at_samples()
@@ -317,7 +320,7 @@ class Simulator:
             if bad.any():
                 raise SimulationError(f"the run diverged: non-finite state at t = {grid.nodes[np.argmax(bad)]:.4g} s")
             states = every[grid.is_sample]
-            fine = lambda: (grid.nodes, every)  # noqa: E731 the internal grid, >= 1 kHz
+            fine = cache(lambda: (grid.nodes, every))  # the internal grid, >= 1 kHz (typed as in the other branch)
             on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
             signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
 
@@ -346,7 +349,7 @@ class Simulator:
             t=t,
             signals=signals,
             carriage_names=tuple(c.name for c in self.scenario.carriages),
-            q=at_samples[:, :n].T,
+            q=at_samples[:, : len(self.scenario.carriages)].T,
             stop_time=self.stop_time,
             final=final,
             settling=metrics,
