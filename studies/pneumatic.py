@@ -44,7 +44,7 @@ from isolator.errors import ParameterError
 from isolator.model.equilibrium import Equilibrium
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import SineProfile
-from isolator.scenario.validation import rest_gauge_pressures
+from isolator.scenario.validation import isolator_rest_pressures
 from isolator.simulation.stepping import Method
 
 from .pneumatic_report import write_outputs
@@ -112,7 +112,7 @@ def closed_form_optimum(scenario: Scenario, ratio: float) -> ClosedForm:
     isolators = _pneumatic_isolators(scenario)
     air = scenario.air
     assert air is not None
-    p0 = _rest_pressures(scenario) + air.atmosphere
+    p0 = isolator_rest_pressures(scenario) + air.atmosphere
     n = air.polytropic
     k0 = sum(n * p * iso.area**2 / (iso.volume * (1 + ratio)) for iso, p in zip(isolators, p0, strict=True))
     m = scenario.total_mass
@@ -259,18 +259,11 @@ def _own_ratio(isolators: Sequence[PneumaticIsolator]) -> float:
     return float(np.exp(np.mean([math.log(iso.damping_volume / iso.volume) for iso in isolators])))
 
 
-def _rest_pressures(scenario: Scenario) -> np.ndarray:
-    """Each isolator's rest gauge pressure [Pa] (its group's), carriages at their start."""
-    groups = rest_gauge_pressures(scenario)
-    group_of = {k: j for j, g in enumerate(scenario.leveling) for k in g.isolators}
-    return np.array([groups[group_of[k]] for k in range(len(scenario.isolators))])
-
-
 def _tau_coefficient(scenario: Scenario, ratio: float) -> float:
     """``c`` with ``tau = c / d^4`` [s m^4], ``tau`` the geometric mean of the isolators' relaxation times."""
     air = scenario.air
     assert air is not None
-    p0 = _rest_pressures(scenario) + air.atmosphere
+    p0 = isolator_rest_pressures(scenario) + air.atmosphere
     logs = [math.log(128 * air.viscosity * iso.orifice.length * ratio * iso.volume / (math.pi * air.polytropic * p))
             for iso, p in zip(_pneumatic_isolators(scenario), p0, strict=True) if iso.orifice is not None]
     return math.exp(float(np.mean(logs)))

@@ -26,7 +26,7 @@ import numpy as np
 from isolator.errors import ParameterError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import Air, PneumaticIsolator
-from isolator.scenario.validation import rest_gauge_pressures
+from isolator.scenario.validation import isolator_rest_pressures
 
 __all__ = ["EquivalentSpringDamper", "equivalent_spring_damper", "optimal_relaxation_time", "relaxation_time"]
 
@@ -118,12 +118,11 @@ def equivalent_spring_damper(
     if isinstance(target, Scenario):
         if not target.is_pneumatic or target.air is None:
             raise ParameterError("target: the scenario's isolators are not pneumatic")
-        pressures = rest_gauge_pressures(target)
-        group_of = {k: j for j, g in enumerate(target.leveling) for k in g.isolators}
+        pressures = isolator_rest_pressures(target)
         out = {}
         for k, iso in enumerate(target.isolators):
             if isinstance(iso, PneumaticIsolator):
-                out[iso.name] = _equivalent(iso, float(pressures[group_of[k]]), target.air, f)
+                out[iso.name] = _equivalent(iso, float(pressures[k]), target.air, f)
         if isolator is None:
             return out
         if isolator not in out:

@@ -94,7 +94,7 @@ def quasi_static_pressures(
     """``d(pressures)/dd`` when the table is displaced slowly: each group's chambers at one pressure with
     its air kept, ``V dp + n p dV = 0`` summed over the group (rest values, deviations zero)."""
     m = len(structure.chambers)
-    damped = [k for k in range(m) if structure.chambers[k]]
+    damped = structure.damping_slots
     n = prm["air.polytropic"]
     rows: list[ca.SX] = [ca.SX.zeros(1, 6)] * (m + len(damped))
     for members in structure.groups:
@@ -105,5 +105,5 @@ def quasi_static_pressures(
         for k in members:
             rows[k] = row
             if k in damped:
-                rows[m + damped.index(k)] = row
+                rows[m + damped[k]] = row
     return ca.vertcat(*rows)

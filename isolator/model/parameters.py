@@ -44,6 +44,18 @@ class PneumaticStructure:
         """Spring-chamber pressures, then damping-chamber pressures [Pa]."""
         return len(self.chambers) + sum(self.chambers)
 
+    @property
+    def damping_slots(self) -> dict[int, int]:
+        """Isolator index -> its damping chamber's place among the damping chambers (whose pressures
+        follow the spring chambers' in the states), for the isolators that have one, in order."""
+        return {k: s for s, k in enumerate(k for k, d in enumerate(self.chambers) if d)}
+
+    @property
+    def group_of(self) -> tuple[int, ...]:
+        """The leveling group of each isolator."""
+        owner = {k: j for j, members in enumerate(self.groups) for k in members}
+        return tuple(owner[k] for k in range(len(self.chambers)))
+
     def names(self) -> list[str]:
         """Parameter names of the isolators, groups and air, in order."""
         out: list[str] = []

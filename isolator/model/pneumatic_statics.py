@@ -67,9 +67,8 @@ def rest_element_states(layout: ParameterLayout, prm: dict[str, ca.SX], gauge: c
     structure = layout.pneumatic
     if structure is None:
         return ca.SX.zeros(0, 1)
-    group_of = {k: j for j, members in enumerate(structure.groups) for k in members}
-    p1 = [prm["air.atmosphere"] + gauge[group_of[k]] for k in range(len(structure.chambers))]
-    p2 = [p1[k] for k, damped in enumerate(structure.chambers) if damped]
+    p1 = [prm["air.atmosphere"] + gauge[j] for j in structure.group_of]
+    p2 = [p1[k] for k in structure.damping_slots]
     return ca.vertcat(*p1, *p2)
 
 
@@ -91,7 +90,7 @@ def _chamber_volumes(structure: PneumaticStructure, prm: dict[str, ca.SX], pos: 
     zero = ca.SX.zeros(3, 1)
     motion = attachment_motion(pos, rot, zero, zero, prm, ground)
     v1 = [prm["volume"][k] + prm["area"][k] * motion.stretch[k][2] for k in range(len(structure.chambers))]
-    v2 = [prm["damping_volume"][k] for k, d in enumerate(structure.chambers) if d]
+    v2 = [prm["damping_volume"][k] for k in structure.damping_slots]
     return v1, v2
 
 
@@ -100,7 +99,7 @@ def air_contents(structure: PneumaticStructure, prm: dict[str, ca.SX], x: ca.SX)
     m = len(structure.chambers)
     v1, v2 = _chamber_volumes(structure, prm, x[0:3], quaternion_to_matrix(x[3:7]), None)
     inv_n = 1.0 / prm["air.polytropic"]
-    slot = {k: s for s, k in enumerate(k for k, d in enumerate(structure.chambers) if d)}
+    slot = structure.damping_slots
     out = []
     for members in structure.groups:
         total = ca.SX(0)
@@ -140,7 +139,7 @@ def closed_static_function(layout: ParameterLayout, all_closed: bool = False) ->
     )
     heights = sensor_heights(prm, z[:3], rot, n_groups)
     v1, v2 = _chamber_volumes(structure, prm, z[:3], rot, None)
-    slot = {k: s for s, k in enumerate(k for k, d in enumerate(structure.chambers) if d)}
+    slot = structure.damping_slots
     inv_n = 1.0 / prm["air.polytropic"]
     scale = _weight_scale(prm)
     extra = []

@@ -25,6 +25,7 @@ __all__ = [
     "check_pneumatics",
     "check_strokes",
     "check_unique_names",
+    "isolator_rest_pressures",
     "rest_gauge_pressures",
     "validate_scenario",
 ]
@@ -175,6 +176,13 @@ def rest_gauge_pressures(scenario: Scenario, positions: np.ndarray | None = None
             "do not all lie on one line are needed to hold the table level)"
         )
     return np.asarray(np.linalg.solve(matrix, load), dtype=float)
+
+
+def isolator_rest_pressures(scenario: Scenario, positions: np.ndarray | None = None) -> np.ndarray:
+    """Each pneumatic isolator's rest gauge pressure, its group's (:func:`rest_gauge_pressures`) [Pa], (isolators,)."""
+    groups = rest_gauge_pressures(scenario, positions)
+    owner = {k: j for j, g in enumerate(scenario.leveling) for k in g.isolators}
+    return np.array([groups[owner[k]] for k in range(len(scenario.isolators))])
 
 
 def check_pneumatics(scenario: Scenario) -> None:

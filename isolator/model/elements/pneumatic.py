@@ -85,9 +85,8 @@ class Pneumatic(IsolatorElement):
         p_atm = prm["air.atmosphere"]
         p1 = [states[k] for k in range(m)]
         inflow1 = [ca.SX(0) for _ in range(m)]
-        damped = [k for k in range(m) if structure.chambers[k]]
         rates2 = []
-        for slot, k in enumerate(damped):
+        for k, slot in structure.damping_slots.items():
             p2 = states[m + slot]
             g = conductance(prm["orifice.diameter"][k], prm["orifice.length"][k], mu)
             flow = capillary_flow(g, p2, p1[k], rt)  # damping chamber -> spring chamber
