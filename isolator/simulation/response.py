@@ -88,6 +88,14 @@ class Response:
     window_result: WindowResult | Callable[[], WindowResult] | None = field(default=None, repr=False, compare=False)
     point_history: np.ndarray | None = field(default=None, repr=False, compare=False)
 
+    def _evaluated(self, name: str) -> Any:
+        """The field ``name``, computed on first use: a callable there is called once and replaced by its value."""
+        value = getattr(self, name)
+        if callable(value):
+            value = value()
+            object.__setattr__(self, name, value)
+        return value
+
     @property
     def point_names(self) -> tuple[str, ...]:
         """The scenario's ``[[points]]`` names."""
@@ -114,10 +122,7 @@ class Response:
     def windows(self) -> WindowResult | None:
         """With ``[[windows]]``: each window's settling time after the stop, read on a >= 1 kHz grid of the
         dense output (:mod:`isolator.simulation.window_settling`); computed on first use. Else None."""
-        result = self.window_result
-        if callable(result):
-            result = result()
-            object.__setattr__(self, "window_result", result)
+        result: WindowResult | None = self._evaluated("window_result")
         return result
 
     @property
@@ -159,10 +164,7 @@ class Response:
     def pneumatic(self) -> PneumaticResult | None:
         """Pneumatic runs: pressures, sensor heights, leveling and the settling about the leveling table
         (:mod:`isolator.simulation.leveling`); computed on first use. None for spring-damper tables."""
-        result = self.pneumatic_result
-        if callable(result):
-            result = result()
-            object.__setattr__(self, "pneumatic_result", result)
+        result: PneumaticResult | None = self._evaluated("pneumatic_result")
         return result
 
     @property
@@ -179,10 +181,7 @@ class Response:
     @property
     def states(self) -> np.ndarray:
         """The model's state at the samples (N, n_states), for checks; evaluated on first use."""
-        history = self.state_history
-        if callable(history):
-            history = np.asarray(history(), dtype=float)
-            object.__setattr__(self, "state_history", history)
+        history: np.ndarray = self._evaluated("state_history")
         return history
 
     @property
