@@ -10,7 +10,6 @@ from typing import Any
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.cli.helpers import (
     check_memory,
-    check_run_memory,
     count,
     figure_path,
     output_path,
@@ -220,7 +219,6 @@ def _simulate(args: argparse.Namespace) -> int:
         from isolator.simulation.actuation import load_forces
 
         forces = load_forces(args.forces, scenario, key="--forces")
-    check_run_memory(scenario)
     if plot is None and not args.json:
         plot = figure_path(Path(f"{scenario.name}.png"), "--plot")
     response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args))
