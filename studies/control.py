@@ -35,6 +35,7 @@ from controllers.feedforward import (
     feedforward_allocation,
     feedforward_optimal,
     path_deviation,
+    run_quasi_static,
     settling_in_band,
 )
 from isolator import SIGNALS, Band, OptimisationError, ParameterError, Response, Scenario, ScenarioError, Simulator
@@ -168,8 +169,9 @@ def run_control_study(
     runs["both"] = sim.run(forces=ff.forces, feedback=fb.feedback_law(scenario, ctrl, reference=ff.path))
     band = Band.of_baseline("passive", runs["passive"].peak)
     settling = {name: settling_in_band(r, band) for name, r in runs.items()}
-    qs = ff.path(runs["passive"].t).T
-    deviation = {name: path_deviation(r, qs) for name, r in runs.items()}
+    qs = ff.path(runs["passive"].t).T  # pneumatic tables: each run's own leveling path (as compare_feedforward)
+    deviation = {name: path_deviation(r, run_quasi_static(sim, r) if scenario.is_pneumatic else qs)
+                 for name, r in runs.items()}
     study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band)
     write_json(folder, study.to_dict())
     ff.forces.to_csv(folder / "feedforward.csv")
@@ -210,8 +212,8 @@ def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -
     for name in CONTROLLERS:
         try:
             ctrl = design(name, lin)
-        except (ParameterError, OptimisationError):  # hinf without slycot, or no H-infinity design
-            if name != "hinf":
+        except (ParameterError, OptimisationError):  # hinf without slycot or no design; state feedback on air
+            if name != "hinf" and not (name == "lqr" and lin.air is not None):
                 raise
             continue
         # the closed loop answers what transmissibility asks of a LinearModel (frequency_response, scenario)

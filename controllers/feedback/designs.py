@@ -232,6 +232,15 @@ def _scales(lin: LinearModel, max_displacement: float, max_rotation: float, max_
     return np.array(states), np.array([a.max_force for a in lin.scenario.actuators])
 
 
+def _measured_state(lin: LinearModel, name: str) -> None:
+    """State-feedback designs need the whole state among the measurements (the table's 12 states)."""
+    if lin.air is not None:
+        raise ParameterError(
+            f"controller: {name} feeds back the whole state, and a pneumatic table's chamber pressures are not "
+            "measured (use skyhook, pid or lead)"
+        )
+
+
 def lqr(
     lin: LinearModel,
     max_displacement: float = 1e-4,
@@ -252,6 +261,7 @@ def lqr(
         Acceptable table displacement [m], rotation [rad], velocity [m/s] and
         angular velocity [rad/s].
     """
+    _measured_state(lin, "lqr")
     a, b = actuated(lin)
     sx, su = _scales(lin, max_displacement, max_rotation, max_velocity, max_rate)
     gain_scaled, _, _ = control.lqr(a * sx[None, :] / sx[:, None], b * su[None, :] / sx[:, None],
@@ -296,6 +306,7 @@ def hinf(
         import slycot
     except ImportError:
         raise ParameterError("controller: hinf needs slycot (pip install slycot)") from None
+    _measured_state(lin, "hinf")
     a, b2 = actuated(lin)
     labels = list(lin.system.input_labels)
     bw = np.asarray(lin.system.B, dtype=float)[:, [labels.index(n) for n in FORCE_INPUTS]]

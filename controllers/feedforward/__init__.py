@@ -29,7 +29,7 @@ pneumatic table's chamber pressures; its model along the path in
 from __future__ import annotations
 
 from .allocation import Feedforward, feedforward_allocation
-from .comparison import FeedforwardComparison, compare_feedforward, path_deviation, settling_in_band
+from .comparison import FeedforwardComparison, compare_feedforward, path_deviation, run_quasi_static, settling_in_band
 from .optimal import OptimalSettings, feedforward_optimal
 from .path import QS_SPACING, AirDemand, PathDemand, QuasiStaticPath, path_demand, quasi_static_path
 from .wrench import allocation_matrix, carriage_inertia_wrench, reaction_wrench
@@ -51,5 +51,6 @@ __all__ = [
     "path_deviation",
     "quasi_static_path",
     "reaction_wrench",
+    "run_quasi_static",
     "settling_in_band",
 ]

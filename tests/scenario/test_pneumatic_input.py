@@ -23,7 +23,7 @@ def _error(data: dict[str, Any]) -> str:
 
 
 def test_bundled_pneumatic_scenarios_read():
-    for name in ("paper-table-3-2-pneumatic", "paper-table-3-2-pneumatic-3"):
+    for name in ("paper-table-3-2-pneumatic", "paper-table-3-2-pneumatic-3", "paper-table-3-2-pneumatic-active"):
         s = load_scenario(name)
         assert s.is_pneumatic
         assert len(s.leveling) == 3
