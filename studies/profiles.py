@@ -232,7 +232,7 @@ def _plot_times(study: ProfileStudy) -> None:
     ax.set_ylabel("time from the move's command [s]")
     ax.set_ylim(0, max(m + (0 if np.isnan(s) else s) for m, s in zip(moves, settles, strict=True)) * 1.12)
     ax.set_title(f"Cycle time = move + settling (nominal model; band: {study.band.how()})")
-    ax.legend(loc="lower right")
+    ax.legend(loc="upper right")
     bx.bar(x, settles, color="tab:red")
     bx.set_xticks(x, names, rotation=20)
     bx.set_ylabel("settling time after the stop [s]")
