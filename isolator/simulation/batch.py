@@ -1,38 +1,53 @@
-"""Many runs of one scenario with the isolators' stiffness and damping scaled per run.
+"""Many runs of one scenario, one parameter vector per run.
 
 The runs' static equilibria are solved side by side; each run gets its own
 DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
-with single runs). Runs that share a plan are stepped ``LANES`` at a time, one
-per SIMD lane of the compiled loop (:mod:`isolator.numerics.dop853_driver`), in worker
-threads; each pack's metrics come from its dense output as a single run's do
+with single runs). Runs that share a plan and the staged inputs (the parameters
+the inputs' staged form depends on: masses, inertia, carriage axes) are stepped
+``LANES`` at a time, one per SIMD lane of the compiled loop
+(:mod:`isolator.numerics.dop853_driver`), in worker threads; each pack's metrics
+come from its dense output as a single run's do
 (:mod:`isolator.simulation.dense_metrics`), four runs at once.
 """
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+import threading
+from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
 import numpy as np
 
-from isolator.errors import ParameterError, SimulationError
+from isolator.errors import ParameterError, SimulationError, UnstableTableError
 from isolator.model.equilibrium import Equilibrium
+from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.response import Response
 from isolator.simulation.settling import Band, signal_bands, still_signals
-from isolator.simulation.stepping import Method, check_turn, dense_stepper, hold_time, rk4_stepper
+from isolator.simulation.stepping import (
+    MAX_TURN,
+    Method,
+    check_turn,
+    dense_stepper,
+    hold_time,
+    rk4_stepper,
+    staged_parameters,
+)
 from isolator.simulation.time_grid import TimeGrid
 
-__all__ = ["BLOCK", "LANES", "BatchResult", "BatchSimulator", "run_batch"]
+__all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_batch", "scale_label"]
 
 #: runs per task of a worker thread (their metrics are computed together)
 BLOCK = 16
 #: runs stepped side by side in one compiled call (AVX holds four doubles)
 LANES = 4
+#: a run's status: measured, no stable rest or turned past ``MAX_TURN``, non-finite states, the run's
+#: work failed (a sweep's chunk that failed twice)
+STATUSES = ("ok", "tipped", "diverged", "failed")
 
 
 @dataclass(frozen=True)
@@ -48,12 +63,14 @@ class BatchResult:
     peak : ndarray (runs, 6)
         [m or rad]; NaN for a run that diverged.
     failures : mapping of int to str
-        Why each diverged run failed, by run index (with ``diverged="record"``).
+        Why each failed run failed, by run index (with ``diverged="record"``).
     band : Band
         How the band was chosen (the scenario's ``[settling]`` rule unless given).
     half_widths : ndarray (runs, 6)
         The band each run's settling time is measured in [m or rad] (own bands: per run; NaN for a run
         that diverged).
+    status : ndarray (runs,) of str
+        One of :data:`STATUSES` per run (``reason`` gives the words of the others).
     """
 
     settling_time: np.ndarray
@@ -62,24 +79,26 @@ class BatchResult:
     failures: Mapping[int, str] = field(default_factory=dict)
     band: Band = field(default_factory=Band)
     half_widths: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
+    status: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
 
     def run_band(self, i: int) -> Band:
         """The band of run ``i``, resolved (its six half-widths)."""
         return Band(self.band.kind, self.band.fraction, self.band.baseline,
                     tuple(float(v) for v in self.half_widths[i]))
 
+    def reason(self, i: int) -> str:
+        """Why run ``i`` has no metrics ('' for a run that is "ok")."""
+        return self.failures.get(i, "")
+
 
 class BatchSimulator(Protocol):
     """What a batch needs of its simulator (:class:`isolator.simulation.simulator.Simulator`)."""
 
     scenario: Scenario
+    layout: ParameterLayout
     model: Model
     grid: TimeGrid
     stop_time: float
-
-    def scaled_parameter_sets(
-        self, stiffness: float | Sequence[float], damping: float | Sequence[float]
-    ) -> np.ndarray: ...
 
     def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]: ...
 
@@ -97,31 +116,35 @@ class BatchSimulator(Protocol):
 
 def run_batch(
     sim: BatchSimulator,
-    stiffness: Sequence[float],
-    damping: Sequence[float],
+    params: np.ndarray,
     workers: int = 2,
     progress: bool = False,
     diverged: Literal["raise", "record"] = "raise",
     band: Band | None = None,
+    label: Callable[[int], str] = lambda i: f"run {i}",
 ) -> BatchResult:
-    """Runs of ``sim``'s scenario with every isolator's stiffness and damping scaled per run.
+    """Runs of ``sim``'s scenario, one per parameter vector.
 
     Parameters
     ----------
     sim : Simulator
         (or anything with what :class:`BatchSimulator` lists)
-    stiffness, damping : sequence of float
-        Scale factors, one per run (stiffness > 0, damping >= 0).
+    params : ndarray (runs, parameters)
+        Whole parameter vectors (``sim.layout.names``), already checked by their rules
+        (:meth:`ParameterLayout.checked`, :meth:`ParameterLayout.with_changes`).
     workers : int
         Threads (the compiled stepping releases the GIL).
     progress : bool
         Print a progress line every 10 %.
     diverged : {"raise", "record"}
-        A run that diverges (or turns the table past 0.2 rad) stops the batch with
-        :class:`SimulationError` ("raise"), or gets NaN metrics and its reason in
-        ``BatchResult.failures`` ("record", for sweeps into soft designs).
+        A run that diverges (or turns the table past 0.2 rad), or whose table has no stable rest, stops
+        the batch with :class:`SimulationError` / :class:`UnstableTableError` ("raise"), or gets NaN
+        metrics, its status and its reason in ``BatchResult.failures`` ("record", for sweeps into soft
+        designs).
     band : Band, optional
         The settling band (default: the scenario's ``[settling]`` rule).
+    label : callable
+        How a message names run ``i`` (default ``run i``; '' leaves the name out).
 
     Returns
     -------
@@ -131,59 +154,65 @@ def run_batch(
     Raises
     ------
     ParameterError
-        A scale is not a finite positive number (named by index), or ``diverged`` is unknown.
+        ``params`` of the wrong shape, or ``diverged`` unknown.
     UnstableTableError
-        A run's table has no stable equilibrium (the message names the run).
+        A run's table has no stable equilibrium (the message names the run), with ``diverged="raise"``.
     SimulationError
         A run diverged (the message names the run), with ``diverged="raise"``.
     """
     if diverged not in ("raise", "record"):
         raise ParameterError(f"diverged: must be 'raise' or 'record', got {diverged!r}")
-    params = sim.scaled_parameter_sets(stiffness, damping)
+    params = np.asarray(params, dtype=float)
+    if params.ndim != 2 or params.shape[1] != sim.layout.size:
+        raise ParameterError(f"params: must be an array (runs, {sim.layout.size}) of parameter vectors, "
+                             f"got shape {params.shape}")
     n = params.shape[0]
     rule = Band.from_settling(sim.scenario.settling) if band is None else band
+    settling = np.full((n, 6), np.nan)
+    peak = np.zeros((n, 6))
+    status = np.full(n, "ok", dtype=object)
+    failures: dict[int, str] = {}
+
+    def failed(i: int, exc: Exception, kind: str) -> None:
+        message = f"{label(i)}: {exc}" if label(i) else str(exc)
+        if diverged == "raise":
+            raise type(exc)(message) from None
+        failures[i] = message
+        status[i] = kind
+        peak[i] = np.nan
+
     if n == 0:
-        return BatchResult(np.zeros((0, 6)), np.zeros(0), np.zeros((0, 6)), {}, rule)
-    starts, ends = sim.equilibria_of(params)
-    methods: list[Method] = [
-        sim.method_for(max(s.max_frequency, e.max_frequency if e else 0.0)) for s, e in zip(starts, ends, strict=True)
-    ]
-    # built before the threads start; scaling stiffness and damping leaves the staged inputs alone
-    plan_inputs = {}
-    for method in {m.plan_key: m for m in methods}.values():
-        if method.plan is not None:
-            plan_inputs[method.plan_key] = sim.plan_inputs(method, params[0])
-        else:
+        return BatchResult(settling, np.zeros(0), peak, {}, rule, np.zeros((0, 6)), status)
+    starts, ends = _equilibria(sim, params, lambda i, exc: failed(i, exc, "tipped"))
+    good = [i for i in range(n) if starts[i] is not None]
+    methods: dict[int, Method] = {}
+    for i in good:
+        start, end = starts[i], ends[i]
+        assert start is not None
+        methods[i] = sim.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
+    for method in {m.plan_key: m for m in methods.values()}.values():  # compiled before the threads start
+        if method.plan is None:
             sim.grid_inputs(method.substeps)
             rk4_stepper(sim.model, method.substeps)
     stepper = dense_stepper(sim.model, LANES)
     t = sim.grid.samples
     finals = np.zeros((n, 6))
-    stops = ends[0] is not None
-    if stops:
-        finals = sim.signals(np.array([e.state for e in ends if e is not None]), np.array([s.state for s in starts])).T
+    stops = any(e is not None for e in ends)
+    if stops and good:
+        finals[good] = sim.signals(np.array([ends[i].state for i in good]),  # type: ignore[union-attr]
+                                   np.array([starts[i].state for i in good])).T  # type: ignore[union-attr]
     holds = np.array([hold_time(e) for e in ends])
-    settling = np.full((n, 6), np.nan)
-    peak = np.zeros((n, 6))
-    failures: dict[int, str] = {}
+    lock = threading.Lock()
     done = [0]
 
-    def failed(i: int, exc: SimulationError) -> None:
-        message = f"run {i} (stiffness x{_scale(stiffness, i):g}, damping x{_scale(damping, i):g}): {exc}"
-        if diverged == "raise":
-            raise SimulationError(message) from None
-        failures[i] = message
-        peak[i] = np.nan
-
-    def pack(runs: list[int]) -> None:
-        """Step ``runs`` (one plan, at most LANES) side by side; their peaks and settling times."""
-        method = methods[runs[0]]
-        plan = method.plan
+    def pack(runs: list[int], inputs: np.ndarray) -> None:
+        """Step ``runs`` (one plan and staged inputs, at most LANES) side by side; their metrics."""
+        plan = methods[runs[0]].plan
         assert plan is not None
         lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
-        x0 = np.array([starts[i].state for i in lanes])
+        x0 = np.array([starts[i].state for i in lanes])  # type: ignore[union-attr]
         raw, step_peaks, deviations, polys = stepper.run_slots(
-            x0, plan, plan_inputs[method.plan_key], params[lanes], x0, with_states=True, final=finals[lanes]
+            x0, plan, inputs, params[lanes], x0, with_states=True, final=finals[lanes]
         )
         assert polys is not None
         dense = DenseRuns(plan, raw, step_peaks, deviations, polys, x0, sim.model.variant.signals)
@@ -198,40 +227,78 @@ def run_batch(
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
                 check_turn(peak[i])
             except SimulationError as exc:
-                failed(i, exc)
+                failed(i, exc, "tipped" if np.nanmax(peak[i][3:], initial=0.0) > MAX_TURN else "diverged")
                 continue
             settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
 
     def task(runs: list[int]) -> None:
-        """A thread's share: RK4 runs one by one, DOP853 runs in packs of one plan."""
-        for i in runs:
-            if methods[i].plan is None:
+        """A thread's share, runs of one method: RK4 runs one by one, DOP853 runs in packs."""
+        method = methods[runs[0]]
+        if method.plan is None:
+            for i in runs:
                 try:
-                    metrics = sim.run_method(params[i], starts[i], ends[i], methods[i], band=rule).settling
+                    metrics = sim.run_method(params[i], starts[i], ends[i], method,  # type: ignore[arg-type]
+                                             band=rule).settling
                 except SimulationError as exc:
-                    failed(i, exc)
+                    failed(i, exc, "diverged")
                     continue
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
-        stepped = [i for i in runs if methods[i].plan is not None]
-        for lo in range(0, len(stepped), LANES):
-            pack(stepped[lo : lo + LANES])
-        done[0] += len(runs)
-        if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
-            print(f"  batch: {done[0]}/{n} runs", flush=True)
+        else:
+            with lock:  # the simulator's cache of staged inputs is not shared between threads
+                inputs = sim.plan_inputs(method, params[runs[0]])
+            for lo in range(0, len(runs), LANES):
+                pack(runs[lo : lo + LANES], inputs)
+        with lock:
+            done[0] += len(runs)
+            if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
+                print(f"  batch: {done[0]}/{n} runs", flush=True)
 
-    # runs of one plan next to each other, so that packs share their plan; tasks of BLOCK runs
-    # (a whole number of packs per plan)
-    tasks: list[list[int]] = []
-    for key in sorted({m.plan_key for m in methods}):
-        same = [i for i in range(n) if methods[i].plan_key == key]
-        tasks += [same[lo : lo + BLOCK] for lo in range(0, len(same), BLOCK)]
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        list(pool.map(task, tasks))
+        list(pool.map(task, _tasks(sim, params, methods)))
     with np.errstate(all="ignore"):
         worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
-    return BatchResult(settling, worst, peak, dict(sorted(failures.items())), rule, rule.resolve(peak))
+    return BatchResult(settling, worst, peak, dict(sorted(failures.items())), rule, rule.resolve(peak), status)
 
 
-def _scale(values: Sequence[float], i: int) -> float:
-    return float(np.asarray(values, dtype=float).reshape(-1)[i])
+def _tasks(sim: BatchSimulator, params: np.ndarray, methods: Mapping[int, Method]) -> list[list[int]]:
+    """Runs of one plan and one staged input next to each other, so that packs share them; tasks of
+    ``BLOCK`` runs (a whole number of packs per group)."""
+    uses = staged_parameters(sim.model)
+    groups: dict[tuple[int, bytes], list[int]] = {}
+    for i, method in methods.items():
+        staged = params[i, uses].tobytes() if method.plan is not None else b""
+        groups.setdefault((method.plan_key, staged), []).append(i)
+    return [same[lo : lo + BLOCK] for _, same in sorted(groups.items()) for lo in range(0, len(same), BLOCK)]
+
+
+def _equilibria(
+    sim: BatchSimulator, params: np.ndarray, failed: Callable[[int, Exception], None]
+) -> tuple[list[Equilibrium | None], list[Equilibrium | None]]:
+    """Start and end equilibria of every run, solved side by side; the runs without a stable rest are
+    found by halving the block that has one (None, and ``failed(i, error)`` for each)."""
+    n = params.shape[0]
+    starts: list[Equilibrium | None] = [None] * n
+    ends: list[Equilibrium | None] = [None] * n
+
+    def solve(rows: np.ndarray) -> None:
+        try:
+            first, last = sim.equilibria_of(params[rows])
+        except UnstableTableError as exc:
+            if rows.size == 1:
+                failed(int(rows[0]), UnstableTableError(str(exc)))
+                return
+            solve(rows[: rows.size // 2])
+            solve(rows[rows.size // 2 :])
+            return
+        for j, i in enumerate(rows):
+            starts[i], ends[i] = first[j], last[j]
+
+    solve(np.arange(n))
+    return starts, ends
+
+
+def scale_label(stiffness: Sequence[float] | float, damping: Sequence[float] | float) -> Callable[[int], str]:
+    """How a batch of scaled designs names run ``i``: ``run i (stiffness x1.2, damping x0.5)``."""
+    k, c = np.asarray(stiffness, dtype=float).reshape(-1), np.asarray(damping, dtype=float).reshape(-1)
+    return lambda i: f"run {i} (stiffness x{k[i]:g}, damping x{c[i]:g})"

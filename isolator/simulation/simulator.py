@@ -20,7 +20,7 @@ from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
 from isolator.simulation.actuation import ForceHistory, with_forces
-from isolator.simulation.batch import BatchResult, run_batch
+from isolator.simulation.batch import BatchResult, run_batch, scale_label
 from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
 from isolator.simulation.dense_metrics import DenseRuns, run_metrics
 from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic_result
@@ -45,13 +45,7 @@ from isolator.simulation.stepping import (
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
 from isolator.simulation.window_settling import run_points
 
-__all__ = [
-    "FeedbackLaw",
-    "Method",
-    "Simulator",
-    "get_model",
-    "simulate",
-]
+__all__ = ["FeedbackLaw", "Method", "Simulator", "get_model", "simulate"]
 
 
 #: the staged inputs a simulator keeps for reuse, at most this many bytes (and 16 plans)
@@ -389,9 +383,10 @@ class Simulator:
         diverged: Literal["raise", "record"] = "raise",
         band: Band | None = None,
     ) -> BatchResult:
-        """Many runs with every isolator's stiffness and damping scaled by a factor per run; the arguments
-        and the result as for :func:`~isolator.simulation.batch.run_batch`."""
-        return run_batch(self, stiffness, damping, workers, progress, diverged, band)
+        """Runs with every isolator's stiffness and damping scaled per run (:meth:`scaled_parameter_sets`); the rest
+        as for :func:`~isolator.simulation.batch.run_batch` (:func:`isolator.sweep.sweep` varies any parameter)."""
+        return run_batch(self, self.scaled_parameter_sets(stiffness, damping), workers, progress, diverged, band,
+                         scale_label(stiffness, damping))
 
 
 def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, float] | None = None) -> Response:
