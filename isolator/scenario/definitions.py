@@ -13,6 +13,7 @@ import numpy as np
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
+from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import Window
 
 __all__ = [
@@ -213,7 +214,9 @@ class Scenario:
     """A validated, immutable scenario. Build one with :func:`isolator.load_scenario`.
 
     Its isolators are all spring-dampers (:class:`Isolator`) or all pneumatic
-    (:class:`PneumaticIsolator`, with ``air`` and the ``leveling`` groups).
+    (:class:`PneumaticIsolator`, with ``air`` and the ``leveling`` groups). With a ``sequence``
+    (``[sequence]``, :func:`isolator.run_sequence`) the carriages' profiles hold them at the sequence's
+    initial positions.
     """
 
     name: str
@@ -229,6 +232,7 @@ class Scenario:
     air: Air | None = None
     leveling: tuple[LevelingGroup, ...] = ()
     windows: tuple[Window, ...] = ()
+    sequence: StepSequence | None = None
 
     # -- derived quantities -------------------------------------------------
     @property

@@ -60,7 +60,8 @@ def load_toml(path: Path) -> dict[str, Any]:
 def _known_keys() -> frozenset[str]:
     """Every key name the scenario's readers know: a key in a file that is one of them is no typo."""
     folder = Path(__file__).parent
-    text = "".join((folder / name).read_text() for name in ("reader.py", "pneumatic_reader.py", "windows_reader.py"))
+    text = "".join((folder / name).read_text() for name in ("reader.py", "pneumatic_reader.py", "windows_reader.py",
+                                                                 "sequence.py", "tables.py"))
     return frozenset(re.findall(r'"([a-z][a-z0-9_]*)"', text))
 
 

@@ -35,11 +35,19 @@ from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pne
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
 from isolator.scenario.rules import check_scenario_values
-from isolator.scenario.tables import SPECTRUM_KINDS, load_spectrum, read_csv_columns, spectrum_from_columns
+from isolator.scenario.sequence import StepSequence, held, read_sequence
+from isolator.scenario.tables import (
+    SPECTRUM_KINDS,
+    load_spectrum,
+    read_csv_columns,
+    read_samples,
+    spectrum_from_columns,
+)
 from isolator.scenario.validation import (
     check_carriage_tree,
     check_isolator_layout,
     check_pneumatics,
+    check_sequence,
     check_strokes,
     check_unique_names,
 )
@@ -134,8 +142,9 @@ def scenario_from_dict(
         sample_rate=sim_reader.number("sample_rate", 1000.0, positive=True),
     )
     sim_reader.finish()
+    sequence = read_sequence(top)
     carriages = tuple(
-        _read_carriage(KeyReader(item, f"carriages[{i}]"), base_dir)
+        _read_carriage(KeyReader(item, f"carriages[{i}]"), base_dir, sequence)
         for i, item in enumerate(table_of_tables(data, "carriages"))
     )
     top.used.add("carriages")
@@ -171,8 +180,10 @@ def scenario_from_dict(
         air=air,
         leveling=leveling,
         windows=windows,
+        sequence=sequence,
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
+    check_sequence(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)
     return scenario
@@ -255,7 +266,7 @@ def _read_profile(r: KeyReader, base_dir: Path) -> Profile:
                 jerk=r.number("jerk", positive=True), deceleration=dec, deceleration_jerk=jerk_down, **common
             )
     elif kind == "samples":
-        t, q = _read_samples(r, base_dir)
+        t, q = read_samples(r, base_dir)
         prof = samples(t, q)
     else:
         raise ScenarioError(
@@ -265,47 +276,22 @@ def _read_profile(r: KeyReader, base_dir: Path) -> Profile:
     return prof
 
 
-def _read_samples(r: KeyReader, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
-    if r.has("file"):
-        if r.has("t") or r.has("q"):
-            raise ScenarioError(f"{r.key('file')}: give either file or inline t and q, not both")
-        file_key = r.key("file")
-        columns = read_csv_columns(base_dir / r.string("file"), file_key, ("t", "q"), exact=True, increasing="t")
-        t, q, key = columns["t"], columns["q"], file_key
-    else:
-        tk, qk = r.key("t"), r.key("q")
-        t_raw, q_raw = r.raw("t"), r.raw("q")
-        for k, v in ((tk, t_raw), (qk, q_raw)):
-            if not isinstance(v, list) or not all(
-                isinstance(x, int | float) and not isinstance(x, bool) for x in v
-            ):
-                raise ScenarioError(f"{k}: must be a list of numbers")
-        t, q, key = np.array(t_raw, float), np.array(q_raw, float), tk
-        if len(t) != len(q):
-            raise ScenarioError(f"{qk}: has {len(q)} values but t has {len(t)}")
-    r.used.update({"file", "t", "q"})
-    if len(t) < 2:
-        raise ScenarioError(f"{key}: needs at least two samples")
-    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
-        raise ScenarioError(f"{key}: samples must be finite (found NaN or infinity)")
-    if np.any(np.diff(t) <= 0):
-        raise ScenarioError(f"{key}: sample times must be strictly increasing")
-    if t[0] < 0:
-        raise ScenarioError(f"{key}: sample times must be >= 0, got {t[0]:g}")
-    return t, q
-
-
-def _read_carriage(r: KeyReader, base_dir: Path) -> Carriage:
+def _read_carriage(r: KeyReader, base_dir: Path, sequence: StepSequence | None) -> Carriage:
     name = r.string("name")
     if not name or name == "table":
         raise ScenarioError(f"{r.key('name')}: must be a non-empty name other than 'table'")
+    if sequence is not None and r.has("profile"):
+        raise ScenarioError(f"{r.key('profile')}: with [sequence] the carriages give no profile (the sequence's "
+                            "steps move them); remove it, or remove [sequence]")
+    profile = _read_profile(KeyReader(r.raw("profile"), r.key("profile")), base_dir) if sequence is None else \
+        held(dict(sequence.initial).get(name, 0.0))  # held where the sequence starts it; run_sequence moves it
     carriage = Carriage(
         name=name,
         mass=r.number("mass", positive=True),
         parent=r.string("parent", "table"),
         axis=r.unit_vector("axis"),
         origin=r.vector("origin", (0.0, 0.0, 0.0)),
-        profile=_read_profile(KeyReader(r.raw("profile"), r.key("profile")), base_dir),
+        profile=profile,
         limits=_read_limits(KeyReader(r.raw("limits", {}), r.key("limits"))),
     )
     r.finish()

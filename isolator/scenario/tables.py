@@ -9,8 +9,9 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import FloorSpectrum
+from isolator.scenario.keys import KeyReader
 
-__all__ = ["SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "spectrum_from_columns"]
+__all__ = ["SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "read_samples", "spectrum_from_columns"]
 
 
 def read_csv_columns(
@@ -185,3 +186,34 @@ def _check_kind(f: np.ndarray, kind: str, where: str) -> None:
         raise ScenarioError(f"{where}: the frequencies are consecutive one-third-octave band centres "
                             f"({f[0]:.4g} to {f[-1]:.4g} Hz), as in a third-octave spectrum (band RMS "
                             "velocities), not a PSD's frequency grid: give its kind as third-octave")
+
+
+def read_samples(r: KeyReader, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
+    """A sampled profile's ``t`` and ``q`` [s, m]: from ``file`` (a CSV with those columns) or inline."""
+    if r.has("file"):
+        if r.has("t") or r.has("q"):
+            raise ScenarioError(f"{r.key('file')}: give either file or inline t and q, not both")
+        file_key = r.key("file")
+        columns = read_csv_columns(base_dir / r.string("file"), file_key, ("t", "q"), exact=True, increasing="t")
+        t, q, key = columns["t"], columns["q"], file_key
+    else:
+        tk, qk = r.key("t"), r.key("q")
+        t_raw, q_raw = r.raw("t"), r.raw("q")
+        for k, v in ((tk, t_raw), (qk, q_raw)):
+            if not isinstance(v, list) or not all(
+                isinstance(x, int | float) and not isinstance(x, bool) for x in v
+            ):
+                raise ScenarioError(f"{k}: must be a list of numbers")
+        t, q, key = np.array(t_raw, float), np.array(q_raw, float), tk
+        if len(t) != len(q):
+            raise ScenarioError(f"{qk}: has {len(q)} values but t has {len(t)}")
+    r.used.update({"file", "t", "q"})
+    if len(t) < 2:
+        raise ScenarioError(f"{key}: needs at least two samples")
+    if not (np.all(np.isfinite(t)) and np.all(np.isfinite(q))):
+        raise ScenarioError(f"{key}: samples must be finite (found NaN or infinity)")
+    if np.any(np.diff(t) <= 0):
+        raise ScenarioError(f"{key}: sample times must be strictly increasing")
+    if t[0] < 0:
+        raise ScenarioError(f"{key}: sample times must be >= 0, got {t[0]:g}")
+    return t, q

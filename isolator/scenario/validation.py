@@ -23,6 +23,7 @@ __all__ = [
     "check_motion",
     "check_phases",
     "check_pneumatics",
+    "check_sequence",
     "check_strokes",
     "check_unique_names",
     "isolator_rest_pressures",
@@ -91,6 +92,53 @@ def check_strokes(scenario: Scenario) -> None:
             f"{coordinate:.4g} m at t = {times[k]:.4g} s, beyond the table's "
             f"{which} {half:.4g} m (table.size)"
         )
+
+
+def check_sequence(scenario: Scenario) -> None:
+    """A ``[sequence]`` against the carriages: every named carriage exists, has full ``limits`` and no
+    profile of its own, every per-step limit is at most the carriage's, and every configuration the
+    steps reach (and the initial one) keeps every carriage's mass above the table's footprint. The
+    S-curves are monotone between configurations and the footprint test is per axis on positions
+    affine in ``q``, so the configurations are all the moves can reach."""
+    sequence = scenario.sequence
+    if sequence is None:
+        return
+    names = [c.name for c in scenario.carriages]
+    known = ", ".join(names) if names else "none declared in [[carriages]]"
+    for name, _ in sequence.initial:
+        if name not in names:
+            raise ScenarioError(f"sequence.initial.{name}: unknown carriage '{name}' (carriages: {known})")
+    for i, c in enumerate(scenario.carriages):
+        if c.profile.stop_time != 0.0 or c.profile.position(0.0) != sequence.initial_positions(names)[i]:
+            raise ScenarioError(f"carriages[{i}].profile: with [sequence] the carriages give no profile "
+                                "(the sequence's steps move them)")
+    for k, step in enumerate(sequence.steps):
+        for name, move in step.moves:
+            key = f"sequence.steps[{k}].{name}"
+            if name not in names:
+                raise ScenarioError(f"{key}: unknown carriage '{name}' (carriages: {known})")
+            i = names.index(name)
+            limits = scenario.carriages[i].limits
+            for kind in ("velocity", "acceleration", "jerk"):
+                own = getattr(limits, kind)
+                if own is None:
+                    raise ScenarioError(f"carriages[{i}].limits.{kind}: missing; a carriage a [sequence] moves "
+                                        "needs velocity, acceleration and jerk limits (its S-curves)")
+                step_value = getattr(move, kind)
+                if step_value is not None and step_value > own * (1 + 1e-12):
+                    raise ScenarioError(f"{key}.{kind}: {step_value:g} is above the carriage's limit "
+                                        f"carriages[{i}].limits.{kind} = {own:g}")
+    configurations = sequence.configurations(names)
+    excess = scenario.outside_footprint(configurations.T) if names else None
+    if excess is not None and scenario.table.size is not None:
+        i, axis, k, coordinate = excess
+        where = "sequence.initial" if k == 0 else f"sequence.steps[{k - 1}]"
+        moved = names[i] if k == 0 or sequence.steps[k - 1].move(names[i]) is not None else None
+        key = f"{where}.{moved}" if moved else where
+        half = scenario.table.size[axis] / 2.0
+        which = "half-length" if axis == 0 else "half-width"
+        raise ScenarioError(f"{key}: carriage '{names[i]}''s mass reaches {'xy'[axis]} = {coordinate:.4g} m "
+                            f"there, beyond the table's {which} {half:.4g} m (table.size)")
 
 
 def check_duration(scenario: Scenario) -> None:
@@ -217,6 +265,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_unique_names([a.name for a in scenario.actuators], "actuators")
     check_unique_names([pt.name for pt in scenario.points], "points")
     check_windows(scenario.windows, [pt.name for pt in scenario.points])
+    check_sequence(scenario)
     check_motion(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)

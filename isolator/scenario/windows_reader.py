@@ -1,5 +1,5 @@
-"""Reading ``[[windows]]`` (absolute settling windows at points) and refusing ``[sequence]`` until
-step-and-settle sequences are implemented (``docs/scenario-format.md``)."""
+"""Reading ``[[windows]]`` (absolute settling windows at points, ``docs/scenario-format.md``); ``[sequence]``
+is read by :mod:`isolator.scenario.sequence`."""
 
 from __future__ import annotations
 
@@ -14,10 +14,8 @@ __all__ = ["read_windows"]
 
 
 def read_windows(top: KeyReader, data: Mapping[str, Any], point_names: Sequence[str]) -> tuple[Window, ...]:
-    """The ``[[windows]]`` blocks, checked against the ``[[points]]`` names; a ``[sequence]`` is refused."""
-    top.used.update(("windows", "sequence"))
-    if top.has("sequence"):
-        raise ScenarioError("sequence: step-and-settle sequences are not implemented yet")
+    """The ``[[windows]]`` blocks, checked against the ``[[points]]`` names."""
+    top.used.add("windows")
     windows = tuple(_read_window(KeyReader(item, f"windows[{i}]"))
                     for i, item in enumerate(table_of_tables(data, "windows")))
     check_windows(windows, point_names)

@@ -1,4 +1,4 @@
-"""``[[windows]]`` keys: read, defaults, and every bad value one error naming its key; ``[sequence]`` refused."""
+"""``[[windows]]`` keys: read, defaults, and every bad value one error naming its key."""
 
 from __future__ import annotations
 
@@ -64,9 +64,10 @@ def test_windows_must_be_an_array_of_tables():
     assert _error(base_dict(points=[PROBE], windows={"point": "probe"})).startswith("windows:")
 
 
-def test_sequence_is_refused_for_now():
+def test_sequence_with_a_carriage_profile_is_refused():
+    """``[sequence]`` is read now (tests/scenario/test_sequence_input.py); a carriage profile beside it is not."""
     message = _error(_data(sequence={"measure": 0.1, "steps": [{"x-stage": 0.1}]}))
-    assert message == "sequence: step-and-settle sequences are not implemented yet"
+    assert message.startswith("carriages[0].profile: with [sequence] the carriages give no profile"), message
 
 
 def test_scenarios_built_from_dataclasses_are_checked_too():
