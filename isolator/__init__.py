@@ -56,6 +56,8 @@ from isolator.simulation.band import Band
 from isolator.simulation.batch import BatchResult
 from isolator.simulation.leveling import PneumaticResult
 from isolator.simulation.response import Response
+from isolator.simulation.sequence import run_sequence
+from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.settling import SettlingResult, settling_time
 from isolator.simulation.simulator import Simulator, simulate
 
@@ -97,12 +99,14 @@ __all__ = [
     "Scenario",
     "ScenarioError",
     "Settling",
+    "SequenceResult",
     "SettlingResult",
     "SimulationError",
     "SimulationSettings",
     "Simulator",
     "SineProfile",
     "StabilityReport",
+    "StepResult",
     "Table",
     "UnstableClosedLoopError",
     "UnstableTableError",
@@ -119,6 +123,7 @@ __all__ = [
     "modes",
     "modes_over_travel",
     "samples",
+    "run_sequence",
     "scenario_from_dict",
     "scurve",
     "segments",

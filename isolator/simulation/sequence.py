@@ -1,0 +1,322 @@
+"""Step-and-settle sequences, event-driven (``[sequence]``, ``docs/scenario-format.md``): each step's carriages
+start together (plus any per-step delay) with seven-segment S-curves to their targets, the step stops when
+the last one arrives, and the next step starts once every window has held for ``measure`` seconds.
+
+Each step is simulated from the previous step's end state as its own short run (local time from 0, the
+step's moves as inputs), DOP853 steps between the profiles' breakpoints, extended in chunks until the
+window rule (:mod:`isolator.simulation.sequence_rule`) is decided on a 1 kHz grid read from the dense output;
+the part after the step's end is dropped and the runs are stitched with their time offsets.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from isolator.errors import ParameterError, ScenarioError, SimulationError, UnstableTableError
+from isolator.model.cache import get_model
+from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
+from isolator.model.tipping import rocking_over, tipping_verdict
+from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
+from isolator.scenario.definitions import MotionLimits, Scenario
+from isolator.scenario.profile_shapes import scurve
+from isolator.scenario.profiles import Profile
+from isolator.scenario.sequence import held
+from isolator.simulation.points import PointSet, point_positions
+from isolator.simulation.sequence_result import SequenceResult, StepResult
+from isolator.simulation.sequence_rule import held_from, normalised
+from isolator.simulation.simulator import Simulator
+from isolator.simulation.stepping import (
+    DENSE_STEP_ANGLE,
+    MAX_DENSE_STEP,
+    check_step_count,
+    dense_stepper,
+    staged_map,
+)
+
+__all__ = ["MoveDesign", "SequenceResult", "StepResult", "run_sequence"]
+
+#: a step's move design: (step index, carriage name, q from [m], q to [m], that step's limits) -> a profile in
+#: the step's local time (the step starts at 0), at rest at ``q from`` before it and at ``q to`` after its stop
+MoveDesign = Callable[[int, str, float, float, MotionLimits], Profile]
+
+#: the grid the window rule is read on [Hz] (global time k / RULE_RATE)
+RULE_RATE = 1000.0
+#: the shortest extension of a step's run while its rule is undecided [s]
+MIN_CHUNK = 0.25
+
+
+@dataclass
+class _Chunk:
+    """One DOP853 run: global times ``t0 .. t1`` (the valid part), its plan in chunk time from 0."""
+
+    t0: float
+    t1: float
+    step: int
+    plan: StepPlan
+    polynomials: np.ndarray
+
+    def states(self, t: np.ndarray) -> np.ndarray:
+        return DenseStepper.states_at(self.plan, self.polynomials, np.asarray(t, dtype=float) - self.t0)
+
+
+class _Runner:
+    """A sequence scenario's model, parameters, equilibria (cached by configuration) and chunk runs."""
+
+    def __init__(self, scenario: Scenario, model: str) -> None:
+        self.scenario = scenario
+        self.sim = Simulator(scenario, model)
+        self.model = self.sim.model
+        self.p = self.sim.parameters
+        self.names = tuple(c.name for c in scenario.carriages)
+        first = static_equilibria(self.model, self.p[None, :], scenario.initial_positions(),
+                                  "with the carriages at the sequence's initial positions")[0]
+        self.start = first
+        self.air = None if self.sim.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
+                                                                                self.p[None, :])
+        self._equilibria: dict[bytes, Equilibrium] = {scenario.initial_positions().tobytes(): first}
+        self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
+        self.origin = point_positions(first.state, self.arms, self.model.kind)[:, :, 0]
+
+    def equilibrium(self, q: np.ndarray) -> Equilibrium:
+        key = np.asarray(q, dtype=float).tobytes()
+        if key not in self._equilibria:
+            where = "with the carriages parked at " + ", ".join(f"{n} = {v:.6g} m" for n, v in zip(self.names, q,
+                                                                                               strict=True))
+            self._equilibria[key] = static_equilibria(self.model, self.p[None, :], np.asarray(q, dtype=float), where,
+                                                      air=self.air)[0]
+        return self._equilibria[key]
+
+    def check_tipping(self, configurations: np.ndarray) -> None:
+        """Refuse a sequence whose parked configurations would tip the table (``isolator stability``)."""
+        configs = np.unique(configurations, axis=0)
+        stable, _, line = tipping_verdict(configs, rocking_over(get_model(self.sim.layout, "exact"), self.p, configs))
+        if not stable:
+            raise UnstableTableError(line)
+
+    def settled_points(self, q: np.ndarray) -> np.ndarray:
+        """Every point's displacement [m] (points, 3) at the static equilibrium with the carriages at ``q``."""
+        return point_positions(self.equilibrium(q).state, self.arms, self.model.kind)[:, :, 0] - self.origin
+
+    def max_step(self, omega: float) -> float:
+        key = max(0, math.ceil(8 * math.log2(MAX_DENSE_STEP * max(omega, 1e-12) / DENSE_STEP_ANGLE)))
+        return MAX_DENSE_STEP * 2.0 ** (-key / 8)
+
+    def run_chunk(self, x0: np.ndarray, profiles: tuple[Profile, ...], step_start: float, a: float, b: float,
+                  max_step: float, step: int) -> _Chunk:
+        """Integrate from ``x0`` over the step's local times ``a .. b`` [s] (global ``step_start + a ..``)."""
+        length = b - a
+        ground = self.scenario.ground
+        knots = {float(k) - a for prof in profiles for k in prof.breakpoints}
+        if ground is not None:
+            knots |= {float(k) - a - step_start for k in ground.breakpoints}
+        inside = np.array(sorted(k for k in knots if 0.0 < k < length), dtype=float)
+        plan = step_plan(np.array([0.0, length]), inside, max_step, end=length)
+        times, mid = plan.stage_times()
+        layout = self.sim.layout
+        n = len(profiles)
+        u = np.zeros((*times.shape, layout.input_size))
+        for i, prof in enumerate(profiles):
+            q, v, acc = prof.evaluate(times + a, mid + a)
+            u[..., i], u[..., n + i], u[..., 2 * n + i] = q, v, acc
+        if layout.ground and ground is not None:
+            u[..., layout.ground_slice] = ground.displacement(times + a + step_start, mid + a + step_start)
+        if self.model.staged_inputs is not None:
+            flat = u.reshape(u.shape[0] * u.shape[1], u.shape[2])
+            u = staged_map(self.model)(flat, self.p)[0].reshape(*u.shape[:2], -1)
+        _, _, _, poly = dense_stepper(self.model).run_slots(x0, plan, np.ascontiguousarray(u), self.p,
+                                                            self.start.state, with_states=True)
+        if poly is None or not np.all(np.isfinite(poly)):
+            raise SimulationError(f"the run diverged: non-finite state in step {step} after t = "
+                                  f"{step_start + a:.4g} s")
+        return _Chunk(step_start + a, step_start + b, step, plan, poly[: plan.steps])
+
+    def point_rows(self, states: np.ndarray, settled: np.ndarray) -> np.ndarray:
+        """The windows' deviations from the settled positions divided by their half-widths (rows, N)."""
+        moved = point_positions(states, self.arms, self.model.kind) - self.origin[:, :, None]
+        names = [pt.name for pt in self.scenario.points]
+        deviations, widths = [], []
+        for w in self.scenario.windows:
+            i, axes = names.index(w.point), list(w.axis_indices)
+            deviations.append(moved[i, axes] - settled[i, axes, None])
+            widths.append(w.translation)
+        return normalised(deviations, widths)
+
+
+def _step_profiles(
+    runner: _Runner, index: int, q: np.ndarray, move_design: MoveDesign | None
+) -> tuple[tuple[Profile, ...], np.ndarray, float]:
+    """The carriages' profiles of step ``index`` from ``q`` (local time), the targets, and the stop [s]."""
+    scenario = runner.scenario
+    sequence = scenario.sequence
+    assert sequence is not None
+    step = sequence.steps[index]
+    profiles: list[Profile] = []
+    target = q.copy()
+    stop = 0.0
+    for i, carriage in enumerate(scenario.carriages):
+        mv = step.move(carriage.name)
+        if mv is None:
+            profiles.append(held(q[i]))
+            continue
+        lim = carriage.limits
+        velocity, acceleration, jerk = mv.limits(float(lim.velocity or 0.0), float(lim.acceleration or 0.0),
+                                                 float(lim.jerk or 0.0))
+        target[i] = mv.target
+        if move_design is not None:
+            prof = _designed(move_design, index, carriage.name, float(q[i]), mv.target,
+                             MotionLimits(velocity, acceleration, jerk))
+        elif mv.target == q[i]:
+            prof = held(q[i])
+        else:
+            prof = scurve(float(q[i]), mv.target - float(q[i]), velocity, acceleration, jerk, t0=mv.delay)
+        profiles.append(prof)
+        stop = max(stop, float(prof.stop_time) if prof.breakpoints else 0.0)
+    return tuple(profiles), target, stop
+
+
+def _designed(design: MoveDesign, index: int, name: str, q0: float, q1: float, limits: MotionLimits) -> Profile:
+    prof = design(index, name, q0, q1, limits)
+    where = f"move: step {index}, carriage '{name}'"
+    if not isinstance(prof, Profile):
+        raise ParameterError(f"{where}: must return a Profile, got {type(prof).__name__}")
+    if not math.isfinite(prof.stop_time):
+        raise ParameterError(f"{where}: the profile never stops (a sine); a step's move must stop")
+    tol = 1e-9 * max(1.0, abs(q0), abs(q1))
+    first, last = prof.position(0.0), prof.position(float(prof.stop_time) + 1.0)
+    if abs(first - q0) > tol or abs(last - q1) > tol:
+        raise ParameterError(f"{where}: the profile goes from {first:.9g} m to {last:.9g} m, not from the carriage's "
+                             f"position {q0:.9g} m to the target {q1:.9g} m")
+    return prof
+
+
+def _rule_times(step_start: float, a: float, b: float, stop: float) -> np.ndarray:
+    """The rule's grid in the step's local time within (a, b]: global multiples of 1 / RULE_RATE after the stop,
+    and the stop itself when it falls in this chunk."""
+    lo = max(a, stop)
+    k0 = math.floor((step_start + lo) * RULE_RATE) + 1
+    k1 = math.floor((step_start + b) * RULE_RATE * (1 + 1e-15))
+    grid = np.arange(k0, k1 + 1) / RULE_RATE - step_start
+    grid = grid[(grid > lo + 1e-12) & (grid <= b + 1e-12)]
+    return np.concatenate([[stop], grid]) if a <= stop <= b else grid
+
+
+def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | None = None) -> SequenceResult:
+    """Simulate a scenario's ``[sequence]``: step, settle, measure, next step.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With a ``[sequence]`` and at least one ``[[windows]]``.
+    model : {"exact", "paper"}
+    move : callable, optional
+        ``move(step_index, carriage_name, q_from, q_to, limits) -> Profile``: each named carriage's move in
+        the step's local time (the step starts at 0; its ``delay`` is not added), at rest at ``q_from``
+        [m] before and at ``q_to`` [m] after its last breakpoint, which is the move's stop; ``limits`` are the
+        step's S-curve limits (:class:`~isolator.scenario.definitions.MotionLimits`). Default: the
+        seven-segment S-curve at those limits, started after the step's ``delay``.
+
+    Returns
+    -------
+    SequenceResult
+
+    Raises
+    ------
+    ScenarioError
+        No ``[sequence]`` or no ``[[windows]]``.
+    ParameterError
+        A ``move`` that does not return a stopping profile from ``q_from`` to ``q_to``.
+    UnstableTableError, SimulationError
+        A configuration that tips the table; a run that diverges.
+
+    Examples
+    --------
+    >>> from isolator import load_scenario, run_sequence
+    >>> result = run_sequence(load_scenario("paper-table-3-2-sequence"))  # doctest: +SKIP
+    >>> result.total_time, result.throughput  # doctest: +SKIP
+    """
+    sequence = scenario.sequence
+    if sequence is None:
+        raise ScenarioError("sequence: the scenario has no [sequence] (steps to run); see docs/scenario-format.md")
+    if not scenario.windows:
+        raise ScenarioError("windows: a [sequence] needs at least one [[windows]] to tell when a step has settled")
+    runner = _Runner(scenario, model)
+    names = runner.names
+    runner.check_tipping(sequence.configurations(names))
+    duration = scenario.simulation.duration
+    q = sequence.initial_positions(names)
+    x = runner.start.state
+    chunks: list[_Chunk] = []
+    timeline: list[tuple[float, tuple[Profile, ...]]] = [(0.0, tuple(held(v) for v in q))]
+    omega = runner.start.max_frequency
+    if sequence.start > 0:  # at rest (or on the moving floor) until the first step
+        b = min(sequence.start, duration)
+        chunks.append(runner.run_chunk(x, timeline[0][1], 0.0, 0.0, b, runner.max_step(omega), -1))
+        x = chunks[-1].states(np.array([b]))[0]
+    now = min(sequence.start, duration)
+    results: list[StepResult] = []
+    settled_points: list[np.ndarray] = []
+    unsettled: int | None = None
+    guess = 1.0 + sequence.measure
+    for k in range(len(sequence.steps)):
+        profiles, target, stop = _step_profiles(runner, k, q, move)
+        settled = runner.settled_points(target)
+        omega = max(omega, runner.equilibrium(target).max_frequency)
+        h = runner.max_step(omega)
+        available = duration - now
+        check_step_count(omega, max(available, 0.0), DENSE_STEP_ANGLE)
+        timeline.append((now, profiles))
+        settled_points.append(settled)
+        found: float | None = None
+        t_rule: list[np.ndarray] = []
+        rows: list[np.ndarray] = []
+        a, b, x_chunk = 0.0, min(stop + guess, available), x
+        while available > 1e-12:
+            chunk = runner.run_chunk(x_chunk, profiles, now, a, b, h, k)
+            chunks.append(chunk)
+            if b >= stop:
+                times = _rule_times(now, a, b, stop)
+                t_rule.append(times)
+                rows.append(runner.point_rows(chunk.states(times + now), settled))
+                found = held_from(np.concatenate(t_rule), np.hstack(rows), sequence.measure)
+                if found is not None:
+                    break
+            if b >= available - 1e-12:
+                break
+            x_chunk = chunk.states(np.array([now + b]))[0]
+            a, b = b, min(b + max(MIN_CHUNK, 0.25 * guess), available)
+        if found is None:
+            unsettled = k
+            results.append(StepResult(k, now, now + stop, None, None))
+            if chunks:
+                chunks[-1].t1 = min(chunks[-1].t1, duration)
+            break
+        end = found + sequence.measure
+        results.append(StepResult(k, now, now + stop, now + found, now + end))
+        while chunks[-1].t0 > now + end + 1e-12 and chunks[-1].step == k:
+            chunks.pop()
+        chunks[-1].t1 = now + end
+        x = chunks[-1].states(np.array([now + end]))[0]
+        guess = max(found - stop, 0.0) * 1.1 + sequence.measure + 0.05
+        q = target
+        now += end
+    return SequenceResult.stitch(scenario, runner.model.kind, runner.model.variant.signals, runner.start.state,
+                                 runner.arms, runner.origin, chunks, timeline, tuple(results),
+                                 tuple(settled_points), unsettled)
+
+
+def chain_scenario(scenario: Scenario, result: SequenceResult) -> Scenario:
+    """The sequence's moves as an ordinary scenario: each carriage's profile the chain of its steps' moves at
+    the steps' start times (:func:`~isolator.simulation.sequence_result.chain_profiles`), no ``[sequence]``,
+    running until the last step's end. Simulating it gives the same response as the sequence (a check, and
+    the fixed-time baseline of the benchmark)."""
+    from isolator.simulation.sequence_result import chain_profiles
+
+    profiles = chain_profiles(result)
+    carriages = tuple(replace(c, profile=prof) for c, prof in zip(scenario.carriages, profiles, strict=True))
+    end = result.t[-1] if result.t.size else scenario.simulation.duration
+    simulation = replace(scenario.simulation, duration=float(end))
+    return replace(scenario, carriages=carriages, sequence=None, simulation=simulation)
