@@ -1,0 +1,261 @@
+"""``sweep``: many designs of one scenario, run on any :class:`concurrent.futures.Executor`."""
+
+from __future__ import annotations
+
+import math
+import multiprocessing
+import os
+import sys
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from concurrent.futures import Executor, ProcessPoolExecutor
+from pathlib import Path
+from typing import Any, Literal
+
+import numpy as np
+
+from isolator.errors import ParameterError
+from isolator.model.parameters import ParameterLayout
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.reader import load_scenario
+from isolator.simulation.settling import Band
+from isolator.sweep.designs import Designs, Values, build_designs
+from isolator.sweep.names import joint_entries
+from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
+from isolator.sweep.result import SweepResult, Tally
+from isolator.sweep.runner import run_chunks
+from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key
+
+__all__ = ["MAX_CHUNK", "chunk_size_for", "default_workers", "sweep"]
+
+#: designs per chunk at most (a chunk's work is then about 0.2 s on one core for Table 3.2)
+MAX_CHUNK = 256
+
+
+def default_workers() -> int:
+    """Worker processes of the default pool: the cores this process may use."""
+    return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def chunk_size_for(designs: int, workers: int) -> int:
+    """Designs per chunk: about four chunks per worker (every worker gets work when there are at least as
+    many designs as workers), at most :data:`MAX_CHUNK`."""
+    return max(1, min(MAX_CHUNK, math.ceil(designs / (4 * max(1, workers)))))
+
+
+def sweep(
+    scenario: Scenario | str | Path | None,
+    set: Mapping[str, Values] | None = None,
+    scale: Mapping[str, Values] | None = None,
+    *,
+    zip: bool = False,
+    samples: int | None = None,
+    method: Literal["sobol", "lhs"] = "sobol",
+    seed: int = 0,
+    model: str = "exact",
+    executor: Executor | None = None,
+    workers: int | None = None,
+    frequencies: Sequence[float] = (),
+    modes: bool = False,
+    out: str | Path | None = None,
+    resume: bool = False,
+    force: bool = False,
+    progress: bool = False,
+    chunk_size: int | None = None,
+    band: Band | None = None,
+) -> SweepResult:
+    """Run a scenario for many designs; per design the settling times, peaks and status.
+
+    Parameters
+    ----------
+    scenario : Scenario, str or Path
+        A scenario, a file or a bundled name (None: the default scenario).
+    set : mapping of str to values, optional
+        Parameter name (``Simulator(...).layout.names``; ``[*]`` for every element,
+        ``isolators[*].stiffness.z``; a vector's name for all its components, ``isolators[0].damping``)
+        to absolute values [SI units]: a list (crossed with the others into a grid, first name outermost;
+        with ``zip``, paired), or with ``samples`` a range ``(low, high)``.
+    scale : mapping of str to values, optional
+        The same, as factors [-] on the scenario's values.
+    zip : bool
+        Pair the lists (one length) instead of crossing them.
+    samples : int, optional
+        Draw this many designs over the ranges, by ``method``: "sobol" (scrambled) or "lhs" (Latin
+        hypercube), seeded by ``seed`` (reproducible).
+    model : {"exact", "paper"}
+    executor : concurrent.futures.Executor, optional
+        Where the chunks run: any executor (a Dask ``Client.get_executor()``, mpi4py's
+        ``MPIPoolExecutor``); default a local process pool of ``workers`` processes.
+    workers : int, optional
+        Processes of the default pool (default: the machine's cores; 1: in this process, one chunk after
+        another); with ``executor``, how many workers it has (sizes the chunks; default its own count).
+    frequencies : sequence of float
+        [Hz]: per design the same-axis transmissibility magnitudes (floor x, y, z to table x, y, z, about
+        the rest with the carriages at their start) at each, columns ``transmissibility:<axis>@<f>Hz``.
+    modes : bool
+        Per design the six (spring-dampers) mode frequencies [Hz], columns ``mode:1`` ... ``mode:6``.
+    out : str or Path, optional
+        Write the rows as they arrive, ``.csv`` or ``.parquet`` (needs pyarrow); the result then reads
+        its columns back from the file (memory flat in the number of designs).
+    resume : bool
+        Continue the sweep whose rows ``out`` holds (designs already there are skipped).
+    force : bool
+        Overwrite ``out`` (without ``resume`` or ``force`` an existing ``out`` is an error).
+    progress : bool
+        A progress bar on stderr (only when it is a terminal).
+    chunk_size : int, optional
+        Designs per task (default :func:`chunk_size_for`).
+    band : Band, optional
+        The settling band (default the scenario's ``[settling]`` rule).
+
+    Returns
+    -------
+    SweepResult
+        Columns in design order: one per swept name as given (a scale column holds the factor),
+        ``settling_time_max`` [s], ``settling:<signal>`` [s], ``peak:<signal>`` [m or rad], ``status``
+        ("ok", "tipped": no stable rest or turned past 0.2 rad, "diverged", "invalid": the design breaks a
+        rule of its parameters, "failed": its chunk failed twice), ``reason``, ``design``, then the
+        transmissibility and mode columns.
+
+    Raises
+    ------
+    ParameterError
+        A bad argument, named; nothing is written then.
+    """
+    start_time = time.perf_counter()
+    scene = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    layout = ParameterLayout.of(scene)
+    designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
+    freqs = _frequencies(frequencies)
+    n_modes = 6 if modes else 0
+    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes)
+    path = None if out is None else Path(out)
+    done = np.zeros(designs.count, dtype=bool)
+    if path is not None:
+        check_format(path)
+        if resume and force:
+            raise ParameterError("resume, force: choose one (resume continues the file, force starts again)")
+        exists = path.exists() or staging_path(path).exists()
+        if exists and not (resume or force):
+            raise ParameterError(f"out: '{path}' exists; resume=True (--resume) continues it, force=True "
+                                 "(--force) overwrites it")
+        if exists and resume:
+            done = done_designs(path, columns, designs.names, designs.values)
+            on_disk = read_columns(path, ["settling_time_max", "status", "design"])
+    tally = Tally(designs.count, int(np.sum(done)))
+    if tally.resumed:
+        tally.count(on_disk["design"].astype(int), on_disk["settling_time_max"], on_disk["status"])
+        if path is not None and not staging_path(path).exists():  # a finished .parquet
+            if not done.all():
+                raise ParameterError(f"out: '{path}' is a finished sweep of other designs; --force starts again")
+            return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
+    n_workers = _workers(workers, executor)
+    size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
+    key = scenario_key(scene, model)
+    swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
+    template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
+    sink = None if path is None else RowSink(path, columns, append=resume)
+    if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
+        path.unlink()
+    bar = _bar(progress, designs.count, int(np.sum(done)))
+    rows: list[list[Any]] | None = [] if sink is None else None
+
+    def finished(result: ChunkResult) -> None:
+        block = _rows(designs, result, columns)
+        tally.add(result)
+        if sink is not None:
+            sink.write(block)
+        elif rows is not None:
+            rows.extend(block)
+        bar(len(block))
+
+    pool, renew = _executor(executor, n_workers)
+    complete = False
+    try:
+        run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew)
+        complete = True
+    finally:
+        if pool is not None and renew is not None:
+            pool.shutdown(wait=complete, cancel_futures=True)
+        if sink is not None:
+            sink.close(complete)
+        bar(-1)
+    return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
+
+
+def _rows(designs: Designs, result: ChunkResult, columns: Sequence[str]) -> list[list[Any]]:
+    """A chunk's rows, one value per column."""
+    out = []
+    for r in range(result.status.size):
+        i = result.start + r
+        with np.errstate(all="ignore"):
+            worst = float(np.max(result.settling[r])) if np.all(np.isfinite(result.settling[r])) else math.nan
+        out.append([*map(float, designs.values[i]), worst, *map(float, result.settling[r]),
+                    *map(float, result.peak[r]), str(result.status[r]), str(result.reason[r]), i,
+                    *map(float, result.extras[r])])
+    return out
+
+
+def _chunks(designs: Designs, template: Chunk, done: np.ndarray, size: int) -> Iterator[Chunk]:
+    """The chunks of the designs not done yet, each of consecutive designs, made when needed."""
+    from dataclasses import replace
+
+    todo = np.flatnonzero(~done)
+    lo = 0
+    while lo < todo.size:  # a run of consecutive designs, at most ``size``
+        start = int(todo[lo])
+        hi = lo + 1
+        while hi < todo.size and hi - lo < size and todo[hi] == todo[hi - 1] + 1:
+            hi += 1
+        yield replace(template, start=start, params=designs.parameters(start, start + hi - lo))
+        lo = hi
+
+
+def _executor(executor: Executor | None, workers: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
+    """The executor and how to make a fresh one (only for the pool made here)."""
+    if executor is not None:
+        return executor, None
+    if workers <= 1:
+        return None, None
+    methods = multiprocessing.get_all_start_methods()
+    context = multiprocessing.get_context("fork" if "fork" in methods else None)
+
+    def make() -> Executor:
+        return ProcessPoolExecutor(max_workers=workers, mp_context=context)
+
+    return make(), make
+
+
+def _workers(workers: int | None, executor: Executor | None) -> int:
+    if workers is not None:
+        return _positive(workers, "workers")
+    if executor is not None:
+        return int(getattr(executor, "_max_workers", 0) or default_workers())
+    return default_workers()
+
+
+def _positive(value: object, name: str = "chunk_size") -> int:
+    if isinstance(value, bool) or not isinstance(value, int | np.integer) or value < 1:
+        raise ParameterError(f"{name}: must be a whole number >= 1, got {value!r}")
+    return int(value)
+
+
+def _frequencies(values: Sequence[float]) -> tuple[float, ...]:
+    try:
+        out = tuple(float(f) for f in np.atleast_1d(np.asarray(values, dtype=float)))
+    except (TypeError, ValueError):
+        raise ParameterError(f"frequencies: must be numbers [Hz], got {values!r}") from None
+    bad = [f for f in out if not (math.isfinite(f) and f >= 0)]
+    if bad:
+        raise ParameterError(f"frequencies: must be finite and >= 0 [Hz], got {bad[0]:g}")
+    return out
+
+
+def _bar(progress: bool, total: int, initial: int) -> Callable[[int], None]:
+    """A tqdm bar on stderr, when asked and stderr is a terminal: ``bar(k)`` adds k runs, ``bar(-1)`` closes."""
+    if not (progress and sys.stderr.isatty()):
+        return lambda k: None
+    from tqdm import tqdm
+
+    shown = tqdm(total=total, initial=initial, unit="run", file=sys.stderr, smoothing=0.1)
+    return lambda k: shown.close() if k < 0 else shown.update(k)

@@ -1,0 +1,150 @@
+"""A chunk of a sweep, run where an executor puts it: the worker builds the scenario's
+:class:`~isolator.simulation.simulator.Simulator` once (a module-level cache keyed by a hash of the
+scenario and model) and reuses it for every chunk it gets."""
+
+from __future__ import annotations
+
+import hashlib
+import pickle
+from dataclasses import dataclass
+
+import numpy as np
+
+from isolator.analysis.linear import linearise
+from isolator.analysis.modes import modes
+from isolator.errors import IsolatorError
+from isolator.scenario.definitions import Scenario
+from isolator.simulation.batch import run_batch
+from isolator.simulation.settling import Band
+from isolator.simulation.simulator import Simulator
+
+__all__ = ["Chunk", "ChunkResult", "run_chunk", "scenario_key"]
+
+#: the same-axis transmissibilities reported at each ``frequencies`` entry (floor motion to table motion)
+TRANSMISSIBILITY_AXES = ("x", "y", "z")
+
+_SIMULATORS: dict[str, Simulator] = {}
+
+
+def scenario_key(scenario: Scenario, model: str) -> str:
+    """A hash of a scenario and model: which simulator a worker reuses."""
+    return hashlib.sha256(pickle.dumps((scenario, model))).hexdigest()
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """Designs ``start`` to ``start + len(params) - 1`` of a sweep, as one task (picklable).
+
+    Attributes
+    ----------
+    key : str
+        :func:`scenario_key` of ``scenario`` and ``model``.
+    scenario : Scenario
+    model : str
+    start : int
+        The first design's index.
+    params : ndarray (designs, parameters)
+    check : tuple of int
+        Entries whose designs are checked whole (:func:`isolator.sweep.names.joint_entries`), if swept.
+    band : Band or None
+        The settling band (None: the scenario's rule).
+    frequencies : tuple of float
+        [Hz] for the transmissibility columns.
+    modes : int
+        Mode frequencies to report (0: none).
+    threads : int
+        Threads of the batch inside the worker.
+    """
+
+    key: str
+    scenario: Scenario
+    model: str
+    start: int
+    params: np.ndarray
+    check: tuple[int, ...] = ()
+    band: Band | None = None
+    frequencies: tuple[float, ...] = ()
+    modes: int = 0
+    threads: int = 1
+
+
+@dataclass(frozen=True)
+class ChunkResult:
+    """The metrics of a chunk's designs.
+
+    Attributes
+    ----------
+    start : int
+    settling : ndarray (designs, 6)
+        [s]; NaN where unavailable.
+    peak : ndarray (designs, 6)
+        [m or rad].
+    status, reason : ndarray (designs,) of str
+    extras : ndarray (designs, k)
+        Transmissibility magnitudes [-] (each frequency: x, y, z), then mode frequencies [Hz].
+    """
+
+    start: int
+    settling: np.ndarray
+    peak: np.ndarray
+    status: np.ndarray
+    reason: np.ndarray
+    extras: np.ndarray
+
+
+def simulator_for(chunk: Chunk) -> Simulator:
+    """The worker's simulator of the chunk's scenario, built on first use."""
+    if chunk.key not in _SIMULATORS:
+        if len(_SIMULATORS) >= 4:
+            _SIMULATORS.pop(next(iter(_SIMULATORS)))
+        _SIMULATORS[chunk.key] = Simulator(chunk.scenario, chunk.model)
+    return _SIMULATORS[chunk.key]
+
+
+def run_chunk(chunk: Chunk) -> ChunkResult:
+    """Run a chunk's designs: a batch (tipped and diverged runs recorded), the linear extras of each
+    design that stands, and designs whose swept entries break a joint rule recorded "invalid"."""
+    sim = simulator_for(chunk)
+    n = chunk.params.shape[0]
+    status = np.full(n, "ok", dtype=object)
+    reason = np.full(n, "", dtype=object)
+    if chunk.check:
+        for r, p in enumerate(chunk.params):
+            try:
+                sim.layout.check(p, lambda i: sim.layout.names[i], chunk.check)
+            except IsolatorError as exc:
+                status[r], reason[r] = "invalid", str(exc)
+    valid = np.flatnonzero(status == "ok")
+    batch = run_batch(sim, chunk.params[valid], chunk.threads, diverged="record", band=chunk.band,
+                      label=lambda i: "")
+    settling, peak = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    settling[valid], peak[valid] = batch.settling_time, batch.peak
+    status[valid] = batch.status
+    for i, why in batch.failures.items():
+        reason[valid[i]] = why
+    width = len(chunk.frequencies) * len(TRANSMISSIBILITY_AXES) + chunk.modes
+    extras = np.full((n, width), np.nan)
+    if width:
+        for r in np.flatnonzero(status != "invalid"):
+            if status[r] != "tipped":
+                extras[r] = _linear(sim.scenario, chunk.params[r], chunk.frequencies, chunk.modes)
+    return ChunkResult(chunk.start, settling, peak, status, reason, extras)
+
+
+def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], count: int) -> np.ndarray:
+    """Same-axis transmissibility magnitudes at ``frequencies`` and the first ``count`` mode frequencies
+    [Hz] (NaN past the modes there are) of one design, about its rest with the carriages at their start."""
+    try:
+        lin = linearise(scenario, parameters=p)
+    except IsolatorError:
+        return np.full(len(frequencies) * len(TRANSMISSIBILITY_AXES) + count, np.nan)
+    out: list[float] = []
+    if frequencies:
+        axes = list(TRANSMISSIBILITY_AXES)
+        h = lin.frequency_response(np.array(frequencies), [f"ground:{a}" for a in axes], axes)
+        out += [float(v) for v in np.abs(np.diagonal(h, axis1=1, axis2=2)).ravel()]
+    if count:
+        found = modes(lin).frequencies_hz[:count]
+        out += [*map(float, found), *[np.nan] * (count - found.size)]
+    return np.array(out)
+
