@@ -18,6 +18,7 @@ from isolator.cli.helpers import (
     scenario_argument,
     use_agg,
 )
+from isolator.cli.sequence_command import register as register_sequence
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
@@ -99,6 +100,7 @@ def register(sub: Any) -> None:
     stab.set_defaults(handler=_stability)
     crit.set_defaults(handler=_criteria)
     sub.add_parser("scenarios", help="list the bundled scenarios").set_defaults(handler=_scenarios)
+    register_sequence(sub)
 
 
 def _scenarios(args: argparse.Namespace) -> int:

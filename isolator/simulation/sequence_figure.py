@@ -5,6 +5,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 if TYPE_CHECKING:
     from isolator.simulation.sequence_result import SequenceResult
 
@@ -15,10 +17,11 @@ PHASE_COLOURS = {"move": "#9ecae1", "settle": "#fdd0a2", "measure": "#a1d99b"}
 
 
 def plot_sequence(result: SequenceResult, point: str | None = None, title: str | None = None) -> Any:
-    """Two panels sharing time: above, the deviation of ``point`` (default: the first window's) from each
-    step's settled position on the windows' axes [nm], the window band shaded, the vertical axis limited to
-    a few windows' widths (the moves' excursions are clipped; they are microns); below, the carriages'
-    coordinates [mm]. Every step's move, settle and measure are coloured spans behind both panels."""
+    """Two panels sharing time: above, the largest deviation of ``point`` (default: the first window's) from
+    each step's settled position over the windows' axes [nm], on a log scale (the moves' microns and the
+    window's nanometres in one view), the window shaded, each settled time marked, the steps numbered;
+    below, the carriages' coordinates [mm]. Every step's move, settle and measure are coloured spans
+    behind both panels."""
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
 
@@ -38,23 +41,30 @@ def plot_sequence(result: SequenceResult, point: str | None = None, title: str |
                 for axis in (ax, axq):
                     axis.axvspan(a, b, color=PHASE_COLOURS[kind], alpha=0.55, lw=0, zorder=0)
     width = max((w.translation for w in windows if w.point == name), default=0.0) * 1e9
-    if name is not None and name in result.point_names:
-        dev = result.deviation(name) * 1e9
-        axes = sorted({a for w in windows if w.point == name for a in w.axes}, key="xyz".index) or ["x", "y", "z"]
-        colours = {"x": "tab:blue", "y": "tab:orange", "z": "tab:purple"}
-        for a in axes:
-            ax.plot(result.t, dev["xyz".index(a)], lw=0.8, color=colours[a], label=f"{name}:{a}", zorder=3)
+    axes = sorted({a for w in windows if w.point == name for a in w.axes}, key="xyz".index) or ["x", "y", "z"]
+    floor = width / 100 if width > 0 else 1e-3
+    if name is not None and name in result.point_names and result.t.size:
+        dev = np.abs(result.deviation(name)[["xyz".index(a) for a in axes]]).max(axis=0) * 1e9
+        ax.semilogy(result.t, np.maximum(dev, floor), lw=0.7, color="tab:blue", zorder=3,
+                    label=f"{name}: largest |deviation| on {','.join(axes)}")
+        ax.set_ylim(floor, max(float(dev.max()) * 1.5, 10 * width))
     if width > 0:
-        ax.axhspan(-width, width, color="tab:green", alpha=0.18, lw=0, zorder=1)
-        ax.axhline(width, color="tab:green", lw=0.6, zorder=2)
-        ax.axhline(-width, color="tab:green", lw=0.6, zorder=2)
-        ax.set_ylim(-5 * width, 5 * width)
-    ax.set_ylabel("deviation from the step's\nsettled position [nm]")
-    ax.grid(True, alpha=0.3, zorder=0)
+        ax.axhspan(floor, width, color="tab:green", alpha=0.18, lw=0, zorder=1)
+        ax.axhline(width, color="tab:green", lw=0.8, zorder=2)
+    done = [s.settled for s in result.steps if s.settled is not None]
+    if done and width > 0:
+        ax.plot(done, [width] * len(done), ls="none", marker="v", ms=6, color="tab:green", zorder=4,
+                label="settled (measure starts)")
+    for s in result.steps:
+        ax.annotate(str(s.index), (0.5 * (s.start + s.stop), 1.0), xycoords=("data", "axes fraction"),
+                    xytext=(0, -10), textcoords="offset points", ha="center", fontsize=7, color="0.3")
+    ax.set_ylabel(f"{name} deviation from the\nstep's settled position [nm]")
+    ax.grid(True, which="major", alpha=0.3, zorder=0)
     handles, _ = ax.get_legend_handles_labels()
     handles += [Patch(color="tab:green", alpha=0.3, label=f"window ±{width:.4g} nm")] if width > 0 else []
     handles += [Patch(color=c, alpha=0.55, label=k) for k, c in PHASE_COLOURS.items()]
-    ax.legend(handles=handles, loc="upper right", fontsize=8, ncol=len(handles), framealpha=0.9)
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), fontsize=8, ncol=len(handles),
+              frameon=False)
     for i, n in enumerate(result.carriage_names):
         axq.plot(result.t, result.q[i] * 1e3, lw=1.2, label=n)
     axq.set_ylabel("carriage [mm]")
@@ -67,5 +77,6 @@ def plot_sequence(result: SequenceResult, point: str | None = None, title: str |
     rate = result.throughput
     verdict = (f"{len(result.steps)} steps in {total:.3f} s, {rate:.0f} steps per hour" if total is not None
                and rate is not None else f"step {result.unsettled} did not settle within {result.duration:g} s")
-    fig.suptitle(title or f"{result.name}: step and settle ({verdict}; measure {result.measure:g} s)")
+    fig.suptitle(title or f"{result.name}: step and settle ({verdict}; measure {result.measure:g} s)",
+                 fontsize=11)
     return fig
