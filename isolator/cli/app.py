@@ -24,7 +24,7 @@ from typing import NoReturn
 
 import numpy as np
 
-from isolator.cli import commands
+from isolator.cli import commands, sweep_command
 from isolator.errors import IsolatorError
 
 __all__ = ["ENTRY_POINT_GROUP", "build_parser", "main"]
@@ -50,6 +50,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"%(prog)s {version('isolator')}")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     commands.register(sub)
+    sweep_command.register(sub)
     for entry in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
         entry.load()(sub)
     return parser

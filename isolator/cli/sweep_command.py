@@ -1,0 +1,151 @@
+"""``isolator sweep``: many designs of one scenario, locally or through a Dask scheduler, streamed to a
+file (:func:`isolator.sweep.sweep`)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+from concurrent.futures import Executor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from isolator.cli.helpers import count, output_path, scenario_argument
+from isolator.errors import ParameterError
+from isolator.model.variants import MODEL_KINDS
+from isolator.sweep import METHODS, sweep
+from isolator.sweep.output import SUFFIXES, staging_path
+
+__all__ = ["SCHEDULER_TIMEOUT", "parse_values", "register"]
+
+#: how long [s] to try reaching a Dask scheduler
+SCHEDULER_TIMEOUT = 5.0
+
+
+class _Swept(argparse.Action):
+    """``--set`` and ``--scale`` into one list of (mode, text), in command-line order."""
+
+    def __call__(self, parser: argparse.ArgumentParser, namespace: argparse.Namespace, values: Any,
+                 option: str | None = None) -> None:
+        swept = list(getattr(namespace, "swept", None) or [])
+        namespace.swept = [*swept, (str(option).removeprefix("--"), str(values))]
+
+
+def register(sub: Any) -> None:
+    """Add ``isolator sweep`` to the ``isolator`` command's subparsers."""
+    p = sub.add_parser(
+        "sweep", help="run many designs (a grid, zipped lists or samples of any parameters); rows to a file",
+        description="Run a scenario for many designs of any named parameters (Simulator.layout.names; [*] for "
+        "every element, a vector's name for all its components) and write one row per design: the swept "
+        "values, settling_time_max, settling:<signal>, peak:<signal>, status, reason, design.",
+    )
+    scenario_argument(p)
+    p.add_argument("--set", action=_Swept, dest="swept", metavar="NAME=VALUES",
+                   help="absolute values: START:STOP:COUNT (inclusive, like numpy.linspace), START:STOP:COUNT:log "
+                   "(geometric), v1,v2,... or, with --samples, START:STOP; repeat for more names")
+    p.add_argument("--scale", action=_Swept, dest="swept", metavar="NAME=VALUES",
+                   help="factors on the scenario's values, written as for --set")
+    p.add_argument("--zip", action="store_true", help="pair the lists (one length) instead of crossing them")
+    p.add_argument("--samples", type=count, metavar="N", help="draw N designs over the ranges instead of a grid")
+    p.add_argument("--method", choices=METHODS, default="sobol", help="sampling method (default: sobol)")
+    p.add_argument("--seed", type=count, default=0, help="seed of the sampling (default: 0)")
+    where = p.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=count, metavar="N", help="local worker processes (default: the cores)")
+    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on a Dask cluster through its scheduler")
+    p.add_argument("--frequency", type=float, action="append", default=[], metavar="HZ",
+                   help="add the x, y, z transmissibility at this frequency per design; repeat for more")
+    p.add_argument("--modes", action="store_true", help="add the mode frequencies per design")
+    p.add_argument("--model", choices=MODEL_KINDS, default="exact", help="exact or the paper's small-angle model")
+    p.add_argument("--chunk-size", type=count, metavar="N", help="designs per task (default: about four per worker)")
+    p.add_argument("--out", type=Path, required=True, metavar="FILE.csv", help="the rows (.csv or .parquet)")
+    again = p.add_mutually_exclusive_group()
+    again.add_argument("--resume", action="store_true", help="continue the sweep whose rows --out holds")
+    again.add_argument("--force", action="store_true", help="overwrite --out")
+    p.set_defaults(handler=_sweep, swept=None)
+
+
+def parse_values(text: str, option: str, sampled: bool) -> list[float]:
+    """``NAME=...``'s values: ``START:STOP:COUNT[:log]``, ``v1,v2,...``, or with ``sampled`` ``START:STOP``.
+
+    Raises
+    ------
+    ParameterError
+        Naming ``option``: a non-number, COUNT < 1, a geometric range through zero, a range where a
+        sampled one is needed.
+    """
+    def number(word: str, what: str) -> float:
+        try:
+            value = float(word)
+        except ValueError:
+            raise ParameterError(f"{option}: {what} must be a number, got '{word}'") from None
+        if not math.isfinite(value):
+            raise ParameterError(f"{option}: {what} must be finite, got '{word}'")
+        return value
+
+    if ":" not in text:
+        if sampled:
+            raise ParameterError(f"{option}: with --samples give a range START:STOP, got '{text}'")
+        return [number(w.strip(), "each value") for w in text.split(",")]
+    parts = text.split(":")
+    if sampled:
+        if len(parts) != 2:
+            raise ParameterError(f"{option}: with --samples give a range START:STOP, got '{text}'")
+        return [number(parts[0], "START"), number(parts[1], "STOP")]
+    if len(parts) not in (3, 4) or (len(parts) == 4 and parts[3] != "log"):
+        raise ParameterError(f"{option}: expected START:STOP:COUNT or START:STOP:COUNT:log, got '{text}'")
+    start, stop = number(parts[0], "START"), number(parts[1], "STOP")
+    try:
+        n = count(parts[2])
+    except argparse.ArgumentTypeError:
+        n = 0
+    if n < 1:
+        raise ParameterError(f"{option}: COUNT must be a whole number >= 1, got '{parts[2]}'")
+    if len(parts) == 4:
+        if start <= 0 or stop <= 0:
+            raise ParameterError(f"{option}: a geometric range (:log) needs START and STOP > 0, got '{text}'")
+        return [float(v) for v in np.geomspace(start, stop, n)]
+    return [float(v) for v in np.linspace(start, stop, n)]
+
+
+def _swept(args: argparse.Namespace) -> dict[str, dict[str, list[float]]]:
+    out: dict[str, dict[str, list[float]]] = {"set": {}, "scale": {}}
+    if not args.swept:
+        raise ParameterError("--set, --scale: give at least one NAME=VALUES to sweep")
+    for mode, text in args.swept:
+        name, equals, values = text.partition("=")
+        option = f"--{mode} {text}"
+        if not equals or not name.strip():
+            raise ParameterError(f"{option}: expected NAME=VALUES, e.g. 'isolators[*].stiffness.z=2e5:8e5:4'")
+        if name.strip() in out["set"] or name.strip() in out["scale"]:
+            raise ParameterError(f"{option}: '{name.strip()}' is swept twice")
+        out[mode][name.strip()] = parse_values(values.strip(), option, args.samples is not None)
+    return out
+
+
+def _executor(address: str) -> tuple[Executor, int]:
+    """A Dask cluster's executor and its worker threads; one clear line when it cannot be reached."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise ParameterError("--scheduler: needs Dask's distributed: pip install 'isolator[dask]'") from None
+    try:
+        client = Client(address, timeout=SCHEDULER_TIMEOUT)
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise ParameterError(f"--scheduler: cannot reach a Dask scheduler at {address} within "
+                             f"{SCHEDULER_TIMEOUT:g} s ({type(exc).__name__})") from None
+    return client.get_executor(), max(1, sum(client.nthreads().values()))
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    swept = _swept(args)
+    out = output_path(args.out, "--out", SUFFIXES)
+    if (out.exists() or staging_path(out).exists()) and not (args.resume or args.force):
+        raise ParameterError(f"--out: '{out}' exists; --resume continues it, --force overwrites it")
+    executor, workers = (None, args.workers) if args.scheduler is None else _executor(args.scheduler)
+    result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip, samples=args.samples,
+                   method=args.method, seed=args.seed, model=args.model, executor=executor, workers=workers,
+                   frequencies=args.frequency, modes=args.modes, out=out, resume=args.resume, force=args.force,
+                   progress=True, chunk_size=args.chunk_size)
+    print(result.summary())
+    return 0
