@@ -143,10 +143,10 @@ def held(q: float) -> PiecewisePolynomialProfile:
 def read_sequence(top: KeyReader) -> StepSequence | None:
     """The ``[sequence]`` table of a scenario's top level (None without one); the carriage names, limits
     and footprint are checked later (:func:`~isolator.scenario.validation.check_sequence`)."""
-    top.used.add("sequence")
-    if not top.has("sequence"):
+    raw = top.raw("sequence", None)  # a misspelt [sequnce] is named here, before the carriages miss profiles
+    if raw is None:
         return None
-    r = KeyReader(top.raw("sequence"), "sequence")
+    r = KeyReader(raw, "sequence")
     measure = r.number("measure", nonnegative=True)
     start = r.number("start", 0.0, nonnegative=True)
     initial_raw = r.raw("initial", {})

@@ -288,14 +288,15 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
                 break
             x_chunk = chunk.states(np.array([now + b]))[0]
             a, b = b, min(b + max(MIN_CHUNK, 0.25 * guess), available)
+        where = tuple((n, float(v)) for n, v in zip(names, target, strict=True))
         if found is None:
             unsettled = k
-            results.append(StepResult(k, now, now + stop, None, None))
+            results.append(StepResult(k, now, now + stop, None, None, where))
             if chunks:
                 chunks[-1].t1 = min(chunks[-1].t1, duration)
             break
         end = found + sequence.measure
-        results.append(StepResult(k, now, now + stop, now + found, now + end))
+        results.append(StepResult(k, now, now + stop, now + found, now + end, where))
         while chunks[-1].t0 > now + end + 1e-12 and chunks[-1].step == k:
             chunks.pop()
         chunks[-1].t1 = now + end

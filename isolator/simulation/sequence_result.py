@@ -42,6 +42,8 @@ class StepResult:
         The start of the first interval of ``measure`` seconds after the stop over which every window holds.
     end : float or None
         ``settled + measure``: when the next step starts.
+    targets : tuple of (str, float)
+        Every carriage's coordinate once the step has stopped [m].
     """
 
     index: int
@@ -49,6 +51,7 @@ class StepResult:
     stop: float
     settled: float | None
     end: float | None
+    targets: tuple[tuple[str, float], ...] = ()
 
     @property
     def move(self) -> float:
@@ -62,7 +65,7 @@ class StepResult:
 
     def to_dict(self) -> dict[str, Any]:
         return {"step": self.index, "start": self.start, "stop": self.stop, "settled": self.settled,
-                "end": self.end, "move": self.move, "settle": self.settle}
+                "end": self.end, "move": self.move, "settle": self.settle, "targets": dict(self.targets)}
 
 
 @dataclass(frozen=True)
@@ -190,7 +193,8 @@ class SequenceResult:
 
     # -- output ------------------------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """JSON: ``steps`` (each ``start, stop, settled, end, move, settle`` [s]), ``total_time`` [s],
+        """JSON: ``steps`` (each ``start, stop, settled, end, move, settle`` [s] and ``targets``, every carriage's
+        coordinate after the step [m]), ``total_time`` [s],
         ``throughput_per_hour``, ``unsettled`` (step index or null), ``measure``, ``steps_in_sequence``,
         ``move_time``/``settle_time`` (sums over the settled steps [s]), ``settle_time_max``."""
         settles = [s.settle for s in self.steps if s.settle is not None]
