@@ -49,6 +49,9 @@ LANES = 4
 #: work failed (a sweep's chunk that failed twice)
 STATUSES = ("ok", "tipped", "diverged", "failed")
 
+#: a simulator's cache of staged inputs is not shared between threads (batches may run side by side)
+_STAGING = threading.Lock()
+
 
 @dataclass(frozen=True)
 class BatchResult:
@@ -245,7 +248,7 @@ def run_batch(
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
         else:
-            with lock:  # the simulator's cache of staged inputs is not shared between threads
+            with _STAGING:
                 inputs = sim.plan_inputs(method, params[runs[0]])
             for lo in range(0, len(runs), LANES):
                 pack(runs[lo : lo + LANES], inputs)
@@ -254,8 +257,11 @@ def run_batch(
             if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
                 print(f"  batch: {done[0]}/{n} runs", flush=True)
 
-    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
-        list(pool.map(task, _tasks(sim, params, methods)))
+    if workers <= 1:  # in this thread (a sweep's worker process)
+        list(map(task, _tasks(sim, params, methods)))
+    else:
+        with ThreadPoolExecutor(max_workers=workers) as pool:
+            list(pool.map(task, _tasks(sim, params, methods)))
     with np.errstate(all="ignore"):
         worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
     return BatchResult(settling, worst, peak, dict(sorted(failures.items())), rule, rule.resolve(peak), status)

@@ -111,8 +111,8 @@ def build_designs(
         values = np.column_stack(lists)
     else:
         values = np.array(list(itertools.product(*lists)), dtype=float).reshape(-1, len(columns))
-    for c, v in zip_(columns, lists):
-        for value in np.unique(v):
+    for c, v in zip_(columns, lists):  # the rules are intervals: the extremes stand for every value
+        for value in {float(np.min(v)), float(np.max(v))}:
             for i in c.entries:
                 check_value(layout.names[i], value if c.mode == "set" else base[i] * value,
                             f"{c.mode}[{c.name!r}] = {value:g}", ParameterError)

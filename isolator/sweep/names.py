@@ -83,6 +83,6 @@ def joint_entries(layout: ParameterLayout) -> frozenset[int]:
     isolator positions, damping-chamber volumes; a design that sweeps them is checked whole."""
     def joint(name: str) -> bool:
         rule = rule_for(name)
-        return (rule is not None and (rule.unit or rule.triangle)) or ".position." in name and \
-            name.startswith("isolators") or name.endswith(".damping_volume")
+        directions = rule is not None and (rule.unit or rule.triangle)
+        return directions or (name.startswith("isolators") and ".position." in name) or name.endswith(".damping_volume")
     return frozenset(i for i, n in enumerate(layout.names) if joint(n))

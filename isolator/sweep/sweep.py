@@ -24,7 +24,7 @@ from isolator.sweep.names import joint_entries
 from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
 from isolator.sweep.result import SweepResult, Tally
 from isolator.sweep.runner import run_chunks
-from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key
+from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key, simulator_for
 
 __all__ = ["MAX_CHUNK", "chunk_size_for", "default_workers", "sweep"]
 
@@ -169,6 +169,8 @@ def sweep(
             rows.extend(block)
         bar(len(block))
 
+    if executor is None:  # built here once: the forked workers of the default pool inherit it
+        simulator_for(template)
     pool, renew = _executor(executor, n_workers)
     complete = False
     try:

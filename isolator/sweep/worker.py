@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import hashlib
 import pickle
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -18,12 +19,13 @@ from isolator.simulation.batch import run_batch
 from isolator.simulation.settling import Band
 from isolator.simulation.simulator import Simulator
 
-__all__ = ["Chunk", "ChunkResult", "run_chunk", "scenario_key"]
+__all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "run_chunk", "scenario_key", "simulator_for"]
 
 #: the same-axis transmissibilities reported at each ``frequencies`` entry (floor motion to table motion)
 TRANSMISSIBILITY_AXES = ("x", "y", "z")
 
 _SIMULATORS: dict[str, Simulator] = {}
+_BUILDING = threading.Lock()
 
 
 def scenario_key(scenario: Scenario, model: str) -> str:
@@ -94,11 +96,12 @@ class ChunkResult:
 
 def simulator_for(chunk: Chunk) -> Simulator:
     """The worker's simulator of the chunk's scenario, built on first use."""
-    if chunk.key not in _SIMULATORS:
-        if len(_SIMULATORS) >= 4:
-            _SIMULATORS.pop(next(iter(_SIMULATORS)))
-        _SIMULATORS[chunk.key] = Simulator(chunk.scenario, chunk.model)
-    return _SIMULATORS[chunk.key]
+    with _BUILDING:  # one build per worker process, whichever of its threads asks first
+        if chunk.key not in _SIMULATORS:
+            if len(_SIMULATORS) >= 4:
+                _SIMULATORS.pop(next(iter(_SIMULATORS)))
+            _SIMULATORS[chunk.key] = Simulator(chunk.scenario, chunk.model)
+        return _SIMULATORS[chunk.key]
 
 
 def run_chunk(chunk: Chunk) -> ChunkResult:
@@ -125,9 +128,8 @@ def run_chunk(chunk: Chunk) -> ChunkResult:
     width = len(chunk.frequencies) * len(TRANSMISSIBILITY_AXES) + chunk.modes
     extras = np.full((n, width), np.nan)
     if width:
-        for r in np.flatnonzero(status != "invalid"):
-            if status[r] != "tipped":
-                extras[r] = _linear(sim.scenario, chunk.params[r], chunk.frequencies, chunk.modes)
+        for row in np.flatnonzero((status != "invalid") & (status != "tipped")):
+            extras[row] = _linear(sim.scenario, chunk.params[row], chunk.frequencies, chunk.modes)
     return ChunkResult(chunk.start, settling, peak, status, reason, extras)
 
 
