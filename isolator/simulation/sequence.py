@@ -19,6 +19,7 @@ import numpy as np
 from isolator.errors import ParameterError, ScenarioError, SimulationError, UnstableTableError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
+from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.scenario.definitions import MotionLimits, Scenario
@@ -28,7 +29,7 @@ from isolator.scenario.sequence import held
 from isolator.simulation.points import PointSet, point_positions
 from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.sequence_rule import held_from, normalised
-from isolator.simulation.simulator import Simulator
+from isolator.simulation.resources import check_run_memory
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
     MAX_DENSE_STEP,
@@ -67,15 +68,16 @@ class _Runner:
     """A sequence scenario's model, parameters, equilibria (cached by configuration) and chunk runs."""
 
     def __init__(self, scenario: Scenario, model: str) -> None:
+        check_run_memory(scenario)  # the output grid the result is read on
         self.scenario = scenario
-        self.sim = Simulator(scenario, model)
-        self.model = self.sim.model
-        self.p = self.sim.parameters
+        self.layout = ParameterLayout.of(scenario)
+        self.model = get_model(self.layout, model)
+        self.p = self.layout.pack(scenario)
         self.names = tuple(c.name for c in scenario.carriages)
         first = static_equilibria(self.model, self.p[None, :], scenario.initial_positions(),
                                   "with the carriages at the sequence's initial positions")[0]
         self.start = first
-        self.air = None if self.sim.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
+        self.air = None if self.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
                                                                                 self.p[None, :])
         self._equilibria: dict[bytes, Equilibrium] = {scenario.initial_positions().tobytes(): first}
         self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
@@ -91,9 +93,15 @@ class _Runner:
         return self._equilibria[key]
 
     def check_tipping(self, configurations: np.ndarray) -> None:
-        """Refuse a sequence whose parked configurations would tip the table (``isolator stability``)."""
-        configs = np.unique(configurations, axis=0)
-        stable, _, line = tipping_verdict(configs, rocking_over(get_model(self.sim.layout, "exact"), self.p, configs))
+        """Refuse a sequence that would tip the table, in ``isolator stability``'s words: checked at the initial
+        configuration and every combination of each carriage's least, middle and greatest coordinate over
+        the steps (as ``isolator stability`` checks a profile's travel)."""
+        levels = [sorted({lo, 0.5 * (lo + hi), hi}) for lo, hi in zip(configurations.min(axis=0),
+                                                                     configurations.max(axis=0), strict=True)]
+        grid = np.array(np.meshgrid(*levels, indexing="ij")).reshape(len(levels), -1).T if levels else \
+            np.zeros((1, 0))
+        configs = np.vstack([configurations[:1], grid])
+        stable, _, line = tipping_verdict(configs, rocking_over(get_model(self.layout, "exact"), self.p, configs))
         if not stable:
             raise UnstableTableError(line)
 
@@ -116,23 +124,43 @@ class _Runner:
         inside = np.array(sorted(k for k in knots if 0.0 < k < length), dtype=float)
         plan = step_plan(np.array([0.0, length]), inside, max_step, end=length)
         times, mid = plan.stage_times()
-        layout = self.sim.layout
-        n = len(profiles)
-        u = np.zeros((*times.shape, layout.input_size))
-        for i, prof in enumerate(profiles):
-            q, v, acc = prof.evaluate(times + a, mid + a)
-            u[..., i], u[..., n + i], u[..., 2 * n + i] = q, v, acc
-        if layout.ground and ground is not None:
-            u[..., layout.ground_slice] = ground.displacement(times + a + step_start, mid + a + step_start)
-        if self.model.staged_inputs is not None:
-            flat = u.reshape(u.shape[0] * u.shape[1], u.shape[2])
-            u = staged_map(self.model)(flat, self.p)[0].reshape(*u.shape[:2], -1)
+        layout = self.layout
+        # after the last carriage stops (and with a still floor) every stage has the same inputs: those rows
+        # are the rest inputs, staged once
+        rest = max((float(prof.stop_time) for prof in profiles), default=0.0)
+        moving = np.ones(times.shape[0], bool) if self.scenario.has_ground_motion else plan.start + a < rest - 1e-12
+        u = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
+        still = self._inputs(profiles, np.full((1, 1), rest + 1.0), np.full((1, 1), rest + 1.0), step_start)
+        staged = np.empty((times.shape[0], times.shape[1], still.shape[2]))
+        if moving.any():
+            staged[moving] = u
+        staged[~moving] = still[0, 0]
+        u = staged
         _, _, _, poly = dense_stepper(self.model).run_slots(x0, plan, np.ascontiguousarray(u), self.p,
                                                             self.start.state, with_states=True)
         if poly is None or not np.all(np.isfinite(poly)):
             raise SimulationError(f"the run diverged: non-finite state in step {step} after t = "
                                   f"{step_start + a:.4g} s")
         return _Chunk(step_start + a, step_start + b, step, plan, poly[: plan.steps])
+
+    def _inputs(self, profiles: tuple[Profile, ...], times: np.ndarray, mid: np.ndarray, step_start: float) -> np.ndarray:
+        """The model's inputs (staged when the model has a staged form) at the step's local ``times`` [s]."""
+        layout, ground, n = self.layout, self.scenario.ground, len(profiles)
+        u = np.zeros((*times.shape, layout.input_size))
+        for i, prof in enumerate(profiles):
+            q, v, acc = prof.evaluate(times, mid)
+            u[..., i], u[..., n + i], u[..., 2 * n + i] = q, v, acc
+        if layout.ground and ground is not None:
+            u[..., layout.ground_slice] = ground.displacement(times + step_start, mid + step_start)
+        if self.model.staged_inputs is not None and times.size:
+            flat = u.reshape(u.shape[0] * u.shape[1], u.shape[2])
+            u = staged_map(self.model)(flat, self.p)[0].reshape(*u.shape[:2], -1)
+        return u
+
+    def pose_at(self, chunk: _Chunk, t: np.ndarray) -> np.ndarray:
+        """The states' position and rotation part (N, 7) at global times ``t`` [s] (what the points need)."""
+        width = 7 if self.model.kind == "exact" else 6
+        return DenseStepper.states_at(chunk.plan, chunk.polynomials[:, :, :width], np.asarray(t) - chunk.t0)
 
     def point_rows(self, states: np.ndarray, settled: np.ndarray) -> np.ndarray:
         """The windows' deviations from the settled positions divided by their half-widths (rows, N)."""
@@ -280,14 +308,14 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
             if b >= stop:
                 times = _rule_times(now, a, b, stop)
                 t_rule.append(times)
-                rows.append(runner.point_rows(chunk.states(times + now), settled))
+                rows.append(runner.point_rows(runner.pose_at(chunk, times + now), settled))
                 found = held_from(np.concatenate(t_rule), np.hstack(rows), sequence.measure)
                 if found is not None:
                     break
             if b >= available - 1e-12:
                 break
             x_chunk = chunk.states(np.array([now + b]))[0]
-            a, b = b, min(b + max(MIN_CHUNK, 0.25 * guess), available)
+            a, b = b, min(b + max(MIN_CHUNK, 0.5 * (b - stop)), available)  # growing: few chunks, little overrun
         where = tuple((n, float(v)) for n, v in zip(names, target, strict=True))
         if found is None:
             unsettled = k
@@ -301,7 +329,7 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
             chunks.pop()
         chunks[-1].t1 = now + end
         x = chunks[-1].states(np.array([now + end]))[0]
-        guess = max(found - stop, 0.0) * 1.1 + sequence.measure + 0.05
+        guess = max(found - stop, 0.0) * 1.03 + sequence.measure + 0.02
         q = target
         now += end
     return SequenceResult.stitch(scenario, runner.model.kind, runner.model.variant.signals, runner.start.state,

@@ -7,7 +7,8 @@ from __future__ import annotations
 import csv
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -86,23 +87,17 @@ class SequenceResult:
         The step that did not settle within ``[simulation] duration`` (no later step ran).
     duration : float
         The run's limit [s].
-    t : ndarray (N,)
-        Output sample times [s] from 0 to the last step's end (to the duration when a step did not settle).
-    signals : ndarray (6, N)
-        Table x, y, z [m], rx, ry, rz [rad] from the initial equilibrium.
-    carriage_names : tuple of str
-    q : ndarray (carriages, N)
-        Carriage coordinates [m].
-    point_names : tuple of str
-    point_signals : ndarray (points, 3, N)
-        Each point's world displacement from its initial position [m].
+    carriage_names, point_names : tuple of str
     settled_points : ndarray (steps, points, 3)
         Each step's settled point displacements [m] (static equilibrium at its targets).
-    step_of_sample : ndarray (N,) of int
-        The step each sample belongs to (-1 before the first).
     windows : tuple of Window
     profiles : tuple of (float, tuple of Profile)
         Each step's start [s] and carriage profiles in its local time (first: the rest before the first step).
+    sampled : callable
+        Computes the response at the output samples on first use (:attr:`t`, :attr:`signals`, :attr:`q`,
+        :attr:`point_signals`, :attr:`step_of_sample`, :attr:`states`): ``t`` from 0 to the last step's end
+        (to the duration when a step did not settle), the table signals from the initial equilibrium, each
+        point's world displacement from its initial position [m].
     """
 
     name: str
@@ -112,16 +107,47 @@ class SequenceResult:
     measure: float
     unsettled: int | None
     duration: float
-    t: np.ndarray
-    signals: np.ndarray
     carriage_names: tuple[str, ...]
-    q: np.ndarray
     point_names: tuple[str, ...]
-    point_signals: np.ndarray
     settled_points: np.ndarray
-    step_of_sample: np.ndarray
     windows: tuple[Window, ...]
     profiles: tuple[tuple[float, tuple[Profile, ...]], ...]
+    sampled: Callable[[], tuple[np.ndarray, ...]] = field(repr=False, compare=False)
+
+    # -- the response at the output samples, computed on first use ----------------------------------------
+    @cached_property
+    def _samples(self) -> tuple[np.ndarray, ...]:
+        return self.sampled()
+
+    @property
+    def t(self) -> np.ndarray:
+        """Output sample times [s] (N,)."""
+        return self._samples[0]
+
+    @property
+    def signals(self) -> np.ndarray:
+        """The six table signals (6, N) [m, rad]."""
+        return self._samples[1]
+
+    @property
+    def q(self) -> np.ndarray:
+        """Carriage coordinates (carriages, N) [m]."""
+        return self._samples[2]
+
+    @property
+    def point_signals(self) -> np.ndarray:
+        """Point displacements (points, 3, N) [m]."""
+        return self._samples[3]
+
+    @property
+    def step_of_sample(self) -> np.ndarray:
+        """The step each sample belongs to (N,), -1 before the first."""
+        return self._samples[4]
+
+    @property
+    def states(self) -> np.ndarray:
+        """The model's states at the samples (N, n_states)."""
+        return self._samples[5]
 
     @classmethod
     def stitch(
@@ -130,35 +156,39 @@ class SequenceResult:
         timeline: Sequence[tuple[float, tuple[Profile, ...]]], steps: tuple[StepResult, ...],
         settled: tuple[np.ndarray, ...], unsettled: int | None,
     ) -> SequenceResult:
-        """The result from the runs (``chunks``: ``t0``, ``t1``, ``states(t)``) read at the output samples."""
+        """The result from the runs (``chunks``: ``t0``, ``t1``, ``states(t)``), read at the output samples
+        on first use."""
         rate = scenario.simulation.sample_rate
         end = max((c.t1 for c in chunks), default=0.0)
-        t = np.arange(int(math.floor(end * rate * (1 + 1e-12))) + 1) / rate
-        n_states = start_state.size
-        states = np.tile(start_state, (t.size, 1)).reshape(t.size, n_states)
-        for c in chunks:
-            pick = (t > c.t0 - 1e-12) & (t <= c.t1 + 1e-12)
-            if pick.any():
-                states[pick] = c.states(t[pick])
-        starts = np.array([s for s, _ in timeline])
-        owner = np.searchsorted(starts[1:], t + 1e-12, side="right") - 1
-        q = np.zeros((len(scenario.carriages), t.size))
-        for j, (t0, profiles) in enumerate(timeline):
-            pick = owner == j - 1
-            for i, prof in enumerate(profiles):
-                q[i, pick] = prof.evaluate(t[pick] - t0)[0]
-        moved = point_positions(states, arms, kind) - origin[:, :, None] if arms.size else np.zeros((0, 3, t.size))
+        n_carriages = len(scenario.carriages)
+
+        def sampled() -> tuple[np.ndarray, ...]:
+            t = np.arange(int(math.floor(end * rate * (1 + 1e-12))) + 1) / rate
+            states = np.tile(start_state, (t.size, 1)).reshape(t.size, start_state.size)
+            for c in chunks:
+                pick = (t > c.t0 - 1e-12) & (t <= c.t1 + 1e-12)
+                if pick.any():
+                    states[pick] = c.states(t[pick])
+            starts = np.array([s for s, _ in timeline])
+            owner = np.searchsorted(starts[1:], t + 1e-12, side="right") - 1
+            q = np.zeros((n_carriages, t.size))
+            for j, (t0, profiles) in enumerate(timeline):
+                pick = owner == j - 1
+                for i, prof in enumerate(profiles):
+                    q[i, pick] = prof.evaluate(t[pick] - t0)[0]
+            moved = point_positions(states, arms, kind) - origin[:, :, None] if arms.size else np.zeros((0, 3, t.size))
+            table = np.ascontiguousarray(np.asarray(signals(states, start_state)).reshape(6, t.size))
+            return t, table, q, moved, owner, states
+
         return cls(
             name=scenario.name, model=kind, steps=steps,
             step_count=len(scenario.sequence.steps) if scenario.sequence is not None else len(steps),
             measure=scenario.sequence.measure if scenario.sequence is not None else 0.0,
-            unsettled=unsettled, duration=scenario.simulation.duration, t=t,
-            signals=np.ascontiguousarray(np.asarray(signals(states, start_state)).reshape(t.size, 6).T)
-            if t.size else np.zeros((6, 0)),
-            carriage_names=tuple(c.name for c in scenario.carriages), q=q,
-            point_names=tuple(pt.name for pt in scenario.points), point_signals=moved,
+            unsettled=unsettled, duration=scenario.simulation.duration,
+            carriage_names=tuple(c.name for c in scenario.carriages),
+            point_names=tuple(pt.name for pt in scenario.points),
             settled_points=np.array(settled).reshape(len(settled), len(scenario.points), 3),
-            step_of_sample=owner, windows=scenario.windows, profiles=tuple(timeline),
+            windows=scenario.windows, profiles=tuple(timeline), sampled=sampled,
         )
 
     # -- figures of merit --------------------------------------------------------------------------------

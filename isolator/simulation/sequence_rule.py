@@ -22,18 +22,18 @@ def normalised(deviations: list[np.ndarray], half_widths: list[float]) -> np.nda
     return np.vstack(rows) if rows else np.zeros((0, 0))
 
 
-def _crossing(t0: float, t1: float, d0: np.ndarray, d1: np.ndarray, leaving: bool) -> float:
-    """When the rows (d0 at t0, d1 at t1) cross the window edge +-1 by linear interpolation: the first
-    row to leave (``leaving``) or the last to come back."""
-    if leaving:
-        rows = np.abs(d1) > 1.0
-        edge = np.copysign(1.0, d1[rows])
-        frac = (edge - d0[rows]) / (d1[rows] - d0[rows])
-        return float(t0 + (t1 - t0) * np.clip(frac, 0.0, 1.0).min())
-    rows = np.abs(d0) > 1.0
-    edge = np.copysign(1.0, d0[rows])
-    frac = (d0[rows] - edge) / (d0[rows] - d1[rows])
-    return float(t0 + (t1 - t0) * np.clip(frac, 0.0, 1.0).max())
+def _crossings(t: np.ndarray, d: np.ndarray, k: np.ndarray, leaving: bool) -> np.ndarray:
+    """When the rows cross the window edge +-1 between grid times ``k`` and ``k + 1`` (each of ``k``), by
+    linear interpolation: the first row to leave (``leaving``, outside at ``k + 1``) or the last one to
+    come back (outside at ``k``)."""
+    d0, d1 = d[:, k], d[:, k + 1]
+    out = np.abs(d1 if leaving else d0) > 1.0
+    edge = np.copysign(1.0, d1 if leaving else d0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        frac = np.clip((edge - d0) / (d1 - d0), 0.0, 1.0)
+    frac = np.where(out, frac, np.inf if leaving else -np.inf)
+    pick = frac.min(axis=0) if leaving else frac.max(axis=0)
+    return np.asarray(t[k] + (t[k + 1] - t[k]) * pick)
 
 
 def held_from(t: np.ndarray, rows: np.ndarray, measure: float) -> float | None:
@@ -66,11 +66,15 @@ def held_from(t: np.ndarray, rows: np.ndarray, measure: float) -> float | None:
         starts = np.concatenate([[0], starts])
     if inside[-1]:
         ends = np.concatenate([ends, [t.size - 1]])
-    for a, b in zip(starts, ends, strict=True):
-        enter = float(t[0]) if a == 0 else _crossing(t[a - 1], t[a], d[:, a - 1], d[:, a], leaving=False)
-        if b == t.size - 1:  # still inside when the data end
-            return enter if t[-1] - enter >= measure * (1 - 1e-12) else None
-        leave = _crossing(t[b], t[b + 1], d[:, b], d[:, b + 1], leaving=True)
-        if leave - enter >= measure * (1 - 1e-12) and leave > enter:
-            return enter
+    enter = np.full(starts.size, float(t[0]))
+    later = starts > 0
+    enter[later] = _crossings(t, d, starts[later] - 1, leaving=False)
+    open_end = ends == t.size - 1  # still inside when the data end (the last run only)
+    leave = np.full(ends.size, np.inf)
+    leave[~open_end] = _crossings(t, d, ends[~open_end], leaving=True)
+    closed = ~open_end & (leave - enter >= measure * (1 - 1e-12)) & (leave > enter)
+    if closed.any():
+        return float(enter[np.argmax(closed)])
+    if open_end[-1] and t[-1] - enter[-1] >= measure * (1 - 1e-12):
+        return float(enter[-1])
     return None
