@@ -1,0 +1,118 @@
+"""Sweeps run: the metrics of each design as a single run gives them, serial and pool alike, failures
+recorded per row (a design that tips, a chunk that raises, a worker that dies), linear extras."""
+
+from __future__ import annotations
+
+from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
+from typing import Any
+
+import numpy as np
+import pytest
+
+from isolator import Simulator, load_scenario
+from isolator.analysis.linear import linearise
+from isolator.analysis.modes import modes
+from isolator.scenario.definitions import SIGNALS
+from isolator.sweep import sweep, worker
+
+SCENARIO = "paper-table-3-2"
+SIM = Simulator(load_scenario(SCENARIO))
+GRID = {"isolators[*].stiffness": [0.6, 1.0, 1.7], "isolators[*].damping": [0.5, 2.0]}
+
+
+def same(a: dict[str, np.ndarray], b: dict[str, np.ndarray], rtol: float = 1e-12) -> None:
+    assert list(a) == list(b)
+    for name in a:
+        if a[name].dtype == object:
+            assert a[name].tolist() == b[name].tolist(), name
+        else:
+            np.testing.assert_allclose(a[name], b[name], rtol=rtol, atol=0, equal_nan=True, err_msg=name)
+
+
+def test_each_row_is_the_single_run_of_its_design():
+    result = sweep(SCENARIO, scale=GRID, set={"carriages[1].mass": [150.0]}, workers=1)
+    assert result.columns[:3] == ("carriages[1].mass", "isolators[*].stiffness", "isolators[*].damping")
+    assert result.columns[3:5] == ("settling_time_max", "settling:x")
+    assert len(result) == 6
+    table = result.table()
+    for r in range(6):
+        k, c = table["isolators[*].stiffness"][r], table["isolators[*].damping"][r]
+        p = SIM.scaled_parameters(k, c)
+        p[SIM.layout.names.index("carriages[1].mass")] = 150.0
+        run = SIM.run(p=p)
+        expected = [np.nan if v is None else v for v in run.settling_time.values()]
+        np.testing.assert_allclose([table[f"settling:{s}"][r] for s in SIGNALS], expected, rtol=0, atol=1e-9)
+        np.testing.assert_allclose([table[f"peak:{s}"][r] for s in SIGNALS], list(run.peak.values()), rtol=1e-9)
+        assert table["status"][r] == "ok" and table["design"][r] == r
+
+
+def test_a_pool_gives_the_serial_rows_in_design_order():
+    serial = sweep(SCENARIO, scale=GRID, workers=1)
+    pooled = sweep(SCENARIO, scale=GRID, workers=2, chunk_size=1)
+    threads = sweep(SCENARIO, scale=GRID, executor=ThreadPoolExecutor(2), chunk_size=4)
+    same(serial.table(), pooled.table())
+    same(serial.table(), threads.table())
+
+
+def test_a_design_that_tips_is_recorded_and_the_others_kept():
+    result = sweep(SCENARIO, scale={"isolators[*].stiffness": [1.0, 1e-4, 0.9]}, workers=1)
+    assert result["status"].tolist() == ["ok", "tipped", "ok"]
+    assert "the table would tip" in result["reason"][1]
+    assert result["reason"][0] == ""
+    assert np.isnan(result["settling_time_max"][1]) and np.all(np.isfinite(result["settling_time_max"][[0, 2]]))
+    assert result.tally.failed == 1
+
+
+def test_a_chunk_that_raises_is_retried_once_then_recorded(monkeypatch):
+    original, calls = worker.run_chunk, []
+
+    def flaky(chunk: worker.Chunk) -> worker.ChunkResult:
+        calls.append(chunk.start)
+        if chunk.start == 2:  # always fails
+            raise RuntimeError("a bad node")
+        if chunk.start == 4 and calls.count(4) == 1:  # fails once
+            raise RuntimeError("a hiccup")
+        return original(chunk)
+
+    monkeypatch.setattr(worker, "run_chunk", flaky)
+    for options in ({"workers": 1}, {"executor": ThreadPoolExecutor(2)}):
+        calls.clear()
+        result = sweep(SCENARIO, scale=GRID, chunk_size=2, **options)
+        assert sorted(calls) == [0, 2, 2, 4, 4]
+        assert result["status"].tolist() == ["ok", "ok", "failed", "failed", "ok", "ok"]
+        assert result["reason"][2] == "after 2 attempts: RuntimeError: a bad node"
+        assert np.all(np.isfinite(result["peak:z"][[0, 1, 4, 5]])) and np.all(np.isnan(result["peak:z"][[2, 3]]))
+
+
+class _Dying(ThreadPoolExecutor):
+    """An executor whose chunk starting at design 3 kills its worker on the first try."""
+
+    tries: dict[int, int] = {}
+
+    def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Future:
+        chunk = args[0]
+        self.tries[chunk.start] = self.tries.get(chunk.start, 0) + 1
+        if chunk.start == 3 and self.tries[chunk.start] == 1:
+            future: Future = Future()
+            future.set_exception(BrokenProcessPool("a worker died"))
+            return future
+        return super().submit(fn, *args, **kwargs)
+
+
+def test_a_chunk_whose_worker_died_is_run_again():
+    result = sweep(SCENARIO, scale=GRID, executor=_Dying(2), chunk_size=3)
+    assert _Dying.tries == {0: 1, 3: 2}
+    same(result.table(), sweep(SCENARIO, scale=GRID, workers=1).table())
+
+
+def test_transmissibility_and_modes_per_design():
+    result = sweep(SCENARIO, scale={"isolators[*].stiffness": [0.7, 1.4]}, workers=1, frequencies=[2.0, 20.0],
+                   modes=True)
+    assert result.columns[-12:] == ("transmissibility:x@2Hz", "transmissibility:y@2Hz", "transmissibility:z@2Hz",
+                                    "transmissibility:x@20Hz", "transmissibility:y@20Hz", "transmissibility:z@20Hz",
+                                    *[f"mode:{k}" for k in range(1, 7)])
+    lin = linearise(SIM.scenario, parameters=SIM.scaled_parameters(1.4, 1.0))
+    h = lin.frequency_response(np.array([20.0]), ["ground:z"], ["z"])[0, 0, 0]
+    assert result["transmissibility:z@20Hz"][1] == pytest.approx(abs(h), rel=1e-12)
+    np.testing.assert_allclose([result[f"mode:{k}"][1] for k in range(1, 7)], modes(lin).frequencies_hz, rtol=1e-12)
