@@ -80,6 +80,7 @@ class _Runner:
         self.air = None if self.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
                                                                                 self.p[None, :])
         self._equilibria: dict[bytes, Equilibrium] = {scenario.initial_positions().tobytes(): first}
+        self._still: dict[bytes, np.ndarray] = {}  # the staged rest inputs by configuration
         self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
         self.origin = point_positions(first.state, self.arms, self.model.kind)[:, :, 0]
 
@@ -130,7 +131,12 @@ class _Runner:
         rest = max((float(prof.stop_time) for prof in profiles), default=0.0)
         moving = np.ones(times.shape[0], bool) if self.scenario.has_ground_motion else plan.start + a < rest - 1e-12
         u = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
-        still = self._inputs(profiles, np.full((1, 1), rest + 1.0), np.full((1, 1), rest + 1.0), step_start)
+        parked = np.array([prof.position(rest + 1.0) for prof in profiles])
+        key = parked.tobytes()
+        if key not in self._still:
+            self._still[key] = self._inputs(profiles, np.full((1, 1), rest + 1.0), np.full((1, 1), rest + 1.0),
+                                            step_start)
+        still = self._still[key]
         staged = np.empty((times.shape[0], times.shape[1], still.shape[2]))
         if moving.any():
             staged[moving] = u
