@@ -1,0 +1,99 @@
+"""``isolator sweep``: a run writes its rows and a summary; every bad input one line, exit status 2,
+nothing written."""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from isolator.cli import sweep_command
+from isolator.cli.app import main
+from isolator.cli.sweep_command import parse_values
+from isolator.errors import ParameterError
+
+
+def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, list[str]]:
+    try:
+        status = main(argv)
+    except SystemExit as exc:
+        status = int(exc.code or 0)
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err.splitlines()
+
+
+def test_a_sweep_from_the_command_line(tmp_path: Path, capsys):
+    out = tmp_path / "rows.csv"
+    status, text, err = run(["sweep", "paper-table-3-2", "--scale", "isolators[*].stiffness=0.8:1.2:3",
+                             "--set", "isolators[*].damping.z=4000,8000", "--workers", "1", "--frequency", "10",
+                             "--out", str(out)], capsys)
+    assert status == 0, err
+    assert "designs: 6 (6 run now), not ok: 0" in text and "best design: isolators[*].damping.z = " in text
+    rows = list(csv.DictReader(out.open()))
+    assert [r["design"] for r in rows] == [str(i) for i in range(6)]
+    assert [float(r["isolators[*].damping.z"]) for r in rows] == [4000.0] * 3 + [8000.0] * 3
+    assert [float(r["isolators[*].stiffness"]) for r in rows[:3]] == [0.8, 1.0, 1.2]
+    assert "transmissibility:z@10Hz" in rows[0]
+    status, text, err = run(["sweep", "--scale", "isolators[*].stiffness=0.8:1.2:3", "--set",
+                             "isolators[*].damping.z=4000,8000", "--workers", "1", "--frequency", "10", "--out",
+                             str(out), "--resume"], capsys)
+    assert status == 0 and "6 from the file" in text
+
+
+def test_samples_from_the_command_line(tmp_path: Path, capsys):
+    out = tmp_path / "rows.csv"
+    status, _, err = run(["sweep", "--set", "table.mass=4000:5000", "--samples", "5", "--method", "lhs",
+                          "--workers", "1", "--out", str(out)], capsys)
+    assert status == 0, err
+    masses = [float(r["table.mass"]) for r in csv.DictReader(out.open())]
+    assert len(masses) == 5 and all(4000 <= m <= 5000 for m in masses)
+
+
+def test_ranges_are_inclusive_and_log_is_geometric():
+    assert parse_values("1:2:3", "--set", False) == [1.0, 1.5, 2.0]
+    assert np.allclose(parse_values("1:100:3:log", "--set", False), [1.0, 10.0, 100.0], rtol=1e-14)
+    assert parse_values("1,2.5,4", "--set", False) == [1.0, 2.5, 4.0]
+    assert parse_values("7", "--set", False) == [7.0]
+    assert parse_values("1:2", "--set", True) == [1.0, 2.0]
+    with pytest.raises(ParameterError, match="a geometric range"):
+        parse_values("0:1:3:log", "--set", False)
+
+
+@pytest.mark.parametrize(("args", "named"), [
+    (["--scale", "isolators[*].stifness=0.5:2:3"], "did you mean 'isolators[*].stiffness'"),
+    (["--scale", "isolators[*].stiffness=0.5:2:0"], "COUNT must be a whole number >= 1, got '0'"),
+    (["--scale", "isolators[*].stiffness=0.5:2:x"], "COUNT must be a whole number >= 1, got 'x'"),
+    (["--scale", "isolators[*].stiffness=a:2:3"], "START must be a number, got 'a'"),
+    (["--scale", "isolators[*].stiffness=1,b"], "each value must be a number, got 'b'"),
+    (["--scale", "isolators[*].stiffness=1:2:3:lin"], "expected START:STOP:COUNT or START:STOP:COUNT:log"),
+    (["--scale", "isolators[*].stiffness"], "expected NAME=VALUES"),
+    (["--scale", "table[*].mass=1,2"], "'[*]' after 'table', which has no elements"),
+    (["--scale", "isolators[*].stiffness=1,2", "--scale", "table.mass=1,2,3", "--zip"], "zip: the zipped lists"),
+    (["--scale", "isolators[*].stiffness=1:2:3", "--samples", "4"], "with --samples give a range START:STOP"),
+    (["--scale", "isolators[*].stiffness=1,2", "--scale", "isolators[*].stiffness=3"], "is swept twice"),
+    ([], "--set, --scale: give at least one NAME=VALUES"),
+    (["--scale", "isolators[*].stiffness=1,2", "--scheduler", "tcp://127.0.0.1:9"],
+     "cannot reach a Dask scheduler at tcp://127.0.0.1:9"),
+])
+def test_bad_input_is_one_line_and_nothing_written(tmp_path: Path, capsys, monkeypatch, args, named):
+    monkeypatch.setattr(sweep_command, "SCHEDULER_TIMEOUT", 0.5)  # the address is closed: no need to wait 5 s
+    out = tmp_path / "rows.csv"
+    status, _, err = run(["sweep", *args, "--out", str(out), "--workers", "1"] if "--scheduler" not in args
+                         else ["sweep", *args, "--out", str(out)], capsys)
+    assert status == 2 and len(err) == 1, err
+    assert err[0].startswith("isolator: error: ") and named in err[0], err
+    assert not out.exists()
+
+
+def test_existing_output_and_extensions(tmp_path: Path, capsys):
+    out = tmp_path / "rows.csv"
+    out.write_text("keep me\n")
+    status, _, err = run(["sweep", "--scale", "table.mass=1,2", "--out", str(out)], capsys)
+    assert status == 2 and len(err) == 1 and "exists; --resume continues it, --force overwrites it" in err[0]
+    assert out.read_text() == "keep me\n"
+    status, _, err = run(["sweep", "--scale", "table.mass=1,2", "--out", str(tmp_path / "rows.xlsx")], capsys)
+    assert status == 2 and len(err) == 1 and "has extension '.xlsx'; supported: .csv, .parquet" in err[0]
+    status, _, err = run(["sweep", "--scale", "table.mass=1,2", "--out", str(out), "--resume", "--force"], capsys)
+    assert status == 2 and len(err) == 1 and "not allowed with argument" in err[0]

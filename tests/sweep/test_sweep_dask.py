@@ -1,0 +1,25 @@
+"""A sweep through a Dask ``LocalCluster`` of two worker processes gives the serial rows (about 2 s;
+skipped without ``distributed``)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from isolator.sweep import sweep
+
+distributed = pytest.importorskip("distributed")
+
+GRID = {"isolators[*].stiffness": [0.6, 1.0, 1.7], "isolators[*].damping": [0.5, 2.0]}
+
+
+def test_a_dask_cluster_gives_the_serial_rows():
+    serial = sweep("paper-table-3-2", scale=GRID, workers=1).table()
+    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cluster, \
+            distributed.Client(cluster) as client:
+        through = sweep("paper-table-3-2", scale=GRID, executor=client.get_executor(), chunk_size=2).table()
+    for name, values in serial.items():
+        if values.dtype == object:
+            assert values.tolist() == through[name].tolist(), name
+        else:
+            np.testing.assert_allclose(through[name], values, rtol=1e-12, atol=0, equal_nan=True, err_msg=name)

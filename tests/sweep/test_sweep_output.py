@@ -1,0 +1,89 @@
+"""Rows streamed to CSV or Parquet as chunks arrive, read back; an interrupted sweep resumed from the file."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from isolator.errors import ParameterError
+from isolator.sweep import sweep, worker
+
+SCENARIO = "paper-table-3-2"
+GRID = {"isolators[*].stiffness": [0.6, 1.0, 1.7], "isolators[*].damping": [0.5, 1.0, 2.0]}
+
+
+def same(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
+    assert list(a) == list(b)
+    for name in a:
+        if a[name].dtype == object:
+            assert a[name].tolist() == b[name].tolist(), name
+        else:
+            assert np.array_equal(a[name], b[name], equal_nan=True), name
+
+
+def test_streamed_rows_are_the_kept_rows(tmp_path: Path):
+    kept = sweep(SCENARIO, scale=GRID, workers=1)
+    streamed = sweep(SCENARIO, scale=GRID, workers=1, out=tmp_path / "rows.csv", chunk_size=2)
+    assert streamed._kept is None  # nothing kept in memory: read back from the file
+    same(kept.table(), streamed.table())
+    assert streamed["status"].tolist() == kept["status"].tolist()
+    assert (tmp_path / "rows.csv").read_text().splitlines()[0].startswith(
+        "isolators[*].stiffness,isolators[*].damping,settling_time_max,settling:x,")
+
+
+def test_an_interrupted_sweep_resumes_to_the_clean_result(tmp_path: Path, monkeypatch):
+    clean = sweep(SCENARIO, scale=GRID, workers=1, out=tmp_path / "clean.csv")
+    lines = (tmp_path / "clean.csv").read_text().splitlines(keepends=True)
+    cut = tmp_path / "cut.csv"
+    cut.write_text("".join(lines[:5]) + lines[5][:17])  # four rows, then an interrupt mid-row
+    with pytest.raises(ParameterError, match="exists; resume=True .* continues it"):
+        sweep(SCENARIO, scale=GRID, workers=1, out=cut)
+    assert cut.read_text() == "".join(lines[:5]) + lines[5][:17]  # nothing overwritten
+    ran: list[int] = []
+    original = worker.run_chunk
+    monkeypatch.setattr(worker, "run_chunk", lambda chunk: ran.append(chunk.start) or original(chunk))
+    resumed = sweep(SCENARIO, scale=GRID, workers=1, out=cut, resume=True, chunk_size=2)
+    assert ran == [4, 6, 8]  # designs 0-3 were on disk
+    assert cut.read_text() == (tmp_path / "clean.csv").read_text()
+    same(resumed.table(), clean.table())
+    assert resumed.tally.resumed == 4 and resumed.tally.runs == 5
+    assert resumed.tally.best == clean.tally.best
+
+
+def test_resume_refuses_another_sweeps_file(tmp_path: Path):
+    out = tmp_path / "rows.csv"
+    sweep(SCENARIO, scale=GRID, workers=1, out=out)
+    with pytest.raises(ParameterError, match="holds other columns"):
+        sweep(SCENARIO, scale={"isolators[*].stiffness": [1.0]}, workers=1, out=out, resume=True)
+    with pytest.raises(ParameterError, match="holds another sweep's rows"):
+        sweep(SCENARIO, scale={**GRID, "isolators[*].stiffness": [0.6, 1.1, 1.7]}, workers=1, out=out, resume=True)
+    forced = sweep(SCENARIO, scale={"isolators[*].stiffness": [1.0]}, set={}, workers=1, out=out, force=True)
+    assert len(forced["design"]) == 1
+
+
+def test_bad_output_paths(tmp_path: Path):
+    with pytest.raises(ParameterError, match=r"out: .* has extension '\.txt'; supported: \.csv, \.parquet"):
+        sweep(SCENARIO, scale=GRID, out=tmp_path / "rows.txt")
+    with pytest.raises(ParameterError, match="resume, force: choose one"):
+        (tmp_path / "rows.csv").write_text("x\n")
+        sweep(SCENARIO, scale=GRID, out=tmp_path / "rows.csv", resume=True, force=True)
+
+
+def test_parquet_without_pyarrow_names_the_install(tmp_path: Path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "pyarrow", None)
+    with pytest.raises(ParameterError, match="needs pyarrow: pip install pyarrow"):
+        sweep(SCENARIO, scale=GRID, out=tmp_path / "rows.parquet")
+    assert not list(tmp_path.iterdir())
+
+
+def test_parquet_is_written_when_the_sweep_ends(tmp_path: Path):
+    pytest.importorskip("pyarrow")
+    out = tmp_path / "rows.parquet"
+    result = sweep(SCENARIO, scale=GRID, workers=1, out=out, chunk_size=4)
+    assert out.exists() and not (tmp_path / "rows.parquet.partial.csv").exists()
+    same(result.table(), sweep(SCENARIO, scale=GRID, workers=1).table())
+    again = sweep(SCENARIO, scale=GRID, workers=1, out=out, resume=True)
+    assert again.tally.runs == 0 and again.tally.resumed == 9
