@@ -30,7 +30,8 @@ def test_a_sweep_from_the_command_line(tmp_path: Path, capsys):
                              "--set", "isolators[*].damping.z=4000,8000", "--workers", "1", "--frequency", "10",
                              "--out", str(out)], capsys)
     assert status == 0, err
-    assert "designs: 6 (6 run now), not ok: 0" in text and "best design: isolators[*].damping.z = " in text
+    assert "designs: 6 (6 run now), not ok: 0" in text
+    assert "best design: isolators[*].damping.z = " in text
     rows = list(csv.DictReader(out.open()))
     assert [r["design"] for r in rows] == [str(i) for i in range(6)]
     assert [float(r["isolators[*].damping.z"]) for r in rows] == [4000.0] * 3 + [8000.0] * 3
@@ -39,7 +40,8 @@ def test_a_sweep_from_the_command_line(tmp_path: Path, capsys):
     status, text, err = run(["sweep", "--scale", "isolators[*].stiffness=0.8:1.2:3", "--set",
                              "isolators[*].damping.z=4000,8000", "--workers", "1", "--frequency", "10", "--out",
                              str(out), "--resume"], capsys)
-    assert status == 0 and "6 from the file" in text
+    assert status == 0
+    assert "6 from the file" in text
 
 
 def test_samples_from_the_command_line(tmp_path: Path, capsys):
@@ -48,7 +50,8 @@ def test_samples_from_the_command_line(tmp_path: Path, capsys):
                           "--workers", "1", "--out", str(out)], capsys)
     assert status == 0, err
     masses = [float(r["table.mass"]) for r in csv.DictReader(out.open())]
-    assert len(masses) == 5 and all(4000 <= m <= 5000 for m in masses)
+    assert len(masses) == 5
+    assert all(4000 <= m <= 5000 for m in masses)
 
 
 def test_ranges_are_inclusive_and_log_is_geometric():
@@ -82,8 +85,10 @@ def test_bad_input_is_one_line_and_nothing_written(tmp_path: Path, capsys, monke
     out = tmp_path / "rows.csv"
     status, _, err = run(["sweep", *args, "--out", str(out), "--workers", "1"] if "--scheduler" not in args
                          else ["sweep", *args, "--out", str(out)], capsys)
-    assert status == 2 and len(err) == 1, err
-    assert err[0].startswith("isolator: error: ") and named in err[0], err
+    assert status == 2
+    assert len(err) == 1, err
+    assert err[0].startswith("isolator: error: "), err
+    assert named in err[0], err
     assert not out.exists()
 
 
@@ -91,9 +96,15 @@ def test_existing_output_and_extensions(tmp_path: Path, capsys):
     out = tmp_path / "rows.csv"
     out.write_text("keep me\n")
     status, _, err = run(["sweep", "--scale", "table.mass=1,2", "--out", str(out)], capsys)
-    assert status == 2 and len(err) == 1 and "exists; --resume continues it, --force overwrites it" in err[0]
+    assert status == 2
+    assert len(err) == 1
+    assert "exists; --resume continues it, --force overwrites it" in err[0]
     assert out.read_text() == "keep me\n"
     status, _, err = run(["sweep", "--scale", "table.mass=1,2", "--out", str(tmp_path / "rows.xlsx")], capsys)
-    assert status == 2 and len(err) == 1 and "has extension '.xlsx'; supported: .csv, .parquet" in err[0]
+    assert status == 2
+    assert len(err) == 1
+    assert "has extension '.xlsx'; supported: .csv, .parquet" in err[0]
     status, _, err = run(["sweep", "--scale", "table.mass=1,2", "--out", str(out), "--resume", "--force"], capsys)
-    assert status == 2 and len(err) == 1 and "not allowed with argument" in err[0]
+    assert status == 2
+    assert len(err) == 1
+    assert "not allowed with argument" in err[0]

@@ -15,8 +15,8 @@ GRID = {"isolators[*].stiffness": [0.6, 1.0, 1.7], "isolators[*].damping": [0.5,
 
 def test_a_dask_cluster_gives_the_serial_rows():
     serial = sweep("paper-table-3-2", scale=GRID, workers=1).table()
-    with distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None) as cluster, \
-            distributed.Client(cluster) as client:
+    cluster = distributed.LocalCluster(n_workers=2, processes=True, threads_per_worker=1, dashboard_address=None)
+    with cluster, distributed.Client(cluster) as client:
         through = sweep("paper-table-3-2", scale=GRID, executor=client.get_executor(), chunk_size=2).table()
     for name, values in serial.items():
         if values.dtype == object:

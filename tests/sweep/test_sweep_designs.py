@@ -66,10 +66,10 @@ def test_set_is_absolute_and_scale_multiplies_the_scenarios_values():
 
 
 def test_zip_pairs_lists_of_one_length():
-    designs = build_designs(LAYOUT, BASE, scale={"isolators[*].stiffness": [1, 2, 3], "isolators[*].damping": [4, 5, 6]},
-                            zip=True)
+    designs = build_designs(LAYOUT, BASE, zip=True,
+                            scale={"isolators[*].stiffness": [1, 2, 3], "isolators[*].damping": [4, 5, 6]})
     assert designs.values.tolist() == [[1, 4], [2, 5], [3, 6]]
-    with pytest.raises(ParameterError, match="zip: the zipped lists must have one length, got .*: 3, .*: 2"):
+    with pytest.raises(ParameterError, match=r"zip: the zipped lists must have one length, got .*: 3, .*: 2"):
         build_designs(LAYOUT, BASE, scale={"isolators[*].stiffness": [1, 2, 3], "isolators[*].damping": [4, 5]},
                       zip=True)
 

@@ -39,7 +39,7 @@ def test_an_interrupted_sweep_resumes_to_the_clean_result(tmp_path: Path, monkey
     lines = (tmp_path / "clean.csv").read_text().splitlines(keepends=True)
     cut = tmp_path / "cut.csv"
     cut.write_text("".join(lines[:5]) + lines[5][:17])  # four rows, then an interrupt mid-row
-    with pytest.raises(ParameterError, match="exists; resume=True .* continues it"):
+    with pytest.raises(ParameterError, match=r"exists; resume=True .* continues it"):
         sweep(SCENARIO, scale=GRID, workers=1, out=cut)
     assert cut.read_text() == "".join(lines[:5]) + lines[5][:17]  # nothing overwritten
     ran: list[int] = []
@@ -49,7 +49,8 @@ def test_an_interrupted_sweep_resumes_to_the_clean_result(tmp_path: Path, monkey
     assert ran == [4, 6, 8]  # designs 0-3 were on disk
     assert cut.read_text() == (tmp_path / "clean.csv").read_text()
     same(resumed.table(), clean.table())
-    assert resumed.tally.resumed == 4 and resumed.tally.runs == 5
+    assert resumed.tally.resumed == 4
+    assert resumed.tally.runs == 5
     assert resumed.tally.best == clean.tally.best
 
 
@@ -67,8 +68,8 @@ def test_resume_refuses_another_sweeps_file(tmp_path: Path):
 def test_bad_output_paths(tmp_path: Path):
     with pytest.raises(ParameterError, match=r"out: .* has extension '\.txt'; supported: \.csv, \.parquet"):
         sweep(SCENARIO, scale=GRID, out=tmp_path / "rows.txt")
+    (tmp_path / "rows.csv").write_text("x\n")
     with pytest.raises(ParameterError, match="resume, force: choose one"):
-        (tmp_path / "rows.csv").write_text("x\n")
         sweep(SCENARIO, scale=GRID, out=tmp_path / "rows.csv", resume=True, force=True)
 
 
@@ -83,7 +84,9 @@ def test_parquet_is_written_when_the_sweep_ends(tmp_path: Path):
     pytest.importorskip("pyarrow")
     out = tmp_path / "rows.parquet"
     result = sweep(SCENARIO, scale=GRID, workers=1, out=out, chunk_size=4)
-    assert out.exists() and not (tmp_path / "rows.parquet.partial.csv").exists()
+    assert out.exists()
+    assert not (tmp_path / "rows.parquet.partial.csv").exists()
     same(result.table(), sweep(SCENARIO, scale=GRID, workers=1).table())
     again = sweep(SCENARIO, scale=GRID, workers=1, out=out, resume=True)
-    assert again.tally.runs == 0 and again.tally.resumed == 9
+    assert again.tally.runs == 0
+    assert again.tally.resumed == 9

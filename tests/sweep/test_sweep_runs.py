@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 import pytest
@@ -44,7 +44,8 @@ def test_each_row_is_the_single_run_of_its_design():
         expected = [np.nan if v is None else v for v in run.settling_time.values()]
         np.testing.assert_allclose([table[f"settling:{s}"][r] for s in SIGNALS], expected, rtol=0, atol=1e-9)
         np.testing.assert_allclose([table[f"peak:{s}"][r] for s in SIGNALS], list(run.peak.values()), rtol=1e-9)
-        assert table["status"][r] == "ok" and table["design"][r] == r
+        assert table["status"][r] == "ok"
+        assert table["design"][r] == r
 
 
 def test_a_pool_gives_the_serial_rows_in_design_order():
@@ -60,7 +61,8 @@ def test_a_design_that_tips_is_recorded_and_the_others_kept():
     assert result["status"].tolist() == ["ok", "tipped", "ok"]
     assert "the table would tip" in result["reason"][1]
     assert result["reason"][0] == ""
-    assert np.isnan(result["settling_time_max"][1]) and np.all(np.isfinite(result["settling_time_max"][[0, 2]]))
+    assert np.isnan(result["settling_time_max"][1])
+    assert np.all(np.isfinite(result["settling_time_max"][[0, 2]]))
     assert result.tally.failed == 1
 
 
@@ -82,13 +84,14 @@ def test_a_chunk_that_raises_is_retried_once_then_recorded(monkeypatch):
         assert sorted(calls) == [0, 2, 2, 4, 4]
         assert result["status"].tolist() == ["ok", "ok", "failed", "failed", "ok", "ok"]
         assert result["reason"][2] == "after 2 attempts: RuntimeError: a bad node"
-        assert np.all(np.isfinite(result["peak:z"][[0, 1, 4, 5]])) and np.all(np.isnan(result["peak:z"][[2, 3]]))
+        assert np.all(np.isfinite(result["peak:z"][[0, 1, 4, 5]]))
+        assert np.all(np.isnan(result["peak:z"][[2, 3]]))
 
 
 class _Dying(ThreadPoolExecutor):
     """An executor whose chunk starting at design 3 kills its worker on the first try."""
 
-    tries: dict[int, int] = {}
+    tries: ClassVar[dict[int, int]] = {}
 
     def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Future:
         chunk = args[0]
