@@ -343,15 +343,17 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
                                  tuple(settled_points), unsettled)
 
 
-def chain_scenario(scenario: Scenario, result: SequenceResult) -> Scenario:
+def chain_scenario(scenario: Scenario, result: SequenceResult, after: float = 0.0) -> Scenario:
     """The sequence's moves as an ordinary scenario: each carriage's profile the chain of its steps' moves at
     the steps' start times (:func:`~isolator.simulation.sequence_result.chain_profiles`), no ``[sequence]``,
-    running until the last step's end. Simulating it gives the same response as the sequence (a check, and
-    the fixed-time baseline of the benchmark)."""
+    running until the last step's end (the run's end when a step did not settle) plus ``after`` [s].
+    Simulating it gives the same response as the sequence (a check, and the fixed-time baseline of the
+    benchmark)."""
     from isolator.simulation.sequence_result import chain_profiles
 
     profiles = chain_profiles(result)
     carriages = tuple(replace(c, profile=prof) for c, prof in zip(scenario.carriages, profiles, strict=True))
-    end = result.t[-1] if result.t.size else scenario.simulation.duration
-    simulation = replace(scenario.simulation, duration=float(end))
+    last = result.steps[-1].end if result.steps and result.steps[-1].end is not None else None
+    end = scenario.simulation.duration if last is None else last
+    simulation = replace(scenario.simulation, duration=float(end + after))
     return replace(scenario, carriages=carriages, sequence=None, simulation=simulation)
