@@ -26,10 +26,10 @@ from isolator.scenario.definitions import MotionLimits, Scenario
 from isolator.scenario.profile_shapes import scurve
 from isolator.scenario.profiles import Profile
 from isolator.scenario.sequence import held
-from isolator.simulation.points import PointSet, point_positions
+from isolator.simulation.points import point_positions
+from isolator.simulation.resources import check_run_memory
 from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.sequence_rule import held_from, normalised
-from isolator.simulation.resources import check_run_memory
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
     MAX_DENSE_STEP,
@@ -125,7 +125,6 @@ class _Runner:
         inside = np.array(sorted(k for k in knots if 0.0 < k < length), dtype=float)
         plan = step_plan(np.array([0.0, length]), inside, max_step, end=length)
         times, mid = plan.stage_times()
-        layout = self.layout
         # after the last carriage stops (and with a still floor) every stage has the same inputs: those rows
         # are the rest inputs, staged once
         rest = max((float(prof.stop_time) for prof in profiles), default=0.0)
@@ -149,7 +148,9 @@ class _Runner:
                                   f"{step_start + a:.4g} s")
         return _Chunk(step_start + a, step_start + b, step, plan, poly[: plan.steps])
 
-    def _inputs(self, profiles: tuple[Profile, ...], times: np.ndarray, mid: np.ndarray, step_start: float) -> np.ndarray:
+    def _inputs(
+        self, profiles: tuple[Profile, ...], times: np.ndarray, mid: np.ndarray, step_start: float
+    ) -> np.ndarray:
         """The model's inputs (staged when the model has a staged form) at the step's local ``times`` [s]."""
         layout, ground, n = self.layout, self.scenario.ground, len(profiles)
         u = np.zeros((*times.shape, layout.input_size))

@@ -3,12 +3,9 @@ time, the window shaded, each step's move, settle and measure as coloured spans.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
-
-if TYPE_CHECKING:
-    from isolator.simulation.sequence_result import SequenceResult
 
 __all__ = ["PHASE_COLOURS", "plot_sequence"]
 
@@ -16,12 +13,14 @@ __all__ = ["PHASE_COLOURS", "plot_sequence"]
 PHASE_COLOURS = {"move": "#9ecae1", "settle": "#fdd0a2", "measure": "#a1d99b"}
 
 
-def plot_sequence(result: SequenceResult, point: str | None = None, title: str | None = None) -> Any:
-    """Two panels sharing time: above, the largest deviation of ``point`` (default: the first window's) from
-    each step's settled position over the windows' axes [nm], on a log scale (the moves' microns and the
-    window's nanometres in one view), the window shaded, each settled time marked, the steps numbered;
-    below, the carriages' coordinates [mm]. Every step's move, settle and measure are coloured spans
-    behind both panels."""
+def plot_sequence(result: Any, point: str | None = None, title: str | None = None) -> Any:
+    """A :class:`~isolator.simulation.sequence_result.SequenceResult`'s figure, two panels sharing time.
+
+    Above, the largest deviation of ``point`` (default: the first window's) from each step's settled
+    position over the windows' axes [nm], on a log scale (the moves' microns and the window's nanometres
+    in one view), the window shaded, each settled time marked, the steps numbered; below, the carriages'
+    coordinates [mm]. Every step's move, settle and measure are coloured spans behind both panels.
+    """
     import matplotlib.pyplot as plt
     from matplotlib.patches import Patch
 

@@ -163,7 +163,7 @@ class SequenceResult:
         n_carriages = len(scenario.carriages)
 
         def sampled() -> tuple[np.ndarray, ...]:
-            t = np.arange(int(math.floor(end * rate * (1 + 1e-12))) + 1) / rate
+            t = np.arange(math.floor(end * rate * (1 + 1e-12)) + 1) / rate
             states = np.tile(start_state, (t.size, 1)).reshape(t.size, start_state.size)
             for c in chunks:
                 pick = (t > c.t0 - 1e-12) & (t <= c.t1 + 1e-12)

@@ -31,7 +31,8 @@ def test_table_outputs_and_figure(tmp_path, capsys):
     assert "paper-table-3-2-sequence (exact model): 20 steps, measure 0.1 s" in out
     assert "step  start [s]   stop [s] settled [s]    end [s]   move [s] settle [s]" in out
     assert "\n  19 " in out
-    assert "total time:" in out and "steps per hour" in out
+    assert "total time:" in out
+    assert "steps per hour" in out
     assert f"steps: {steps}" in out
     with open(steps) as handle:
         rows = list(csv.reader(handle))
@@ -75,7 +76,9 @@ def test_unsettled_step_exits_4_naming_it(tmp_path, capsys):
     assert "step 1 did not settle" in captured.out
     with open(steps) as handle:
         rows = list(csv.reader(handle))
-    assert rows[2][0] == "1" and rows[2][3] == "" and rows[2][4] == ""
+    assert rows[2][0] == "1"
+    assert rows[2][3] == ""
+    assert rows[2][4] == ""
     assert main(["sequence", str(_short(tmp_path, 10.0)), "--json"]) == 4
     assert json.loads(capsys.readouterr().out)["unsettled"] == 1
 

@@ -68,7 +68,8 @@ def test_inline_moves_and_initial():
     assert sc.initial_positions().tolist() == [-0.3, 0.0]
     move = seq.steps[0].move("x-stage")
     assert move == Move(0.1, 0.15, 0.4, 4.0, 0.05)
-    assert move is not None and move.limits(0.2, 0.5, 5.0) == (0.15, 0.4, 4.0)
+    assert move is not None
+    assert move.limits(0.2, 0.5, 5.0) == (0.15, 0.4, 4.0)
     assert Move(0.1, velocity=0.1).limits(0.2, 0.5, 5.0) == (0.1, 0.5, 5.0)
     assert seq.steps[0].move("y-stage") == Move(0.02)
     assert seq.steps[0].move("z-stage") is None

@@ -152,7 +152,7 @@ def test_sequence_equals_a_fixed_time_run_of_the_same_moves(three):
 
 
 def test_step_times_and_per_step_limits(three):
-    sc, result = three
+    _sc, result = three
     assert [s.index for s in result.steps] == [0, 1, 2]
     assert result.unsettled is None
     s0, s1, s2 = result.steps
@@ -211,8 +211,11 @@ def test_unsettled_step_is_reported():
     assert len(result.steps) == 2
     assert result.steps[0].end is not None
     last = result.steps[1]
-    assert last.settled is None and last.end is None and last.settle is None
-    assert result.total_time is None and result.throughput is None
+    assert last.settled is None
+    assert last.end is None
+    assert last.settle is None
+    assert result.total_time is None
+    assert result.throughput is None
     assert result.t[-1] == pytest.approx(5.0)
     summary = result.to_dict()
     assert summary["unsettled"] == 1
@@ -221,7 +224,7 @@ def test_unsettled_step_is_reported():
 
 
 def test_output_rate_does_not_change_the_settled_times(three):
-    sc, result = three
+    _sc, result = three
     coarse = run_sequence(scenario_from_dict(sequence_dict(THREE_STEPS, rate=50.0)))
     for a, b in zip(result.steps, coarse.steps, strict=True):
         assert b.settled == pytest.approx(a.settled, abs=1e-9)
@@ -229,7 +232,7 @@ def test_output_rate_does_not_change_the_settled_times(three):
 
 
 def test_designed_moves_replace_the_s_curve(three):
-    sc, result = three
+    sc, _result = three
     calls = []
 
     def move(k: int, name: str, q0: float, q1: float, limits: MotionLimits):
@@ -257,7 +260,7 @@ def test_scenario_without_sequence_or_windows_is_refused():
 
 
 def test_outputs(three, tmp_path):
-    sc, result = three
+    _sc, result = three
     steps = result.write_steps(tmp_path / "steps.csv")
     with open(steps) as handle:
         rows = list(csv.reader(handle))
