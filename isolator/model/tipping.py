@@ -2,7 +2,8 @@
 
 The table stands when its condensed rocking stiffness (:class:`~isolator.model.equilibrium.RockingStiffness`)
 is positive at rest with the carriages anywhere in their travel: at the start, at the end, and at
-every combination of each carriage's stroke limits and mid-point over the run. The exact model's
+every combination of each carriage's stroke limits and mid-point over the run (and over the
+configurations of a ``[sequence]``). The exact model's
 static pose is used where one exists, else the upright pose. :func:`tipping_verdict` gives the one
 line both the stability report and a refused simulation print.
 """
@@ -26,8 +27,13 @@ def travel_configurations(scenario: Scenario) -> np.ndarray:
     carriages stop), and every combination of each carriage's extremes and mid-point over the run."""
     t_end = scenario.simulation.duration
     levels = []
-    for carriage in scenario.carriages:
+    # a [sequence] moves the carriages between its configurations (the S-curves stay between them)
+    steps = None if scenario.sequence is None else scenario.sequence.configurations([c.name for c in
+                                                                                      scenario.carriages])
+    for i, carriage in enumerate(scenario.carriages):
         lo, hi = carriage.profile.position_range(t_end)
+        if steps is not None:
+            lo, hi = min(lo, float(steps[:, i].min())), max(hi, float(steps[:, i].max()))
         levels.append(sorted({lo, 0.5 * (lo + hi), hi}))
     configs = [scenario.initial_positions()]
     finals = scenario.final_positions()

@@ -20,7 +20,7 @@ from isolator.errors import ParameterError, ScenarioError, SimulationError, Unst
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
-from isolator.model.tipping import rocking_over, tipping_verdict
+from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.scenario.definitions import MotionLimits, Scenario
 from isolator.scenario.profile_shapes import scurve
@@ -80,7 +80,7 @@ class _Runner:
         self.air = None if self.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
                                                                                 self.p[None, :])
         self._equilibria: dict[bytes, Equilibrium] = {scenario.initial_positions().tobytes(): first}
-        self._still: dict[bytes, np.ndarray] = {}  # the staged rest inputs by configuration
+        self._still: dict[int, np.ndarray] = {}  # the staged rest inputs of each step's profiles
         self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
         self.origin = point_positions(first.state, self.arms, self.model.kind)[:, :, 0]
 
@@ -93,15 +93,10 @@ class _Runner:
                                                       air=self.air)[0]
         return self._equilibria[key]
 
-    def check_tipping(self, configurations: np.ndarray) -> None:
-        """Refuse a sequence that would tip the table, in ``isolator stability``'s words: checked at the initial
-        configuration and every combination of each carriage's least, middle and greatest coordinate over
-        the steps (as ``isolator stability`` checks a profile's travel)."""
-        levels = [sorted({lo, 0.5 * (lo + hi), hi}) for lo, hi in zip(configurations.min(axis=0),
-                                                                     configurations.max(axis=0), strict=True)]
-        grid = np.array(np.meshgrid(*levels, indexing="ij")).reshape(len(levels), -1).T if levels else \
-            np.zeros((1, 0))
-        configs = np.vstack([configurations[:1], grid])
+    def check_tipping(self) -> None:
+        """Refuse a sequence that would tip the table, in ``isolator stability``'s words (its configurations:
+        every combination of each carriage's least, middle and greatest coordinate over the steps)."""
+        configs = travel_configurations(self.scenario)
         stable, _, line = tipping_verdict(configs, rocking_over(get_model(self.layout, "exact"), self.p, configs))
         if not stable:
             raise UnstableTableError(line)
@@ -130,12 +125,10 @@ class _Runner:
         rest = max((float(prof.stop_time) for prof in profiles), default=0.0)
         moving = np.ones(times.shape[0], bool) if self.scenario.has_ground_motion else plan.start + a < rest - 1e-12
         u = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
-        parked = np.array([prof.position(rest + 1.0) for prof in profiles])
-        key = parked.tobytes()
-        if key not in self._still:
-            self._still[key] = self._inputs(profiles, np.full((1, 1), rest + 1.0), np.full((1, 1), rest + 1.0),
-                                            step_start)
-        still = self._still[key]
+        if id(profiles) not in self._still:  # once per step (the profiles stay alive in the run's timeline)
+            at = np.full((1, 1), rest + 1.0)
+            self._still[id(profiles)] = self._inputs(profiles, at, at, step_start)
+        still = self._still[id(profiles)]
         staged = np.empty((times.shape[0], times.shape[1], still.shape[2]))
         if moving.any():
             staged[moving] = u
@@ -165,20 +158,47 @@ class _Runner:
         return u
 
     def pose_at(self, chunk: _Chunk, t: np.ndarray) -> np.ndarray:
-        """The states' position and rotation part (N, 7) at global times ``t`` [s] (what the points need)."""
+        """The states' position and rotation part (N, 7) at global times ``t`` [s] (what the points need): the
+        dense output as :meth:`DenseStepper.states_at` reads it, on those states only."""
         width = 7 if self.model.kind == "exact" else 6
-        return DenseStepper.states_at(chunk.plan, chunk.polynomials[:, :, :width], np.asarray(t) - chunk.t0)
+        plan, poly = chunk.plan, chunk.polynomials
+        local = np.asarray(t, dtype=float) - chunk.t0
+        starts = plan.start[: poly.shape[0]]
+        step = np.clip(np.searchsorted(starts, local, side="right") - 1, 0, poly.shape[0] - 1)
+        s = ((local - starts[step]) / plan.length[step])[:, None]
+        coefficients = poly[step, :, :width]  # (N, degree + 1, width), one gather
+        out = coefficients[:, -1]
+        for j in range(poly.shape[1] - 2, -1, -1):
+            out = coefficients[:, j] + s * out
+        return np.asarray(out)
 
     def point_rows(self, states: np.ndarray, settled: np.ndarray) -> np.ndarray:
         """The windows' deviations from the settled positions divided by their half-widths (rows, N)."""
-        moved = point_positions(states, self.arms, self.model.kind) - self.origin[:, :, None]
         names = [pt.name for pt in self.scenario.points]
+        moved: dict[int, np.ndarray] = {}
         deviations, widths = [], []
         for w in self.scenario.windows:
             i, axes = names.index(w.point), list(w.axis_indices)
-            deviations.append(moved[i, axes] - settled[i, axes, None])
+            if i not in moved:
+                moved[i] = self._moved(states, i)
+            deviations.append(moved[i][axes] - settled[i, axes, None])
             widths.append(w.translation)
         return normalised(deviations, widths)
+
+    def _moved(self, states: np.ndarray, i: int) -> np.ndarray:
+        """Point ``i``'s displacement (3, N) [m] at states (N, >= 7): :func:`point_positions` for one point,
+        the exact model's quaternion turning the lever arm without building the matrices."""
+        if self.model.kind != "exact":
+            return point_positions(states, self.arms[i : i + 1], self.model.kind)[0] - self.origin[i, :, None]
+        w, x, y, z = states[:, 3], states[:, 4], states[:, 5], states[:, 6]
+        s = 2.0 / (w * w + x * x + y * y + z * z)
+        a0, a1, a2 = self.arms[i]
+        xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
+        out = np.empty((3, states.shape[0]))
+        out[0] = states[:, 0] + a0 + s * (-(yy + zz) * a0 + (xy - wz) * a1 + (xz + wy) * a2)
+        out[1] = states[:, 1] + a1 + s * ((xy + wz) * a0 - (xx + zz) * a1 + (yz - wx) * a2)
+        out[2] = states[:, 2] + a2 + s * ((xz - wy) * a0 + (yz + wx) * a1 - (xx + yy) * a2)
+        return out - self.origin[i, :, None]
 
 
 def _step_profiles(
@@ -280,7 +300,7 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
         raise ScenarioError("windows: a [sequence] needs at least one [[windows]] to tell when a step has settled")
     runner = _Runner(scenario, model)
     names = runner.names
-    runner.check_tipping(sequence.configurations(names))
+    runner.check_tipping()
     duration = scenario.simulation.duration
     q = sequence.initial_positions(names)
     x = runner.start.state
