@@ -35,10 +35,10 @@ def plot_sequence(result: Any, point: str | None = None, title: str | None = Non
             spans += [("settle", s.stop, s.settled), ("measure", s.settled, s.end)]
         else:
             spans.append(("settle", s.stop, float(result.t[-1]) if result.t.size else s.stop))
-        for kind, a, b in spans:
+        for kind, a, b in spans:  # a bar along the top of the deviation panel, full height below
             if b > a:
-                for axis in (ax, axq):
-                    axis.axvspan(a, b, color=PHASE_COLOURS[kind], alpha=0.55, lw=0, zorder=0)
+                ax.axvspan(a, b, ymin=0.92, ymax=1.0, color=PHASE_COLOURS[kind], lw=0, zorder=0)
+                axq.axvspan(a, b, color=PHASE_COLOURS[kind], alpha=0.55, lw=0, zorder=0)
     width = max((w.translation for w in windows if w.point == name), default=0.0) * 1e9
     axes = sorted({a for w in windows if w.point == name for a in w.axes}, key="xyz".index) or ["x", "y", "z"]
     floor = width / 100 if width > 0 else 1e-3
@@ -46,7 +46,7 @@ def plot_sequence(result: Any, point: str | None = None, title: str | None = Non
         dev = np.abs(result.deviation(name)[["xyz".index(a) for a in axes]]).max(axis=0) * 1e9
         ax.semilogy(result.t, np.maximum(dev, floor), lw=0.7, color="tab:blue", zorder=3,
                     label=f"{name}: largest |deviation| on {','.join(axes)}")
-        ax.set_ylim(floor, max(float(dev.max()) * 1.5, 10 * width))
+        ax.set_ylim(floor, max(float(dev.max()), 10 * width) * 8.0)  # room for the phase bar
     if width > 0:
         ax.axhspan(floor, width, color="tab:green", alpha=0.18, lw=0, zorder=1)
         ax.axhline(width, color="tab:green", lw=0.8, zorder=2)
@@ -56,12 +56,12 @@ def plot_sequence(result: Any, point: str | None = None, title: str | None = Non
                 label="settled (measure starts)")
     for s in result.steps:
         ax.annotate(str(s.index), (0.5 * (s.start + s.stop), 1.0), xycoords=("data", "axes fraction"),
-                    xytext=(0, -10), textcoords="offset points", ha="center", fontsize=7, color="0.3")
+                    xytext=(0, -9), textcoords="offset points", ha="center", fontsize=7, color="0.2")
     ax.set_ylabel(f"{name} deviation from the\nstep's settled position [nm]")
     ax.grid(True, which="major", alpha=0.3, zorder=0)
     handles, _ = ax.get_legend_handles_labels()
     handles += [Patch(color="tab:green", alpha=0.3, label=f"window ±{width:.4g} nm")] if width > 0 else []
-    handles += [Patch(color=c, alpha=0.55, label=k) for k, c in PHASE_COLOURS.items()]
+    handles += [Patch(color=c, label=k) for k, c in PHASE_COLOURS.items()]
     ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), fontsize=8, ncol=len(handles),
               frameon=False)
     for i, n in enumerate(result.carriage_names):
