@@ -14,6 +14,7 @@ from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
 from isolator.scenario.rules import check_scenario_values
+from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import check_windows
 
 __all__ = [
@@ -103,6 +104,7 @@ def check_sequence(scenario: Scenario) -> None:
     sequence = scenario.sequence
     if sequence is None:
         return
+    _check_sequence_numbers(sequence)
     names = [c.name for c in scenario.carriages]
     known = ", ".join(names) if names else "none declared in [[carriages]]"
     for name, _ in sequence.initial:
@@ -139,6 +141,33 @@ def check_sequence(scenario: Scenario) -> None:
         which = "half-length" if axis == 0 else "half-width"
         raise ScenarioError(f"{key}: carriage '{names[i]}''s mass reaches {'xy'[axis]} = {coordinate:.4g} m "
                             f"there, beyond the table's {which} {half:.4g} m (table.size)")
+
+
+def _check_sequence_numbers(sequence: StepSequence) -> None:
+    """The reader's rules for a sequence built from the dataclasses: finite numbers, ``measure``, ``start``
+    and delays >= 0, per-step limits > 0, at least one step, each naming a carriage."""
+    def check(value: object, key: str, low: float | None = None, strict: bool = False) -> None:
+        ok = isinstance(value, int | float) and not isinstance(value, bool) and math.isfinite(value)
+        if not ok or (low is not None and (value <= low if strict else value < low)):  # type: ignore[operator]
+            bound = "" if low is None else f" {'>' if strict else '>='} {low:g}"
+            raise ScenarioError(f"{key}: must be a finite number{bound}, got {value!r}")
+
+    check(sequence.measure, "sequence.measure", 0.0)
+    check(sequence.start, "sequence.start", 0.0)
+    for name, q in sequence.initial:
+        check(q, f"sequence.initial.{name}")
+    if not sequence.steps:
+        raise ScenarioError("sequence.steps: is empty; a sequence needs at least one step")
+    for k, step in enumerate(sequence.steps):
+        if not step.moves:
+            raise ScenarioError(f"sequence.steps[{k}]: names no carriage (a step moves at least one)")
+        for name, move in step.moves:
+            key = f"sequence.steps[{k}].{name}"
+            check(move.target, key if move.plain else f"{key}.target")
+            check(move.delay, f"{key}.delay", 0.0)
+            for kind in ("velocity", "acceleration", "jerk"):
+                if getattr(move, kind) is not None:
+                    check(getattr(move, kind), f"{key}.{kind}", 0.0, strict=True)
 
 
 def check_duration(scenario: Scenario) -> None:

@@ -14,7 +14,15 @@ import pytest
 from conftest import base_dict
 from isolator import load_scenario, scenario_from_dict
 from isolator.errors import ParameterError, ScenarioError
-from isolator.scenario.sequence import Move, Step, parse_pattern, raster_steps, sequence_table, sequence_toml
+from isolator.scenario.sequence import (
+    Move,
+    Step,
+    StepSequence,
+    parse_pattern,
+    raster_steps,
+    sequence_table,
+    sequence_toml,
+)
 from isolator.scenario.validation import validate_scenario
 
 PROBE = {"name": "probe", "position": [0.3, 0.0, 0.45]}
@@ -209,3 +217,22 @@ def test_parse_pattern_is_inclusive():
     name, values = parse_pattern(" x-stage =0:0.3:7")
     assert name == "x-stage"
     assert values.tolist() == pytest.approx([0.0, 0.05, 0.1, 0.15, 0.2, 0.25, 0.3])
+
+
+@pytest.mark.parametrize(("sequence", "key"), [
+    (StepSequence(math.nan, (Step((("x-stage", Move(0.1)),)),)), "sequence.measure"),
+    (StepSequence(-0.1, (Step((("x-stage", Move(0.1)),)),)), "sequence.measure"),
+    (StepSequence(0.1, (Step((("x-stage", Move(0.1)),)),), start=math.inf), "sequence.start"),
+    (StepSequence(0.1, ()), "sequence.steps"),
+    (StepSequence(0.1, (Step(()),)), "sequence.steps[0]"),
+    (StepSequence(0.1, (Step((("x-stage", Move(math.nan)),)),)), "sequence.steps[0].x-stage"),
+    (StepSequence(0.1, (Step((("x-stage", Move(0.1, velocity=0.0)),)),)), "sequence.steps[0].x-stage.velocity"),
+    (StepSequence(0.1, (Step((("x-stage", Move(0.1, delay=-1.0)),)),)), "sequence.steps[0].x-stage.delay"),
+    (StepSequence(0.1, (Step((("x-stage", Move(0.1)),)),), initial=(("x-stage", math.nan),)),
+     "sequence.initial.x-stage"),
+])
+def test_sequences_built_from_dataclasses_are_checked(sequence, key):
+    sc = scenario_from_dict(sequence_dict())
+    with pytest.raises(ScenarioError) as info:
+        validate_scenario(dataclasses.replace(sc, sequence=sequence))
+    assert str(info.value).startswith(f"{key}:"), str(info.value)
