@@ -8,7 +8,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from isolator.cli.helpers import check_run_memory, output_path, report, scenario_argument, use_agg
-from isolator.errors import OptimisationError
+from isolator.errors import OptimisationError, ParameterError
+from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import load_scenario
 
 if TYPE_CHECKING:
@@ -37,7 +38,9 @@ def register(sub: Any) -> None:
         "optimise-profile", help="optimise the carriages' motion profiles to cut the settling or cycle time",
         description="Optimise each carriage's S-curve (or trapezoid) through the time-varying model with casadi "
         "and IPOPT, over model variants (isolator stiffness, damping and payload mass 15 % off), and compare "
-        "with the scenario's own profiles by simulation.",
+        "with the scenario's own profiles by simulation. On a scenario with a [sequence], design every step's "
+        "S-curves (limits within the carriages', start delays) for the least total time by the window rule on "
+        "the exact model, and report the total time and throughput before and after.",
     )
     scenario_argument(opt)
     opt.add_argument("--objective", choices=["settling", "cycle"], default="settling",
@@ -53,6 +56,8 @@ def register(sub: Any) -> None:
     opt.add_argument("--out", type=Path, metavar="OPTIMISED.toml", help="write the scenario with the optimised "
                      "profiles")
     opt.add_argument("--json", action="store_true", help="print JSON instead of text")
+    opt.add_argument("--samples", type=int, default=64, metavar="N",
+                     help="with a [sequence]: designs tried per distinct move in the first round (default 64)")
 
     ff.set_defaults(handler=_feedforward)
     opt.set_defaults(handler=_optimise_profile)
@@ -89,6 +94,8 @@ def _optimise_profile(args: argparse.Namespace) -> int:
     out = output_path(args.out, "--out", (".toml",)) if args.out else None
     scenario = load_scenario(args.scenario)
     check_run_memory(scenario)
+    if scenario.sequence is not None:
+        return _optimise_sequence(args, scenario, out)
     settings = ProfileSettings(
         objective=args.objective, transcription=args.transcription, shape=args.shape,
         max_move_time_increase=args.max_move_time_increase,
@@ -114,6 +121,25 @@ def _optimise_profile(args: argparse.Namespace) -> int:
         data["warning"] = warning
         print(f"isolator: warning: {warning}", file=sys.stderr)
     return report(args.json, data, _profile_summary(result, spread), [("optimised scenario", out)])
+
+
+#: optimise-profile's options that design a single move, with their defaults (not for a sequence)
+_SINGLE_MOVE_OPTIONS = {"objective": "settling", "shape": "scurve", "transcription": "single",
+                        "max_move_time_increase": 0.05, "nominal": False}
+
+
+def _optimise_sequence(args: argparse.Namespace, scenario: Scenario, out: Path | None) -> int:
+    from controllers.profiles.sequence_design import optimise_sequence, write_sequence_scenario
+
+    for name, default in _SINGLE_MOVE_OPTIONS.items():
+        if getattr(args, name) != default:
+            option = "--" + name.replace("_", "-")
+            raise ParameterError(f"{option}: designs a single move; a scenario with a [sequence] is designed for "
+                                 "its total time (leave the option out)")
+    result = optimise_sequence(scenario, samples=args.samples, progress=not args.json)
+    if out:
+        write_sequence_scenario(args.scenario, result.scenario, out)
+    return report(args.json, result.to_dict(), result.summary(), [("optimised scenario", out)])
 
 
 def _profile_summary(result: ProfileOptimisation, spread: dict[str, Any]) -> str:

@@ -10,7 +10,7 @@ from isolator.scenario.reader import resolve_scenario_path
 
 from .move_design import MoveDesign
 
-__all__ = ["write_scenario", "write_scenario_profiles"]
+__all__ = ["absolute_files", "write_scenario", "write_scenario_profiles"]
 
 
 def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], path: str | Path) -> Path:
@@ -33,7 +33,7 @@ def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], pat
     origin = resolve_scenario_path(source)
     with open(origin, "rb") as handle:
         data = tomllib.load(handle)
-    _absolute_files(data, origin.parent)
+    absolute_files(data, origin.parent)
     by_name = {d.name: d for d in designs}
     for carriage in data.get("carriages", []):
         if carriage.get("name") in by_name:
@@ -63,7 +63,7 @@ def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str 
     origin = resolve_scenario_path(source)
     with open(origin, "rb") as handle:
         data = tomllib.load(handle)
-    _absolute_files(data, origin.parent)
+    absolute_files(data, origin.parent)
     for carriage in data.get("carriages", []):
         if carriage.get("name") in profiles:
             carriage["profile"] = profiles[carriage["name"]]
@@ -75,14 +75,14 @@ def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str 
     return target
 
 
-def _absolute_files(data: Any, base: Path) -> None:
+def absolute_files(data: Any, base: Path) -> None:
     """Make every relative ``file`` key under ``data`` absolute (relative to ``base``)."""
     if isinstance(data, dict):
         for key, value in data.items():
             if key == "file" and isinstance(value, str) and not Path(value).is_absolute():
                 data[key] = str((base / value).resolve())
             else:
-                _absolute_files(value, base)
+                absolute_files(value, base)
     elif isinstance(data, list):
         for item in data:
-            _absolute_files(item, base)
+            absolute_files(item, base)

@@ -1,0 +1,324 @@
+"""Step-and-settle sequences designed for throughput: each step's S-curves chosen to cut move + settle.
+
+A sequence's total time is the sum over its steps of move, settle (until every window holds) and measure.
+The measure is fixed; the rest of a step depends on how its carriages move. This module designs, for
+every step, the same profile family the sequence runs (seven-segment S-curves) with its own limits
+(speed, acceleration and jerk, each at most the carriage's ``limits``) and, when a step moves several
+carriages, a start delay for each but the first, judged by the window rule on the exact time-varying
+model (:func:`isolator.simulation.sequence.run_sequence`).
+
+The window rule makes the step time a step function of the design (an oscillation peak crossing a
+window edge moves the settled time by half a period), so gradients say nothing; the search is a
+derivative-free one: a scrambled Sobol set over the limits as fractions of the carriage's (log scale,
+down to :data:`LOWEST_FRACTION`), then Sobol sets in shrinking boxes around the best designs. Steps that
+make the same move (the same stroke for each carriage) share one design, tuned on the first of them from
+rest at its start; the whole optimised sequence is then simulated, and any step that came out slower
+than in the starting sequence gets its starting move back, so the result is never slower step by step
+(up to the small state a step inherits from the previous one).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.stats import qmc
+
+from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.reader import resolve_scenario_path
+from isolator.scenario.sequence import Move, Step, sequence_table
+from isolator.simulation.sequence import SequenceResult, run_sequence
+
+from .export import absolute_files
+
+__all__ = ["LOWEST_FRACTION", "SequenceOptimisation", "optimise_sequence", "write_sequence_scenario"]
+
+#: the smallest fraction of a carriage's limit a designed move may use
+LOWEST_FRACTION = 0.05
+#: the longest start delay of a step's second and later carriages [s]
+MAX_DELAY = 0.5
+
+MoveKey = tuple[tuple[str, float], ...]
+
+
+@dataclass(frozen=True)
+class SequenceOptimisation:
+    """A sequence before and after its steps were designed.
+
+    Attributes
+    ----------
+    before, after : SequenceResult
+        The scenario's sequence and the optimised one, simulated in full.
+    scenario : Scenario
+        With the optimised ``[sequence]`` (each designed step's limits and delays given explicitly).
+    designs : dict
+        Per distinct move (carriage name, stroke [m]) the chosen fractions of the carriages' limits
+        (velocity, acceleration, jerk) and delays, and its step time (move + settle) from rest [s] before
+        and after.
+    reverted : tuple of int
+        Steps given their starting move back (slower with the shared design).
+    evaluations : int
+        Single-step simulations run by the search.
+    wall_time : float
+        [s]
+    """
+
+    before: SequenceResult
+    after: SequenceResult
+    scenario: Scenario
+    designs: dict[MoveKey, dict[str, Any]]
+    reverted: tuple[int, ...]
+    evaluations: int
+    wall_time: float
+    notes: list[str] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready: total time and throughput before and after, the gain, the designs."""
+        b, a = self.before, self.after
+        gain = None if not (b.throughput and a.throughput) else a.throughput / b.throughput - 1.0
+        return {
+            "before": {"total_time": b.total_time, "throughput_per_hour": b.throughput},
+            "after": {"total_time": a.total_time, "throughput_per_hour": a.throughput},
+            "throughput_gain": gain,
+            "moves": [{"move": dict(key), **value} for key, value in self.designs.items()],
+            "reverted_steps": list(self.reverted),
+            "evaluations": self.evaluations,
+            "wall_time": self.wall_time,
+            "steps": a.to_dict()["steps"],
+        }
+
+    def summary(self) -> str:
+        """The totals, the throughput gain and each distinct move's design, a line each."""
+        b, a = self.before, self.after
+        lines = [f"{'':>10} {'total [s]':>10} {'throughput [steps/h]':>21}"]
+        for label, r in (("before", b), ("optimised", a)):
+            total = "n/a" if r.total_time is None else f"{r.total_time:.3f}"
+            rate = "n/a" if r.throughput is None else f"{r.throughput:.1f}"
+            lines.append(f"{label:>10} {total:>10} {rate:>21}")
+        data = self.to_dict()
+        if data["throughput_gain"] is not None:
+            lines.append(f"throughput gain: {data['throughput_gain'] * 100:+.1f} %")
+        for key, d in self.designs.items():
+            what = ", ".join(f"{n} {s * 1e3:+.4g} mm" for n, s in key)
+            limits = "; ".join(f"{n}: v {f[0]:.3g}, a {f[1]:.3g}, j {f[2]:.3g} of its limits"
+                               + (f", delay {dl:.3g} s" if dl else "")
+                               for n, f, dl in zip(d["carriages"], d["fractions"], d["delays"], strict=True))
+            lines.append(f"move {what}: {d['before']:.3f} s -> {d['after']:.3f} s from rest ({limits})")
+        if self.reverted:
+            lines.append(f"steps given their starting move back: {', '.join(map(str, self.reverted))}")
+        lines.append(f"{self.evaluations} single-step simulations, {self.wall_time:.1f} s")
+        return "\n".join(lines)
+
+
+def optimise_sequence(
+    scenario: Scenario,
+    model: str = "exact",
+    samples: int = 64,
+    rounds: int = 3,
+    seed: int = 0,
+    progress: bool = False,
+) -> SequenceOptimisation:
+    """Design every step of a scenario's ``[sequence]`` for the least total time.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        With a ``[sequence]`` (and ``[[windows]]``).
+    model : {"exact", "paper"}
+    samples : int
+        Designs tried per distinct move in the first Sobol set (a power of two is best); each of the
+        ``rounds`` refinements tries half as many around the best.
+    rounds : int
+        Refinements (each box half the size of the one before).
+    seed : int
+        Of the scrambled Sobol sets.
+    progress : bool
+        A line per distinct move.
+
+    Raises
+    ------
+    ScenarioError
+        No ``[sequence]``, or the starting sequence does not settle within the duration.
+    ParameterError
+        ``samples`` or ``rounds`` out of range.
+    """
+    t_start = time.perf_counter()
+    sequence = scenario.sequence
+    if sequence is None:
+        raise ScenarioError("sequence: the scenario has no [sequence] to optimise (isolator optimise-profile "
+                            "designs a single move without one)")
+    if isinstance(samples, bool) or not isinstance(samples, int) or samples < 2:
+        raise ParameterError(f"samples: must be a whole number >= 2, got {samples!r}")
+    if isinstance(rounds, bool) or not isinstance(rounds, int) or rounds < 0:
+        raise ParameterError(f"rounds: must be a whole number >= 0, got {rounds!r}")
+    before = run_sequence(scenario, model)
+    if before.unsettled is not None:
+        raise ScenarioError(f"sequence: step {before.unsettled} of the starting sequence does not settle within "
+                            "[simulation] duration; lengthen it before optimising")
+    names = tuple(c.name for c in scenario.carriages)
+    configs = sequence.configurations(names)
+    keys = [_move_key(step, configs[i], names) for i, step in enumerate(sequence.steps)]
+    designs: dict[MoveKey, dict[str, Any]] = {}
+    counter = [0]
+    for i, key in enumerate(keys):
+        if not key or key in designs:
+            continue
+        base_end = before.steps[i].end
+        assert base_end is not None  # every step settled (checked above)
+        limit = 3.0 * (base_end - before.steps[i].start) + 1.0  # a design three times slower is no candidate
+        designs[key] = _design_move(scenario, model, i, configs[i], limit, samples, rounds, seed, counter)
+        if progress:
+            d = designs[key]
+            print(f"  move {', '.join(f'{n} {s * 1e3:+.4g} mm' for n, s in key)}: {d['before']:.3f} s -> "
+                  f"{d['after']:.3f} s from rest", flush=True)
+    steps = tuple(_designed_step(step, designs.get(keys[i])) for i, step in enumerate(sequence.steps))
+    optimised = replace(scenario, sequence=replace(sequence, steps=steps))
+    after = run_sequence(optimised, model)
+    reverted = _slower_steps(before, after)
+    if reverted:
+        steps = tuple(sequence.steps[i] if i in reverted else s for i, s in enumerate(steps))
+        optimised = replace(scenario, sequence=replace(sequence, steps=steps))
+        after = run_sequence(optimised, model)
+    return SequenceOptimisation(before, after, optimised, designs, tuple(reverted), counter[0],
+                                time.perf_counter() - t_start)
+
+
+def _move_key(step: Step, q: np.ndarray, names: tuple[str, ...]) -> MoveKey:
+    """The step's move: (carriage, stroke [m]) of each carriage that moves, strokes rounded to 1 nm."""
+    index = {n: i for i, n in enumerate(names)}
+    return tuple((n, round(m.target - float(q[index[n]]), 9)) for n, m in step.moves
+                 if round(m.target - float(q[index[n]]), 9) != 0.0)
+
+
+def _step_time(scenario: Scenario, model: str, step: Step, q: np.ndarray, limit: float) -> float:
+    """Move + settle [s] of ``step`` alone, from rest with the carriages at ``q`` (inf: not within
+    ``limit`` seconds)."""
+    sequence = scenario.sequence
+    assert sequence is not None
+    names = [c.name for c in scenario.carriages]
+    alone = replace(sequence, steps=(step,), start=0.0, initial=tuple(zip(names, map(float, q), strict=True)))
+    settings = replace(scenario.simulation, duration=limit)
+    result = run_sequence(replace(scenario, sequence=alone, simulation=settings), model)
+    first = result.steps[0]
+    return math.inf if first.settled is None else first.settled - first.start
+
+
+def _design_move(
+    scenario: Scenario, model: str, index: int, q: np.ndarray, limit: float, samples: int, rounds: int, seed: int,
+    counter: list[int],
+) -> dict[str, Any]:
+    """The best design of step ``index``'s move found by Sobol sets in shrinking boxes."""
+    sequence = scenario.sequence
+    assert sequence is not None
+    step = sequence.steps[index]
+    moving = [n for n, _ in _move_key(step, q, tuple(c.name for c in scenario.carriages))]
+    dims = 3 * len(moving) + (len(moving) - 1)
+    low = np.array([math.log(LOWEST_FRACTION)] * (3 * len(moving)) + [0.0] * (len(moving) - 1))
+    high = np.array([0.0] * (3 * len(moving)) + [MAX_DELAY] * (len(moving) - 1))
+
+    def cost(x: np.ndarray) -> float:
+        counter[0] += 1
+        return _step_time(scenario, model, _candidate(scenario, step, moving, x), q, limit)
+
+    start = np.concatenate([np.zeros(3 * len(moving)), np.zeros(len(moving) - 1)])  # the carriages' limits
+    best_x, best = start, cost(start)
+    first = best
+    centre, half = (low + high) / 2, (high - low) / 2
+    count = samples
+    for r in range(rounds + 1):
+        unit = qmc.Sobol(d=dims, scramble=True, seed=seed + r).random(count)
+        points = np.clip(centre + (2 * unit - 1) * half, low, high)
+        for x in points:
+            value = cost(x)
+            if value < best:
+                best_x, best = x, value
+        centre, half, count = best_x, half / 2, max(4, count // 2)
+    fractions = np.exp(best_x[: 3 * len(moving)]).reshape(len(moving), 3)
+    chosen = dict(_candidate(scenario, step, moving, best_x).moves)
+    return {"step": index, "carriages": moving, "fractions": fractions.tolist(),
+            "delays": [chosen[n].delay for n in moving],
+            "limits": [[chosen[n].velocity, chosen[n].acceleration, chosen[n].jerk] for n in moving],
+            "before": first, "after": best}
+
+
+def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray) -> Step:
+    """``step`` with each moving carriage's limits scaled by ``exp(x)`` and its delay from ``x``."""
+    limits = {c.name: c.limits for c in scenario.carriages}
+    moves = []
+    for name, move in step.moves:
+        if name not in moving:
+            moves.append((name, move))
+            continue
+        k = moving.index(name)
+        lim = limits[name]
+        f = np.exp(x[3 * k: 3 * k + 3])
+        delay = float(x[3 * len(moving) + k - 1]) if k > 0 else 0.0
+        moves.append((name, Move(move.target, _scaled(lim.velocity, f[0]), _scaled(lim.acceleration, f[1]),
+                                 _scaled(lim.jerk, f[2]), delay)))
+    return Step(tuple(moves))
+
+
+def _scaled(limit: float | None, fraction: float) -> float:
+    """``fraction`` of ``limit``, never above it (a fraction of 1 gives the limit itself)."""
+    assert limit is not None  # a sequence's carriages have full limits (checked on reading)
+    return float(limit) if fraction >= 1.0 else min(float(limit), float(limit) * float(fraction))
+
+
+def _designed_step(step: Step, design: dict[str, Any] | None) -> Step:
+    """``step`` with a distinct move's designed limits and delays (its targets kept)."""
+    if design is None:
+        return step
+    moves = []
+    for name, move in step.moves:
+        if name in design["carriages"]:
+            k = design["carriages"].index(name)
+            v, a, j = design["limits"][k]
+            moves.append((name, Move(move.target, v, a, j, design["delays"][k])))
+        else:
+            moves.append((name, move))
+    return Step(tuple(moves))
+
+
+def _slower_steps(before: SequenceResult, after: SequenceResult) -> list[int]:
+    """Steps whose move + settle + measure came out longer than in the starting sequence (by > 1 ms)."""
+    slower = []
+    for i, b in enumerate(before.steps):
+        a = after.steps[i] if i < len(after.steps) else None
+        if a is None or a.end is None or b.end is None or (a.end - a.start) > (b.end - b.start) + 1e-3:
+            slower.append(i)
+    return slower
+
+
+def write_sequence_scenario(source: str | Path | None, scenario: Scenario, path: str | Path,
+                            name: str | None = None) -> Path:
+    """Write the source scenario file with its ``[sequence]`` replaced by ``scenario``'s (every designed
+    step's limits and delays explicit, numbers to 17 digits: reading it back gives the same sequence).
+
+    Raises
+    ------
+    ScenarioError
+        ``scenario`` has no sequence.
+    """
+    import tomllib
+
+    import tomli_w
+
+    if scenario.sequence is None:
+        raise ScenarioError("sequence: nothing to write, the scenario has no [sequence]")
+    origin = resolve_scenario_path(source)
+    with open(origin, "rb") as handle:
+        data = tomllib.load(handle)
+    absolute_files(data, origin.parent)
+    data["sequence"] = sequence_table(scenario.sequence)
+    data["name"] = name or f"{data.get('name', origin.stem)}-optimised"
+    target = Path(path)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    with open(target, "wb") as handle:
+        tomli_w.dump(data, handle)
+    return target
+
