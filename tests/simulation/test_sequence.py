@@ -330,3 +330,16 @@ def test_pneumatic_sequence_carries_the_chambers_over():
     np.testing.assert_allclose(result.point_signals, response.point_signals[..., :n], rtol=0, atol=1e-11)
     pressures = result.states[:, 13:]
     assert np.max(np.abs(pressures - response.states[:n, 13:])) < 1e-9 * np.max(np.abs(pressures))
+
+
+def test_moving_floor_keeps_the_sequence_time():
+    """The floor's motion is read at the sequence's time (not the step's): equal to the fixed-time run."""
+    data = sequence_dict({"measure": 0.1, "start": 0.4, "steps": [{"x-stage": 0.1}, {"x-stage": -0.1}]})
+    data["ground"] = {"z": {"type": "trapezoid", "start": 0.0, "stroke": 1e-8, "velocity": 1e-7,
+                            "acceleration": 1e-5, "t0": 0.2}}
+    sc = scenario_from_dict(data)
+    result = run_sequence(sc)
+    assert result.unsettled is None
+    response = Simulator(chain_scenario(sc, result, after=0.5)).run()
+    n = result.t.size
+    np.testing.assert_allclose(result.point_signals, response.point_signals[..., :n], rtol=0, atol=1e-12)
