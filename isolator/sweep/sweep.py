@@ -154,6 +154,7 @@ def sweep(
     key = scenario_key(scene, model)
     swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
     template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
+    simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
     sink = None if path is None else RowSink(path, columns, append=resume)
     if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
         path.unlink()
@@ -169,8 +170,6 @@ def sweep(
             rows.extend(block)
         bar(len(block))
 
-    if executor is None:  # built here once: the forked workers of the default pool inherit it
-        simulator_for(template)
     pool, renew = _executor(executor, n_workers)
     complete = False
     try:
@@ -231,7 +230,10 @@ def _executor(executor: Executor | None, workers: int) -> tuple[Executor | None,
 def _workers(workers: int | None, executor: Executor | None) -> int:
     if workers is not None:
         return _positive(workers, "workers")
-    if executor is not None:
+    if executor is not None:  # a pool's own count, a Dask cluster's threads, else this machine's cores
+        client = getattr(executor, "_client", None)
+        if client is not None and hasattr(client, "nthreads"):
+            return max(1, sum(client.nthreads().values()))
         return int(getattr(executor, "_max_workers", 0) or default_workers())
     return default_workers()
 
