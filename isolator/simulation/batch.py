@@ -20,12 +20,13 @@ from typing import Literal, Protocol
 
 import numpy as np
 
-from isolator.errors import ParameterError, SimulationError, UnstableTableError
+from isolator.errors import ParameterError, ScenarioError, SimulationError, UnstableTableError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
+from isolator.simulation.resources import check_memory
 from isolator.simulation.response import Response
 from isolator.simulation.settling import Band, signal_bands, still_signals
 from isolator.simulation.stepping import (
@@ -45,9 +46,12 @@ __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_b
 BLOCK = 16
 #: runs stepped side by side in one compiled call (AVX holds four doubles)
 LANES = 4
-#: a run's status: measured, no stable rest or turned past ``MAX_TURN``, non-finite states, the run's
-#: work failed (a sweep's chunk that failed twice)
-STATUSES = ("ok", "tipped", "diverged", "failed")
+#: a run's status: measured, no stable rest or turned past ``MAX_TURN``, non-finite states, not run (it
+#: would need far too many steps or more memory than the machine has), the run's work failed (a sweep's
+#: chunk that failed twice)
+STATUSES = ("ok", "tipped", "diverged", "refused", "failed")
+#: a run may use at most this fraction of the memory available (1 / MEMORY_SHARE)
+MEMORY_SHARE = 4
 
 #: a simulator's cache of staged inputs is not shared between threads (batches may run side by side)
 _STAGING = threading.Lock()
@@ -192,8 +196,18 @@ def run_batch(
     for i in good:
         start, end = starts[i], ends[i]
         assert start is not None
-        methods[i] = sim.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
+        try:
+            methods[i] = sim.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
+        except ScenarioError as exc:  # far too many steps
+            failed(i, exc, "refused")
     for method in {m.plan_key: m for m in methods.values()}.values():  # compiled before the threads start
+        try:
+            _check_memory(sim, method)
+        except ParameterError as exc:
+            for i in [i for i, m in methods.items() if m.plan_key == method.plan_key]:
+                failed(i, exc, "refused")
+                del methods[i]
+            continue
         if method.plan is None:
             sim.grid_inputs(method.substeps)
             rk4_stepper(sim.model, method.substeps)
@@ -276,6 +290,23 @@ def _tasks(sim: BatchSimulator, params: np.ndarray, methods: Mapping[int, Method
         staged = params[i, uses].tobytes() if method.plan is not None else b""
         groups.setdefault((method.plan_key, staged), []).append(i)
     return [same[lo : lo + BLOCK] for _, same in sorted(groups.items()) for lo in range(0, len(same), BLOCK)]
+
+
+def _check_memory(sim: BatchSimulator, method: Method) -> None:
+    """Refuse runs of ``method`` whose arrays (RK4: the inputs at every stage of the grid, with the profiles'
+    temporaries; DOP853: a pack's dense output and slots, and the staged inputs at every step) would need more
+    than a :data:`MEMORY_SHARE` of the memory available (:class:`ParameterError`): workers run side by side."""
+    if method.plan is None:
+        intervals = sim.grid.nodes.size - 1
+        need = 4.0 * intervals * (2 * method.substeps + 1) * sim.layout.input_size * 8
+        what = f"RK4 with {method.substeps} steps per interval of the grid"
+    else:
+        plan = method.plan
+        per_step = LANES * (8 * sim.model.n_states + 6 * plan.per_step) + 16 * max(sim.layout.input_size, 48)
+        need = 8.0 * plan.steps * per_step
+        what = f"DOP853 with {plan.steps:.3g} steps"
+    check_memory(MEMORY_SHARE * need, f"{what} (the design's fastest mode), with {MEMORY_SHARE} runs side by side,",
+                 "such a design is far stiffer than a real isolator (or its run far too long)")
 
 
 def _equilibria(
