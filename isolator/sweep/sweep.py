@@ -113,8 +113,9 @@ def sweep(
     SweepResult
         Columns in design order: one per swept name as given (a scale column holds the factor),
         ``settling_time_max`` [s], ``settling:<signal>`` [s], ``peak:<signal>`` [m or rad], ``status``
-        ("ok", "tipped": no stable rest or turned past 0.2 rad, "diverged", "invalid": the design breaks a
-        rule of its parameters, "failed": its chunk failed twice), ``reason``, ``design``, then the
+        ("ok", "tipped": no stable rest or turned past 0.2 rad, "diverged", "refused": it would need far too
+        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "failed": its
+        chunk failed twice), ``reason``, ``design``, then the
         transmissibility and mode columns.
 
     Raises

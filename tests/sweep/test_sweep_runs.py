@@ -14,6 +14,7 @@ from isolator import Simulator, load_scenario
 from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes
 from isolator.scenario.definitions import SIGNALS
+from isolator.simulation import batch
 from isolator.sweep import sweep, worker
 
 SCENARIO = "paper-table-3-2"
@@ -64,6 +65,19 @@ def test_a_design_that_tips_is_recorded_and_the_others_kept():
     assert np.isnan(result["settling_time_max"][1])
     assert np.all(np.isfinite(result["settling_time_max"][[0, 2]]))
     assert result.tally.failed == 1
+
+
+def test_a_design_too_big_for_the_memory_is_refused_not_run(monkeypatch):
+    monkeypatch.setattr(batch, "MEMORY_SHARE", 1e9)  # as if every run needed more than the machine has
+    result = sweep(SCENARIO, scale={"isolators[*].stiffness": [1.0, 2.0]}, workers=1)
+    assert result["status"].tolist() == ["refused", "refused"]
+    assert "of memory, more than the" in result["reason"][0]
+
+
+def test_an_invalid_design_is_recorded():
+    result = sweep(SCENARIO, set={"table.inertia.x": [1000.0, 1e5]}, workers=1)
+    assert result["status"].tolist() == ["ok", "invalid"]
+    assert "table.inertia" in result["reason"][1]
 
 
 def test_a_chunk_that_raises_is_retried_once_then_recorded(monkeypatch):
