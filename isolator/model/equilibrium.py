@@ -232,7 +232,7 @@ def static_equilibria(
     model : Model
     params : ndarray (runs, parameters)
     positions : ndarray
-        Carriage coordinates [m], the same for every run.
+        Carriage coordinates [m], the same for every run, or one row per run (runs, carriages).
     where : str
         Words for messages.
     check : bool
@@ -253,20 +253,24 @@ def static_equilibria(
         run when there are several.
     """
     params = np.atleast_2d(np.asarray(params, dtype=float))
+    q = np.asarray(positions, float)
+    if q.ndim == 2 and params.shape[0] == 1:  # one parameter vector, a configuration per run
+        params = np.repeat(params, q.shape[0], axis=0)
     runs = params.shape[0]
+    qs = list(q) if q.ndim == 2 else [q] * runs
+    c = np.array([model.layout.rest_inputs(row) for row in qs])
     solver = _solver(model)
-    c = model.layout.rest_inputs(positions)
     if air is None:
-        z, active, failed = _newton(lambda rows, z: solver.residual(z, c, params[rows]), params, model.n_static)
+        z, active, failed = _newton(lambda rows, z: solver.residual(z, c[rows], params[rows]), params, model.n_static)
     else:
         closed = solver.closed(all_closed)
-        air = np.atleast_2d(np.asarray(air, dtype=float))
-        z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
+        air = np.broadcast_to(np.atleast_2d(np.asarray(air, dtype=float)), (runs, np.shape(air)[-1]))
+        z, active, failed = _newton(lambda rows, z: closed(z, c[rows], params[rows], air[rows]), params, model.n_static)
     failed |= active  # did not converge
     label = (lambda i: f"run {i}: ") if runs > 1 else (lambda i: "")
     if failed.any():
         i = int(np.argmax(failed))
-        rock = rocking_stiffness(model, params[i], positions, np.zeros(model.n_static))
+        rock = rocking_stiffness(model, params[i], qs[i], np.zeros(model.n_static))
         raise UnstableTableError(
             f"{label(i)}no static equilibrium {where}: the isolators cannot hold the table upright; "
             f"{rock.describe()} (the mass centre is too high for the isolator spacing, or they are too soft)"
@@ -281,14 +285,13 @@ def static_equilibria(
         eig, vec = np.linalg.eig(jacobians[i])
         worst = int(np.argmax(eig.real))
         dof = _dominant_dof(model, vec[:, worst])
-        rock = rocking_stiffness(model, params[i], positions, z[i])
+        rock = rocking_stiffness(model, params[i], qs[i], z[i])
         raise UnstableTableError(
             f"{label(i)}unstable table {where}: a mode mostly in {dof} grows at {eig.real[worst]:.3g} 1/s; "
             f"{rock.describe()}; the mass centre is too high for the isolator spacing "
             "(or an isolator is too soft) and the table would tip"
         )
-    q = np.asarray(positions, float)
-    return [Equilibrium(z[i], states[i], q, eigenvalues[i]) for i in range(runs)]
+    return [Equilibrium(z[i], states[i], qs[i], eigenvalues[i]) for i in range(runs)]
 
 
 def closed_rest_states(
@@ -336,13 +339,8 @@ def _closed_pose(
     ``positions`` one configuration for all runs, or one row per run."""
     closed = _solver(model).closed(all_closed)
     q = np.asarray(positions, dtype=float)
-    if q.ndim == 2:
-        inputs = np.array([model.layout.rest_inputs(row) for row in q])
-        z, active, failed = _newton(lambda rows, z: closed(z, inputs[rows], params[rows], air[rows]), params,
-                                    model.n_static)
-    else:
-        c = model.layout.rest_inputs(q)
-        z, active, failed = _newton(lambda rows, z: closed(z, c, params[rows], air[rows]), params, model.n_static)
+    c = np.array([model.layout.rest_inputs(row) for row in (q if q.ndim == 2 else [q] * params.shape[0])])
+    z, active, failed = _newton(lambda rows, z: closed(z, c[rows], params[rows], air[rows]), params, model.n_static)
     if (failed | active).any():
         raise UnstableTableError(f"no rest with the groups' air kept (row {int(np.argmax(failed | active))})")
     return z

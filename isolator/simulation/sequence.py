@@ -84,6 +84,19 @@ class _Runner:
         self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
         self.origin = point_positions(first.state, self.arms, self.model.kind)[:, :, 0]
 
+    def prepare(self, configurations: np.ndarray) -> None:
+        """Solve the equilibria of the steps' configurations side by side (one Newton run); a configuration
+        without one is left to :meth:`equilibrium`, whose error names it."""
+        todo = [q for q in np.unique(configurations, axis=0) if q.tobytes() not in self._equilibria]
+        if not todo:
+            return
+        try:
+            solved = static_equilibria(self.model, self.p[None, :], np.array(todo), "at a step's targets",
+                                       air=self.air)
+        except UnstableTableError:
+            return
+        self._equilibria.update((q.tobytes(), e) for q, e in zip(todo, solved, strict=True))
+
     def equilibrium(self, q: np.ndarray) -> Equilibrium:
         key = np.asarray(q, dtype=float).tobytes()
         if key not in self._equilibria:
@@ -301,6 +314,7 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
     runner = _Runner(scenario, model)
     names = runner.names
     runner.check_tipping()
+    runner.prepare(sequence.configurations(names))
     duration = scenario.simulation.duration
     q = sequence.initial_positions(names)
     x = runner.start.state
