@@ -137,14 +137,13 @@ class _Runner:
         # are the rest inputs, staged once
         rest = max((float(prof.stop_time) for prof in profiles), default=0.0)
         moving = np.ones(times.shape[0], bool) if self.scenario.has_ground_motion else plan.start + a < rest - 1e-12
-        u = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
         if id(profiles) not in self._still:  # once per step (the profiles stay alive in the run's timeline)
             at = np.full((1, 1), rest + 1.0)
             self._still[id(profiles)] = self._inputs(profiles, at, at, step_start)
         still = self._still[id(profiles)]
         staged = np.empty((times.shape[0], times.shape[1], still.shape[2]))
         if moving.any():
-            staged[moving] = u
+            staged[moving] = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
         staged[~moving] = still[0, 0]
         u = staged
         _, _, _, poly = dense_stepper(self.model).run_slots(x0, plan, np.ascontiguousarray(u), self.p,
