@@ -18,10 +18,12 @@ from isolator.scenario.reader import load_scenario
 from isolator.scenario.sequence import parse_pattern, raster_steps
 from isolator.scenario.validation import validate_scenario
 
-__all__ = ["UNSETTLED_STATUS", "register", "with_pattern"]
+__all__ = ["DEFAULT_SEQUENCE", "UNSETTLED_STATUS", "register", "with_pattern"]
 
 #: the exit status when a step does not settle within ``[simulation] duration``
 UNSETTLED_STATUS = 4
+#: the scenario ``isolator sequence`` runs when none is named
+DEFAULT_SEQUENCE = "paper-table-3-2-sequence"
 
 
 def register(sub: Any) -> None:
@@ -33,7 +35,7 @@ def register(sub: Any) -> None:
         "per-step table, the total time and the throughput; exit status 4 (naming the step) when a step does "
         "not settle within [simulation] duration.",
     )
-    scenario_argument(seq, "scenario file or bundled name with a [sequence] (e.g. paper-table-3-2-sequence)")
+    scenario_argument(seq, f"scenario file or bundled name with a [sequence] (default: {DEFAULT_SEQUENCE})")
     seq.add_argument("--model", choices=MODEL_KINDS, default="exact",
                      help="exact rigid-body model or the paper's small-angle model")
     seq.add_argument("--out", type=Path, metavar="FILE.csv",
@@ -75,7 +77,7 @@ def _sequence(args: argparse.Namespace) -> int:
     out = output_path(args.out, "--out", (".csv",)) if args.out else None
     response = output_path(args.response, "--response", (".csv",)) if args.response else None
     plot = figure_path(args.plot, "--plot")
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario or DEFAULT_SEQUENCE)
     if args.pattern:
         scenario = with_pattern(scenario, args.pattern)
     result = run_sequence(scenario, args.model)

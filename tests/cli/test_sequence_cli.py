@@ -47,10 +47,11 @@ def test_table_outputs_and_figure(tmp_path, capsys):
 
 
 def test_json(capsys):
-    assert main(["sequence", BUNDLED, "--json", "--model", "paper"]) == 0
+    assert main(["sequence", "--json", "--model", "paper"]) == 0  # the bundled sequence by default
     data = json.loads(capsys.readouterr().out)
     assert {"steps", "total_time", "throughput_per_hour", "unsettled"} <= set(data)
     assert data["model"] == "paper"
+    assert data["name"] == BUNDLED
     assert len(data["steps"]) == 20
     assert set(data["steps"][0]) >= {"start", "stop", "settled", "end", "move", "settle"}
     assert data["unsettled"] is None
