@@ -173,10 +173,26 @@ def _profiles(args: argparse.Namespace) -> int:
     from controllers.profiles import ROBUSTNESS_VARIANTS, ModelVariant
     from studies.profiles import run_profile_study
 
+    scenario = _scenario(args, None)
+    if scenario.sequence is not None:
+        return _sequence_profiles(args, scenario)
     variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
-    profiles = run_profile_study(args.out, _scenario(args, None), variants, source=args.scenario)
+    profiles = run_profile_study(args.out, scenario, variants, source=args.scenario)
     for name, m in profiles.methods.items():
         settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
         print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
+    print(f"report: {args.out / 'report.md'}")
+    return 0
+
+
+def _sequence_profiles(args: argparse.Namespace, scenario: Scenario) -> int:
+    from studies.profiles_sequence import run_sequence_profile_study
+
+    study = run_sequence_profile_study(args.out, scenario, source=args.scenario or DEFAULT_SCENARIO,
+                                       samples=8 if args.quick else 64)
+    for name, run in study.runs.items():
+        total = "did not settle" if run.total_time is None else f"total {run.total_time:.2f} s"
+        rate = "" if run.throughput is None else f", {run.throughput:.0f} steps/h"
+        print(f"{name:>22}: {total}{rate}")
     print(f"report: {args.out / 'report.md'}")
     return 0
