@@ -193,7 +193,7 @@ def _rows(designs: Designs, result: ChunkResult, columns: Sequence[str]) -> list
         with np.errstate(all="ignore"):
             worst = float(np.max(result.settling[r])) if np.all(np.isfinite(result.settling[r])) else math.nan
         out.append([*map(float, designs.values[i]), worst, *map(float, result.settling[r]),
-                    *map(float, result.peak[r]), str(result.status[r]), str(result.reason[r]), i,
+                    *map(float, result.peak[r]), str(result.status[r]), " ".join(str(result.reason[r]).split()), i,
                     *map(float, result.extras[r])])
     return out
 

@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 
 from isolator import Simulator, load_scenario
 from isolator.errors import ParameterError
-from isolator.sweep import build_designs, resolve
+from isolator.sweep import build_designs, chunk_size_for, resolve
+from isolator.sweep.sweep import MAX_CHUNK
 
 SIM = Simulator(load_scenario("paper-table-3-2"))
 LAYOUT, BASE = SIM.layout, SIM.parameters
@@ -131,3 +132,10 @@ def test_samples_count_and_bounds(n, seed):
                             method="lhs")
     assert designs.count == n
     assert np.all((designs.values >= 0.5) & (designs.values <= 2.0))
+
+
+@given(designs=st.integers(1, 5000), workers=st.integers(1, 64))
+def test_every_worker_gets_a_chunk_when_there_are_enough_designs(designs, workers):
+    size = chunk_size_for(designs, workers)
+    assert 1 <= size <= MAX_CHUNK
+    assert -(-designs // size) >= min(designs, workers)
