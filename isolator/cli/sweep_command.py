@@ -123,8 +123,8 @@ def _swept(args: argparse.Namespace) -> dict[str, dict[str, list[float]]]:
     return out
 
 
-def _executor(address: str) -> tuple[Executor, int]:
-    """A Dask cluster's executor and its worker threads; one clear line when it cannot be reached."""
+def _client(address: str) -> Any:
+    """A Dask client of the scheduler at ``address``; one clear line when it cannot be reached."""
     try:
         from distributed import Client
     except ImportError:
@@ -134,7 +134,7 @@ def _executor(address: str) -> tuple[Executor, int]:
     except (OSError, TimeoutError, ValueError) as exc:
         raise ParameterError(f"--scheduler: cannot reach a Dask scheduler at {address} within "
                              f"{SCHEDULER_TIMEOUT:g} s ({type(exc).__name__})") from None
-    return client.get_executor(), max(1, sum(client.nthreads().values()))
+    return client
 
 
 def _sweep(args: argparse.Namespace) -> int:
@@ -142,10 +142,15 @@ def _sweep(args: argparse.Namespace) -> int:
     out = output_path(args.out, "--out", SUFFIXES)
     if (out.exists() or staging_path(out).exists()) and not (args.resume or args.force):
         raise ParameterError(f"--out: '{out}' exists; --resume continues it, --force overwrites it")
-    executor, workers = (None, args.workers) if args.scheduler is None else _executor(args.scheduler)
-    result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip, samples=args.samples,
-                   method=args.method, seed=args.seed, model=args.model, executor=executor, workers=workers,
-                   frequencies=args.frequency, modes=args.modes, out=out, resume=args.resume, force=args.force,
-                   progress=True, chunk_size=args.chunk_size)
+    client = None if args.scheduler is None else _client(args.scheduler)
+    executor: Executor | None = None if client is None else client.get_executor()
+    try:
+        result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip,
+                       samples=args.samples, method=args.method, seed=args.seed, model=args.model, executor=executor,
+                       workers=args.workers, frequencies=args.frequency, modes=args.modes, out=out,
+                       resume=args.resume, force=args.force, progress=True, chunk_size=args.chunk_size)
+    finally:
+        if client is not None:
+            client.close()
     print(result.summary())
     return 0
