@@ -163,7 +163,7 @@ def sweep(
     rows: list[list[Any]] | None = [] if sink is None else None
 
     def finished(result: ChunkResult) -> None:
-        block = _rows(designs, result, columns)
+        block = _rows(designs, result)
         tally.add(result)
         if sink is not None:
             sink.write(block)
@@ -185,7 +185,7 @@ def sweep(
     return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
 
 
-def _rows(designs: Designs, result: ChunkResult, columns: Sequence[str]) -> list[list[Any]]:
+def _rows(designs: Designs, result: ChunkResult) -> list[list[Any]]:
     """A chunk's rows, one value per column."""
     out = []
     for r in range(result.status.size):
