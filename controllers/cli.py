@@ -56,8 +56,9 @@ def register(sub: Any) -> None:
     opt.add_argument("--out", type=Path, metavar="OPTIMISED.toml", help="write the scenario with the optimised "
                      "profiles")
     opt.add_argument("--json", action="store_true", help="print JSON instead of text")
-    opt.add_argument("--samples", type=int, default=64, metavar="N",
-                     help="with a [sequence]: designs tried per distinct move in the first round (default 64)")
+    opt.add_argument("--samples", type=int, default=32, metavar="N",
+                     help="with a [sequence]: designs tried per distinct move and profile family in the first "
+                     "round (default 32)")
 
     ff.set_defaults(handler=_feedforward)
     opt.set_defaults(handler=_optimise_profile)

@@ -189,7 +189,7 @@ def _sequence_profiles(args: argparse.Namespace, scenario: Scenario) -> int:
     from studies.profiles_sequence import run_sequence_profile_study
 
     study = run_sequence_profile_study(args.out, scenario, source=args.scenario or DEFAULT_SCENARIO,
-                                       samples=8 if args.quick else 64)
+                                       samples=8 if args.quick else 32)
     for name, run in study.runs.items():
         total = "did not settle" if run.total_time is None else f"total {run.total_time:.2f} s"
         rate = "" if run.throughput is None else f", {run.throughput:.0f} steps/h"

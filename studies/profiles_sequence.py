@@ -84,7 +84,7 @@ class SequenceProfileStudy:
 
 def run_sequence_profile_study(
     folder: str | Path, scenario: Scenario, progress: bool = True, source: str | Path | None = None,
-    samples: int = 64,
+    samples: int = 32,
 ) -> SequenceProfileStudy:
     """Compare the ways of moving through the scenario's sequence; write figures and ``report.md``.
 

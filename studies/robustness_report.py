@@ -4,16 +4,13 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import matplotlib.pyplot as plt
 import numpy as np
 
 from .figures import save_figure
 from .reporting import band_lines, fmt, table_header, table_row, write_report
-
-if TYPE_CHECKING:
-    from .robustness import RobustnessStudy
+from .robustness_results import RobustnessStudy
 
 __all__ = ["plot_cdf", "plot_sensitivity", "write_robustness_report"]
 

@@ -24,10 +24,10 @@ from isolator.scenario.profiles import Profile
 from isolator.scenario.sequence import held
 from isolator.simulation.sequence import MoveDesign
 
-from .input_shaping import SHAPERS, dominant_modes, shaper
+from .input_shaping import SHAPERS, ExcitedMode, dominant_modes, shaper
 from .time_optimal import time_optimal_profile
 
-__all__ = ["shaped_moves", "time_optimal_moves"]
+__all__ = ["dominant_mode", "shaped_moves", "time_optimal_moves"]
 
 
 def shaped_moves(scenario: Scenario, kind: str = "zvd") -> MoveDesign:
@@ -46,11 +46,8 @@ def shaped_moves(scenario: Scenario, kind: str = "zvd") -> MoveDesign:
     names = [c.name for c in scenario.carriages]
     configurations = sequence.configurations(names)
 
-    @cache
     def train(carriage: int, parked: tuple[float, ...]) -> tuple[tuple[float, ...], tuple[float, ...]]:
-        at_rest = replace(scenario, carriages=tuple(replace(c, profile=held(q))
-                                                    for c, q in zip(scenario.carriages, parked, strict=True)))
-        mode = dominant_modes(at_rest, carriage)[0]
+        mode = dominant_mode(scenario, carriage, parked)
         s = shaper(kind, mode.frequency, mode.damping)
         return tuple(s.amplitudes), tuple(s.times)
 
@@ -62,6 +59,20 @@ def shaped_moves(scenario: Scenario, kind: str = "zvd") -> MoveDesign:
         return shaped(move, list(amplitudes), list(times), kind=f"{kind}-shaped")
 
     return design
+
+
+def dominant_mode(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> ExcitedMode:
+    """The table mode carriage ``carriage``'s acceleration excites most with the carriages parked at
+    ``parked`` [m] (:func:`~controllers.profiles.input_shaping.dominant_modes`; cached per scenario and
+    configuration)."""
+    return _dominant(scenario, carriage, tuple(map(float, parked)))
+
+
+@cache
+def _dominant(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> ExcitedMode:
+    at_rest = replace(scenario, carriages=tuple(replace(c, profile=held(q))
+                                                for c, q in zip(scenario.carriages, parked, strict=True)))
+    return dominant_modes(at_rest, carriage)[0]
 
 
 def time_optimal_moves() -> MoveDesign:

@@ -32,9 +32,12 @@ from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import resolve_scenario_path
 from isolator.scenario.sequence import Move, Step, sequence_table
+from isolator.scenario.shapers import shaper
 from isolator.simulation.sequence import SequenceResult, run_sequence
 
 from .export import absolute_files
+from .input_shaping import ExcitedMode
+from .sequence_baselines import dominant_mode
 
 __all__ = ["LOWEST_FRACTION", "SequenceOptimisation", "optimise_sequence", "write_sequence_scenario"]
 
@@ -42,6 +45,12 @@ __all__ = ["LOWEST_FRACTION", "SequenceOptimisation", "optimise_sequence", "writ
 LOWEST_FRACTION = 0.05
 #: the longest start delay of a step's second and later carriages [s]
 MAX_DELAY = 0.5
+#: the profile families searched: the S-curve alone, and S-curves convolved with ZV and ZVD shapers
+FAMILIES = ("scurve", "zv", "zvd")
+#: a shaper's frequency is searched within this factor of the dominant mode's
+SHAPER_RANGE = 1.4
+#: the largest damping ratio a shaper is designed for
+MAX_SHAPER_DAMPING = 0.4
 
 MoveKey = tuple[tuple[str, float], ...]
 
@@ -85,7 +94,8 @@ class SequenceOptimisation:
             "before": {"total_time": b.total_time, "throughput_per_hour": b.throughput},
             "after": {"total_time": a.total_time, "throughput_per_hour": a.throughput},
             "throughput_gain": gain,
-            "moves": [{"move": dict(key), **value} for key, value in self.designs.items()],
+            "moves": [{"move": dict(key), **{k: v for k, v in value.items() if k != "chosen"}}
+                      for key, value in self.designs.items()],
             "reverted_steps": list(self.reverted),
             "evaluations": self.evaluations,
             "wall_time": self.wall_time,
@@ -107,7 +117,10 @@ class SequenceOptimisation:
             what = ", ".join(f"{n} {s * 1e3:+.4g} mm" for n, s in key)
             limits = "; ".join(f"{n}: v {f[0]:.3g}, a {f[1]:.3g}, j {f[2]:.3g} of its limits"
                                + (f", delay {dl:.3g} s" if dl else "")
-                               for n, f, dl in zip(d["carriages"], d["fractions"], d["delays"], strict=True))
+                               + ("" if sh is None else f", {sh['kind'].upper()} shaper at {sh['frequency']:.4g} Hz, "
+                                  f"damping {sh['damping']:.3g}")
+                               for n, f, dl, sh in zip(d["carriages"], d["fractions"], d["delays"], d["shapers"],
+                                                       strict=True))
             lines.append(f"move {what}: {d['before']:.3f} s -> {d['after']:.3f} s from rest ({limits})")
         if self.reverted:
             lines.append(f"steps given their starting move back: {', '.join(map(str, self.reverted))}")
@@ -118,7 +131,7 @@ class SequenceOptimisation:
 def optimise_sequence(
     scenario: Scenario,
     model: str = "exact",
-    samples: int = 64,
+    samples: int = 32,
     rounds: int = 3,
     seed: int = 0,
     progress: bool = False,
@@ -131,8 +144,8 @@ def optimise_sequence(
         With a ``[sequence]`` (and ``[[windows]]``).
     model : {"exact", "paper"}
     samples : int
-        Designs tried per distinct move in the first Sobol set (a power of two is best); each of the
-        ``rounds`` refinements tries half as many around the best.
+        Designs tried per distinct move and family in the first Sobol set (a power of two is best); each
+        of the ``rounds`` refinements tries half as many around the best.
     rounds : int
         Refinements (each box half the size of the one before).
     seed : int
@@ -212,43 +225,68 @@ def _design_move(
     scenario: Scenario, model: str, index: int, q: np.ndarray, limit: float, samples: int, rounds: int, seed: int,
     counter: list[int],
 ) -> dict[str, Any]:
-    """The best design of step ``index``'s move found by Sobol sets in shrinking boxes."""
+    """The best design of step ``index``'s move: per family, Sobol sets in shrinking boxes from its start."""
     sequence = scenario.sequence
     assert sequence is not None
     step = sequence.steps[index]
-    moving = [n for n, _ in _move_key(step, q, tuple(c.name for c in scenario.carriages))]
-    dims = 3 * len(moving) + (len(moving) - 1)
-    low = np.array([math.log(LOWEST_FRACTION)] * (3 * len(moving)) + [0.0] * (len(moving) - 1))
-    high = np.array([0.0] * (3 * len(moving)) + [MAX_DELAY] * (len(moving) - 1))
+    names = tuple(c.name for c in scenario.carriages)
+    moving = [n for n, _ in _move_key(step, q, names)]
+    parked = tuple(map(float, sequence.configurations(names)[index + 1]))
+    modes = [dominant_mode(scenario, names.index(n), parked) for n in moving]
+    best: tuple[float, str, np.ndarray] | None = None
+    first = math.inf
+    for family in FAMILIES:
+        low, high, start = _box(family, len(moving))
 
-    def cost(x: np.ndarray) -> float:
-        counter[0] += 1
-        return _step_time(scenario, model, _candidate(scenario, step, moving, x), q, limit)
+        def cost(x: np.ndarray, family: str = family) -> float:
+            counter[0] += 1
+            return _step_time(scenario, model, _candidate(scenario, step, moving, x, family, modes), q, limit)
 
-    start = np.concatenate([np.zeros(3 * len(moving)), np.zeros(len(moving) - 1)])  # the carriages' limits
-    best_x, best = start, cost(start)
-    first = best
-    centre, half = (low + high) / 2, (high - low) / 2
-    count = samples
-    for r in range(rounds + 1):
-        unit = qmc.Sobol(d=dims, scramble=True, seed=seed + r).random(count)
-        points = np.clip(centre + (2 * unit - 1) * half, low, high)
-        for x in points:
-            value = cost(x)
-            if value < best:
-                best_x, best = x, value
-        centre, half, count = best_x, half / 2, max(4, count // 2)
-    fractions = np.exp(best_x[: 3 * len(moving)]).reshape(len(moving), 3)
-    chosen = dict(_candidate(scenario, step, moving, best_x).moves)
-    return {"step": index, "carriages": moving, "fractions": fractions.tolist(),
+        best_x, value = start, cost(start)
+        if family == "scurve":
+            first = value  # the step as written: every carriage at its limits
+        centre, half, count = (low + high) / 2, (high - low) / 2, samples
+        for r in range(rounds + 1):
+            unit = qmc.Sobol(d=low.size, scramble=True, seed=seed + r).random(count)
+            for x in np.clip(centre + (2 * unit - 1) * half, low, high):
+                trial = cost(x)
+                if trial < value:
+                    best_x, value = x, trial
+            centre, half, count = best_x, half / 2, max(4, count // 2)
+        if best is None or value < best[0]:
+            best = (value, family, best_x)
+    assert best is not None
+    value, family, x = best
+    chosen = dict(_candidate(scenario, step, moving, x, family, modes).moves)
+    return {"step": index, "family": family, "carriages": moving,
+            "fractions": np.exp(x[: 3 * len(moving)]).reshape(len(moving), 3).tolist(),
             "delays": [chosen[n].delay for n in moving],
             "limits": [[chosen[n].velocity, chosen[n].acceleration, chosen[n].jerk] for n in moving],
-            "before": first, "after": best}
+            "shapers": [None if (sh := chosen[n].shaper) is None else
+                        {"kind": sh.kind, "frequency": sh.frequency, "damping": sh.damping} for n in moving],
+            "before": first, "after": value, "chosen": chosen}
 
 
-def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray) -> Step:
-    """``step`` with each moving carriage's limits scaled by ``exp(x)`` and its delay from ``x``."""
+def _box(family: str, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The search box (low, high) of a family's parameters and its start: per moving carriage the log
+    fractions of its velocity, acceleration and jerk limits, the delays of all but the first, and for a
+    shaped family each carriage's log shaper frequency over its dominant mode's and the shaper's damping."""
+    low = [math.log(LOWEST_FRACTION)] * (3 * n) + [0.0] * (n - 1)
+    high = [0.0] * (3 * n) + [MAX_DELAY] * (n - 1)
+    start = [0.0] * (3 * n) + [0.0] * (n - 1)
+    if family != "scurve":
+        low += [math.log(1 / SHAPER_RANGE)] * n + [0.0] * n
+        high += [math.log(SHAPER_RANGE)] * n + [MAX_SHAPER_DAMPING] * n
+        start += [0.0] * n + [-1.0] * n  # -1: the dominant mode's damping (see _candidate)
+    return np.array(low), np.array(high), np.array(start)
+
+
+def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray, family: str = "scurve",
+               modes: list[ExcitedMode] | None = None) -> Step:
+    """``step`` with each moving carriage's limits scaled by ``exp(x)``, its delay from ``x`` and, for a
+    shaped family, its shaper tuned from its dominant mode by ``x`` (a damping below 0: the mode's own)."""
     limits = {c.name: c.limits for c in scenario.carriages}
+    n = len(moving)
     moves = []
     for name, move in step.moves:
         if name not in moving:
@@ -257,9 +295,15 @@ def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray)
         k = moving.index(name)
         lim = limits[name]
         f = np.exp(x[3 * k: 3 * k + 3])
-        delay = float(x[3 * len(moving) + k - 1]) if k > 0 else 0.0
+        delay = float(x[3 * n + k - 1]) if k > 0 else 0.0
+        train = None
+        if family != "scurve" and modes is not None:
+            mode = modes[k]
+            frequency = float(mode.frequency) * math.exp(float(x[4 * n - 1 + k]))
+            given = float(x[5 * n - 1 + k])
+            train = shaper(family, frequency, float(mode.damping) if given < 0 else given)
         moves.append((name, Move(move.target, _scaled(lim.velocity, f[0]), _scaled(lim.acceleration, f[1]),
-                                 _scaled(lim.jerk, f[2]), delay)))
+                                 _scaled(lim.jerk, f[2]), delay, train)))
     return Step(tuple(moves))
 
 
@@ -270,18 +314,12 @@ def _scaled(limit: float | None, fraction: float) -> float:
 
 
 def _designed_step(step: Step, design: dict[str, Any] | None) -> Step:
-    """``step`` with a distinct move's designed limits and delays (its targets kept)."""
+    """``step`` with a distinct move's designed moves (its own targets kept)."""
     if design is None:
         return step
-    moves = []
-    for name, move in step.moves:
-        if name in design["carriages"]:
-            k = design["carriages"].index(name)
-            v, a, j = design["limits"][k]
-            moves.append((name, Move(move.target, v, a, j, design["delays"][k])))
-        else:
-            moves.append((name, move))
-    return Step(tuple(moves))
+    chosen = design["chosen"]
+    return Step(tuple((name, replace(chosen[name], target=move.target) if name in chosen else move)
+                      for name, move in step.moves))
 
 
 def _slower_steps(before: SequenceResult, after: SequenceResult) -> list[int]:

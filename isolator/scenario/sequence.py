@@ -4,9 +4,10 @@ their writer (the ``[sequence]`` table back from a :class:`StepSequence`) and th
 
 A step names, per carriage, a target [m]: a number (the seven-segment S-curve at the carriage's
 ``limits``), or an inline table ``{ target, velocity, acceleration, jerk, delay }`` whose optional
-``velocity``, ``acceleration``, ``jerk`` lower that step's S-curve limits and whose ``delay`` [s] starts
-that carriage that long after the step's start. What needs the carriages (known names, limits, the
-table's footprint) is checked by :func:`isolator.scenario.validation.check_sequence`.
+``velocity``, ``acceleration``, ``jerk`` lower that step's S-curve limits, whose ``delay`` [s] starts
+that carriage that long after the step's start, and whose ``shaper = { kind, frequency, damping }``
+convolves the S-curve with an input shaper (:mod:`isolator.scenario.shapers`). What needs the carriages
+(known names, limits, the table's footprint) is checked by :func:`isolator.scenario.validation.check_sequence`.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.keys import KeyReader, number
 from isolator.scenario.profiles import PiecewisePolynomialProfile
+from isolator.scenario.shapers import SHAPERS, Shaper, shaper
 
 __all__ = [
     "MOVE_LIMITS",
@@ -52,6 +54,8 @@ class Move:
         None: the carriage's.
     delay : float
         The carriage starts this long after the step's start [s], >= 0.
+    shaper : Shaper or None
+        An input shaper the S-curve is convolved with (the move then lasts the shaper's duration longer).
     """
 
     target: float
@@ -59,11 +63,13 @@ class Move:
     acceleration: float | None = None
     jerk: float | None = None
     delay: float = 0.0
+    shaper: Shaper | None = None
 
     @property
     def plain(self) -> bool:
         """Whether the move is just a target (written back as a number)."""
-        return self.velocity is None and self.acceleration is None and self.jerk is None and self.delay == 0.0
+        return (self.velocity is None and self.acceleration is None and self.jerk is None and self.delay == 0.0
+                and self.shaper is None)
 
     def limits(self, velocity: float, acceleration: float, jerk: float) -> tuple[float, float, float]:
         """This move's S-curve limits: its own where given, else the carriage's (the arguments)."""
@@ -184,8 +190,26 @@ def _read_move(r: KeyReader) -> Move:
     limits = {k: r.number(k, positive=True) if r.has(k) else None for k in MOVE_LIMITS}
     r.used.update(MOVE_LIMITS)
     delay = r.number("delay", 0.0, nonnegative=True)
+    train = _read_shaper(r.key("shaper"), r.raw("shaper")) if r.has("shaper") else None
     r.finish()
-    return Move(target=target, delay=delay, **limits)
+    return Move(target=target, delay=delay, shaper=train, **limits)
+
+
+def _read_shaper(key: str, raw: Any) -> Shaper:
+    """``shaper = { kind = "zvd", frequency = 3.4, damping = 0.1 }``: a ZV, ZVD or EI shaper of a mode of
+    this undamped frequency [Hz] and damping ratio."""
+    if not isinstance(raw, Mapping):
+        raise ScenarioError(f"{key}: must be a table {{ kind = \"zvd\", frequency = HZ, damping = RATIO }}")
+    r = KeyReader(raw, key)
+    kind = r.string("kind")
+    if kind not in SHAPERS:
+        raise ScenarioError(f"{r.key('kind')}: must be one of {', '.join(SHAPERS)}, got '{kind}'")
+    frequency = r.number("frequency", positive=True)
+    damping = r.number("damping", 0.0, nonnegative=True)
+    if damping >= 1.0:
+        raise ScenarioError(f"{r.key('damping')}: must be below 1 (a damping ratio), got {damping}")
+    r.finish()
+    return shaper(kind, frequency, damping)
 
 
 # -- writing -------------------------------------------------------------------------------------------------
@@ -205,14 +229,17 @@ def sequence_table(sequence: StepSequence) -> dict[str, Any]:
     return table
 
 
-def _move_table(move: Move) -> dict[str, float]:
-    out = {"target": float(move.target)}
+def _move_table(move: Move) -> dict[str, Any]:
+    out: dict[str, Any] = {"target": float(move.target)}
     for k in MOVE_LIMITS:
         value = getattr(move, k)
         if value is not None:
             out[k] = float(value)
     if move.delay:
         out["delay"] = float(move.delay)
+    if move.shaper is not None:
+        out["shaper"] = {"kind": move.shaper.kind, "frequency": float(move.shaper.frequency),
+                         "damping": float(move.shaper.damping)}
     return out
 
 
@@ -238,7 +265,8 @@ def _number(value: float) -> str:
 def _inline(table: Mapping[str, Any]) -> str:
     items = []
     for key, value in table.items():
-        text = _inline(value) if isinstance(value, Mapping) else _number(value)
+        text = (_inline(value) if isinstance(value, Mapping) else _quoted(value) if isinstance(value, str)
+                else _number(value))
         bare = key.replace("-", "").replace("_", "").isalnum() and key.isascii()
         items.append(f"{key if bare else _quoted(key)} = {text}")
     return "{ " + ", ".join(items) + " }"

@@ -11,23 +11,22 @@ the part after the step's end is dropped and the runs are stitched with their ti
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, replace
 
 import numpy as np
 
-from isolator.errors import ParameterError, ScenarioError, SimulationError, UnstableTableError
+from isolator.errors import ScenarioError, SimulationError, UnstableTableError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
 from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
-from isolator.scenario.definitions import MotionLimits, Scenario
-from isolator.scenario.profile_shapes import scurve
+from isolator.scenario.definitions import Scenario
 from isolator.scenario.profiles import Profile
 from isolator.scenario.sequence import held
 from isolator.simulation.points import point_positions
 from isolator.simulation.resources import check_run_memory
+from isolator.simulation.sequence_moves import MoveDesign, step_profiles
 from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.sequence_rule import held_from, normalised
 from isolator.simulation.stepping import (
@@ -39,10 +38,6 @@ from isolator.simulation.stepping import (
 )
 
 __all__ = ["MoveDesign", "SequenceResult", "StepResult", "run_sequence"]
-
-#: a step's move design: (step index, carriage name, q from [m], q to [m], that step's limits) -> a profile in
-#: the step's local time (the step starts at 0), at rest at ``q from`` before it and at ``q to`` after its stop
-MoveDesign = Callable[[int, str, float, float, MotionLimits], Profile]
 
 #: the grid the window rule is read on [Hz] (global time k / RULE_RATE)
 RULE_RATE = 1000.0
@@ -74,12 +69,14 @@ class _Runner:
         self.model = get_model(self.layout, model)
         self.p = self.layout.pack(scenario)
         self.names = tuple(c.name for c in scenario.carriages)
-        first = static_equilibria(self.model, self.p[None, :], scenario.initial_positions(),
+        assert scenario.sequence is not None
+        initial = scenario.sequence.initial_positions(self.names)  # the sequence's, whatever the carriages hold
+        first = static_equilibria(self.model, self.p[None, :], initial,
                                   "with the carriages at the sequence's initial positions")[0]
         self.start = first
         self.air = None if self.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
                                                                                 self.p[None, :])
-        self._equilibria: dict[bytes, Equilibrium] = {scenario.initial_positions().tobytes(): first}
+        self._equilibria: dict[bytes, Equilibrium] = {initial.tobytes(): first}
         self._still: dict[int, np.ndarray] = {}  # the staged rest inputs of each step's profiles
         self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
         self.origin = point_positions(first.state, self.arms, self.model.kind)[:, :, 0]
@@ -213,53 +210,6 @@ class _Runner:
         return out - self.origin[i, :, None]
 
 
-def _step_profiles(
-    runner: _Runner, index: int, q: np.ndarray, move_design: MoveDesign | None
-) -> tuple[tuple[Profile, ...], np.ndarray, float]:
-    """The carriages' profiles of step ``index`` from ``q`` (local time), the targets, and the stop [s]."""
-    scenario = runner.scenario
-    sequence = scenario.sequence
-    assert sequence is not None
-    step = sequence.steps[index]
-    profiles: list[Profile] = []
-    target = q.copy()
-    stop = 0.0
-    for i, carriage in enumerate(scenario.carriages):
-        mv = step.move(carriage.name)
-        if mv is None:
-            profiles.append(held(q[i]))
-            continue
-        lim = carriage.limits
-        velocity, acceleration, jerk = mv.limits(float(lim.velocity or 0.0), float(lim.acceleration or 0.0),
-                                                 float(lim.jerk or 0.0))
-        target[i] = mv.target
-        if move_design is not None:
-            prof = _designed(move_design, index, carriage.name, float(q[i]), mv.target,
-                             MotionLimits(velocity, acceleration, jerk))
-        elif mv.target == q[i]:
-            prof = held(q[i])
-        else:
-            prof = scurve(float(q[i]), mv.target - float(q[i]), velocity, acceleration, jerk, t0=mv.delay)
-        profiles.append(prof)
-        stop = max(stop, float(prof.stop_time) if prof.breakpoints else 0.0)
-    return tuple(profiles), target, stop
-
-
-def _designed(design: MoveDesign, index: int, name: str, q0: float, q1: float, limits: MotionLimits) -> Profile:
-    prof = design(index, name, q0, q1, limits)
-    where = f"move: step {index}, carriage '{name}'"
-    if not isinstance(prof, Profile):
-        raise ParameterError(f"{where}: must return a Profile, got {type(prof).__name__}")
-    if not math.isfinite(prof.stop_time):
-        raise ParameterError(f"{where}: the profile never stops (a sine); a step's move must stop")
-    tol = 1e-9 * max(1.0, abs(q0), abs(q1))
-    first, last = prof.position(0.0), prof.position(float(prof.stop_time) + 1.0)
-    if abs(first - q0) > tol or abs(last - q1) > tol:
-        raise ParameterError(f"{where}: the profile goes from {first:.9g} m to {last:.9g} m, not from the carriage's "
-                             f"position {q0:.9g} m to the target {q1:.9g} m")
-    return prof
-
-
 def _rule_times(step_start: float, a: float, b: float, stop: float) -> np.ndarray:
     """The rule's grid in the step's local time within (a, b]: global multiples of 1 / RULE_RATE after the stop,
     and the stop itself when it falls in this chunk."""
@@ -330,7 +280,7 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
     unsettled: int | None = None
     guess = 1.0 + sequence.measure
     for k in range(len(sequence.steps)):
-        profiles, target, stop = _step_profiles(runner, k, q, move)
+        profiles, target, stop = step_profiles(runner.scenario, k, q, move)
         settled = runner.settled_points(target)
         omega = max(omega, runner.equilibrium(target).max_frequency)
         h = runner.max_step(omega)

@@ -52,7 +52,7 @@ def test_the_written_scenario_reproduces_the_reported_total(optimised, tmp_path)
 def test_a_scenario_without_a_sequence_is_refused():
     with pytest.raises(ScenarioError, match=r"^sequence: the scenario has no \[sequence\]"):
         optimise_sequence(load_scenario("paper-table-3-2"))
-    with pytest.raises(ParameterError, match="^samples: must be a whole number >= 2"):
+    with pytest.raises(ParameterError, match=r"^samples: must be a whole number >= 2"):
         optimise_sequence(load_scenario(SCENARIO), samples=1)
 
 
