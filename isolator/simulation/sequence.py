@@ -62,12 +62,12 @@ class _Chunk:
 class _Runner:
     """A sequence scenario's model, parameters, equilibria (cached by configuration) and chunk runs."""
 
-    def __init__(self, scenario: Scenario, model: str) -> None:
+    def __init__(self, scenario: Scenario, model: str, p: np.ndarray | None = None) -> None:
         check_run_memory(scenario)  # the output grid the result is read on
         self.scenario = scenario
         self.layout = ParameterLayout.of(scenario)
         self.model = get_model(self.layout, model)
-        self.p = self.layout.pack(scenario)
+        self.p = self.layout.pack(scenario) if p is None else self.layout.checked(p, "parameters")
         self.names = tuple(c.name for c in scenario.carriages)
         assert scenario.sequence is not None
         initial = scenario.sequence.initial_positions(self.names)  # the sequence's, whatever the carriages hold
@@ -221,7 +221,9 @@ def _rule_times(step_start: float, a: float, b: float, stop: float) -> np.ndarra
     return np.concatenate([[stop], grid]) if a <= stop <= b else grid
 
 
-def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | None = None) -> SequenceResult:
+def run_sequence(
+    scenario: Scenario, model: str = "exact", move: MoveDesign | None = None, parameters: np.ndarray | None = None
+) -> SequenceResult:
     """Simulate a scenario's ``[sequence]``: step, settle, measure, next step.
 
     Parameters
@@ -235,6 +237,9 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
         [m] before and at ``q_to`` [m] after its last breakpoint, which is the move's stop; ``limits`` are the
         step's S-curve limits (:class:`~isolator.scenario.definitions.MotionLimits`). Default: the
         seven-segment S-curve at those limits, started after the step's ``delay``.
+    parameters : ndarray, optional
+        A whole parameter vector (``Simulator(scenario).layout`` order; a design of a sweep or study),
+        checked by the rules the file reader checks by; default the scenario's.
 
     Returns
     -------
@@ -260,7 +265,7 @@ def run_sequence(scenario: Scenario, model: str = "exact", move: MoveDesign | No
         raise ScenarioError("sequence: the scenario has no [sequence] (steps to run); see docs/scenario-format.md")
     if not scenario.windows:
         raise ScenarioError("windows: a [sequence] needs at least one [[windows]] to tell when a step has settled")
-    runner = _Runner(scenario, model)
+    runner = _Runner(scenario, model, parameters)
     names = runner.names
     runner.check_tipping()
     runner.prepare(sequence.configurations(names))
