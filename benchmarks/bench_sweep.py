@@ -49,32 +49,33 @@ def main() -> None:
     parser.add_argument("--long", type=int, default=0, help="designs of the streamed sweep with its memory "
                         "(e.g. 100000; 0: skip)")
     parser.add_argument("--no-dask", action="store_true", help="skip the Dask LocalCluster figure")
+    parser.add_argument("--repeat", type=int, default=3, help="repeats of each rate (the median is shown; the "
+                        "machine's other load makes single figures vary by 30 %%)")
     args = parser.parse_args()
     n, workers = args.runs, default_workers()
     k, c = _designs(n)
     sim = Simulator(load_scenario(SCENARIO))
     sim.run_batch(k, c)  # warm-up: every plan and stepper the designs need
-    t0 = time.perf_counter()
-    sim.run_batch(k, c, workers=2)
-    base = n / (time.perf_counter() - t0)
-    print(f"baseline Simulator.run_batch, {n} runs, stiffness x0.5-2, damping x0.5-4, 2 threads: {base:7.0f} runs/s")
+    t_base, _ = timed(lambda: sim.run_batch(k, c, workers=2), args.repeat)
+    base = n / t_base
+    print(f"baseline Simulator.run_batch, {n} runs, stiffness x0.5-2, damping x0.5-4, 2 threads: {base:7.0f} runs/s "
+          f"(median of {args.repeat})")
 
     t_run, _ = timed(sim.run, 30)
     print(f"one transient, Simulator.run (equilibria, stepping, metrics): median {t_run * 1e3:6.2f} ms")
 
-    def rate(**options: object) -> float:
-        t0 = time.perf_counter()
-        result = sweep(SCENARIO, scale=_scales(k, c), zip=True, **options)  # type: ignore[arg-type]
-        dt = time.perf_counter() - t0
-        assert result.tally.failed == 0, result.tally
+    def rate(repeat: int = args.repeat, **options: object) -> float:
+        """Median runs per second of ``repeat`` sweeps of the designs, end to end."""
+        dt, result = timed(lambda: sweep(SCENARIO, scale=_scales(k, c), zip=True, **options), repeat)  # type: ignore[arg-type]
+        assert result.tally.failed == 0  # type: ignore[attr-defined]
         return n / dt
 
     sweep(SCENARIO, scale=_scales(k[:64], c[:64]), zip=True, workers=1)  # this process's simulator built
     pool = rate(workers=workers)
     print(f"sweep, default process pool ({workers} workers, chunks of {chunk_size_for(n, workers)}), end to end: "
-          f"{pool:7.0f} runs/s   ratio {pool / base:5.2f}x the baseline; per transient and core "
-          f"{workers / pool * 1e3:5.2f} ms")
-    one = rate(workers=1)
+          f"{pool:7.0f} runs/s (median of {args.repeat})   ratio {pool / base:5.2f}x the baseline; "
+          f"per transient and core {workers / pool * 1e3:5.2f} ms")
+    one = rate(1, workers=1)
     print(f"sweep in this process (workers=1): {one:7.0f} runs/s   ratio {one / base:5.2f}x the baseline")
 
     if not args.no_dask:
@@ -90,7 +91,8 @@ def main() -> None:
                 warm = time.perf_counter() - t0
                 dask = rate(executor=client.get_executor(), workers=2)
             print(f"sweep on a Dask LocalCluster (2 worker processes, 1 thread each; first 64-design sweep "
-                  f"{warm:.2f} s): {dask:7.0f} runs/s   ratio {dask / pool:5.2f}x the local pool")
+                  f"{warm:.2f} s): {dask:7.0f} runs/s (median of {args.repeat})   "
+                  f"ratio {dask / pool:5.2f}x the local pool")
 
     if args.long:
         k_long, c_long = _designs(args.long, seed=2)
