@@ -4,6 +4,14 @@ The designs (:mod:`~isolator.sweep.designs`, names in :mod:`~isolator.sweep.name
 (:mod:`~isolator.sweep.runner`) to workers that build the scenario's simulator once
 (:mod:`~isolator.sweep.worker`); the rows come back in design order and are streamed to CSV or Parquet
 (:mod:`~isolator.sweep.output`).
+
+Executors: the default is a local process pool (``workers`` processes, forked where the platform can, so that
+they inherit the simulator built here; ``workers=1`` runs in this process). Any
+:class:`concurrent.futures.Executor` works, as the tasks are plain picklable functions and dataclasses: a
+Dask cluster's ``Client(address).get_executor()`` (``pip install "isolator[dask]"``; ``isolator sweep
+--scheduler tcp://HOST:PORT``), or mpi4py's ``MPIPoolExecutor`` (``mpiexec -n 9 python -m mpi4py.futures
+script.py`` with ``sweep(..., executor=MPIPoolExecutor(), workers=8)``). Each worker builds the scenario's
+simulator on its first chunk (the compiled model comes from its own cache, ``ISOLATOR_CACHE``) and reuses it.
 """
 
 from __future__ import annotations
