@@ -113,7 +113,11 @@ def _control(args: argparse.Namespace) -> int:
     control = run_control_study(args.out, _scenario(args, CONTROL_SCENARIO), args.controller, args.feedforward)
     for run in ("passive", "feedforward", "feedback", "both"):
         value = control.settling_time_max(run)
-        print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}")
+        settle, rate = control.window_cycle(run)
+        window = "" if rate is None and settle is None else (
+            f", window settling {'n/a' if settle is None else f'{settle:.3g} s'}"
+            f"{'' if rate is None else f', {rate:.0f} moves per hour'}")
+        print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}{window}")
     print(f"report: {args.out / 'report.md'}")
     return 0
 

@@ -55,6 +55,7 @@ from .reporting import (
     write_json,
     write_report,
 )
+from .throughput import window_cycle
 
 __all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
 
@@ -117,14 +118,22 @@ class ControlStudy:
     def settling_time_max(self, run: str) -> float | None:
         return largest(self.settling[run].values())
 
+    def window_cycle(self, run: str) -> tuple[float | None, float | None]:
+        """With ``[[windows]]``: the run's largest window settling time [s] and the moves per hour it allows
+        (:func:`studies.throughput.window_cycle`); else (None, None)."""
+        return window_cycle(self.runs[run])
+
     def to_dict(self) -> dict[str, Any]:
-        return {
-            run: {"settling_time": self.settling[run], "settling_time_max": self.settling_time_max(run),
-                  "deviation_peak": self.deviation[run],
-                  "max_force": float(np.abs(self.runs[run].actuator_forces).max(initial=0.0)),
-                  "band": self.band.to_dict()}
-            for run in RUNS
-        }
+        out: dict[str, Any] = {}
+        for run in RUNS:
+            out[run] = {"settling_time": self.settling[run], "settling_time_max": self.settling_time_max(run),
+                        "deviation_peak": self.deviation[run],
+                        "max_force": float(np.abs(self.runs[run].actuator_forces).max(initial=0.0)),
+                        "band": self.band.to_dict()}
+            if self.runs[run].windows is not None:
+                settle, rate = self.window_cycle(run)
+                out[run].update(window_settling_time_max=settle, moves_per_hour=rate)
+        return out
 
 
 def run_control_study(
@@ -306,6 +315,15 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
         force = float(np.abs(study.runs[run].actuator_forces).max(initial=0.0))
         lines.append(table_row([run, fmt(study.settling_time_max(run), suffix=" s"),
                                 *(fmt(study.settling[run][k], suffix=" s") for k in SIGNALS), f"{force:.0f} N"]))
+    if study.runs["passive"].windows is not None:
+        lines += ["", "## At the windows: settling and moves per hour", "",
+                  "The largest window settling time (absolute windows at the `[[points]]`, about each run's "
+                  "settled position) and the moves per hour a machine repeating the move would make "
+                  "(3600 / (move time + window settling)).", "",
+                  *table_header(["run", "window settling", "moves per hour"])]
+        for run in RUNS:
+            settle, rate = study.window_cycle(run)
+            lines.append(table_row([run, fmt(settle, suffix=" s"), fmt(rate, ".0f")]))
     lines += ["", *table_header(["run", *(f"dev. {k}" for k in SIGNALS)])]
     for run in RUNS:
         dev = study.deviation[run]

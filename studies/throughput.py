@@ -1,0 +1,31 @@
+"""What a design buys in throughput: window settling and moves per hour of a single move.
+
+A machine that repeats the scenario's move and waits after each until every ``[[windows]]`` point holds its
+window does one move every ``move time + window settling time`` seconds (the move time from the first
+carriage's start to the stop). Scenarios with a ``[sequence]`` have their own figure, the sequence's
+throughput (:class:`isolator.SequenceResult`).
+"""
+
+from __future__ import annotations
+
+import math
+
+from isolator import Response
+
+__all__ = ["moves_per_hour", "window_cycle"]
+
+
+def moves_per_hour(move_time: float | None, window_settling: float | None) -> float | None:
+    """``3600 / (move_time + window_settling)`` [1/h]; None when either is unknown or the sum is not > 0."""
+    if move_time is None or window_settling is None:
+        return None
+    cycle = move_time + window_settling
+    return 3600.0 / cycle if math.isfinite(cycle) and cycle > 0 else None
+
+
+def window_cycle(response: Response) -> tuple[float | None, float | None]:
+    """A run's largest window settling time [s] and moves per hour (None, None without ``[[windows]]``)."""
+    if response.windows is None or not math.isfinite(response.stop_time):
+        return None, None
+    settle = response.window_settling_time_max
+    return settle, moves_per_hour(response.stop_time - response.move_start, settle)
