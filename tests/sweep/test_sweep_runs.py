@@ -3,8 +3,12 @@ recorded per row (a design that tips, a chunk that raises, a worker that dies), 
 
 from __future__ import annotations
 
+import functools
+import os
+import sys
 from concurrent.futures import Future, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from pathlib import Path
 from typing import Any, ClassVar
 
 import numpy as np
@@ -121,6 +125,28 @@ def test_a_chunk_whose_worker_died_is_run_again():
     result = sweep(SCENARIO, scale=GRID, executor=_Dying(2), chunk_size=3)
     assert _Dying.tries == {0: 1, 3: 2}
     same(result.table(), sweep(SCENARIO, scale=GRID, workers=1).table())
+
+
+def _dies_once(marker: Path, chunk: worker.Chunk) -> worker.ChunkResult:
+    """Kill the worker process the first time the chunk starting at design 2 comes (the marker remembers)."""
+    if chunk.start == 2 and not marker.exists():
+        marker.touch()
+        os._exit(1)
+    return ORIGINAL(chunk)
+
+
+ORIGINAL = worker.run_chunk
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the patched task reaches the workers by fork")
+def test_a_process_pool_whose_worker_died_is_renewed_and_nothing_lost(monkeypatch, tmp_path):
+    monkeypatch.setattr(worker, "run_chunk", functools.partial(_dies_once, tmp_path / "died"))
+    result = sweep(SCENARIO, scale=GRID, workers=2, chunk_size=2)
+    assert (tmp_path / "died").exists()
+    monkeypatch.setattr(worker, "run_chunk", ORIGINAL)
+    table = result.table()
+    assert table["status"].tolist() == ["ok"] * 6  # every chunk in flight when the pool broke ran again
+    same(table, sweep(SCENARIO, scale=GRID, workers=1).table())
 
 
 def test_transmissibility_and_modes_per_design():
