@@ -23,6 +23,7 @@ from timing import timed
 
 from isolator import Simulator, load_scenario
 from isolator.sweep import chunk_size_for, default_workers, sweep
+from isolator.sweep.worker import Chunk, run_chunk, scenario_key
 
 SCENARIO = "paper-table-3-2"
 
@@ -89,6 +90,14 @@ def main() -> None:
                 t0 = time.perf_counter()
                 sweep(SCENARIO, scale=_scales(k[:64], c[:64]), zip=True, executor=client.get_executor(), workers=2)
                 warm = time.perf_counter() - t0
+                tiny = Chunk(scenario_key(sim.scenario, "exact"), sim.scenario, "exact", 0, sim.parameters[None, :])
+                t_here, _ = timed(lambda: run_chunk(tiny), 20)
+                t_there, _ = timed(lambda: client.submit(run_chunk, tiny, pure=False).result(), 20)
+                size = chunk_size_for(n, 2)
+                print(f"Dask per-task overhead (one design, round trip less its run here): "
+                      f"{(t_there - t_here) * 1e3:5.1f} ms; a chunk of {size} designs is about "
+                      f"{size / one * 1e3:4.0f} ms of work on one core "
+                      f"({(t_there - t_here) / (size / one):.1%} overhead)")
                 dask = rate(executor=client.get_executor(), workers=2)
             print(f"sweep on a Dask LocalCluster (2 worker processes, 1 thread each; first 64-design sweep "
                   f"{warm:.2f} s): {dask:7.0f} runs/s (median of {args.repeat})   "
