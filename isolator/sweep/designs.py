@@ -148,6 +148,8 @@ def _sampled(columns: tuple[Column, ...], ranges: list[np.ndarray], samples: obj
         raise ParameterError(f"samples: must be a whole number >= 1, got {samples!r}")
     if method not in METHODS:
         raise ParameterError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
+    if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:
+        raise ParameterError(f"seed: must be a whole number >= 0, got {seed!r}")
     for c, r in zip_(columns, ranges):
         if r.size != 2 or not r[0] < r[1]:
             raise ParameterError(f"{c.mode}[{c.name!r}]: with samples, a range (low, high) with low < high, "
