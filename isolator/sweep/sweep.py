@@ -159,7 +159,6 @@ def sweep(
     sink = None if path is None else RowSink(path, columns, append=resume)
     if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
         path.unlink()
-    bar = _bar(progress, designs.count, int(np.sum(done)))
     rows: list[list[Any]] | None = [] if sink is None else None
 
     def finished(result: ChunkResult) -> None:
@@ -172,6 +171,7 @@ def sweep(
         bar(len(block))
 
     pool, renew = _executor(executor, n_workers)
+    bar = _bar(progress, designs.count, int(np.sum(done)))
     complete = False
     try:
         run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew)
@@ -262,5 +262,6 @@ def _bar(progress: bool, total: int, initial: int) -> Callable[[int], None]:
         return lambda k: None
     from tqdm import tqdm
 
+    tqdm.monitor_interval = 0  # no monitor thread: the pool's workers are forked after the bar starts
     shown = tqdm(total=total, initial=initial, unit="run", file=sys.stderr, smoothing=0.1)
     return lambda k: shown.close() if k < 0 else shown.update(k)
