@@ -60,6 +60,7 @@ from isolator.simulation.sequence import run_sequence
 from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.settling import SettlingResult, settling_time
 from isolator.simulation.simulator import Simulator, simulate
+from isolator.sweep import SweepResult, sweep
 
 __all__ = [
     "EXACT",
@@ -107,6 +108,7 @@ __all__ = [
     "SineProfile",
     "StabilityReport",
     "StepResult",
+    "SweepResult",
     "Table",
     "UnstableClosedLoopError",
     "UnstableTableError",
@@ -132,6 +134,7 @@ __all__ = [
     "simulate",
     "stability",
     "static_equilibrium",
+    "sweep",
     "table_signals",
     "transmissibility",
     "trapezoid",

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from isolator.cli.helpers import count, output_path, scenario_argument
+from isolator.cli.helpers import count, figure_path, output_path, save_figure, scenario_argument, use_agg
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.sweep import METHODS, sweep
@@ -59,6 +59,8 @@ def register(sub: Any) -> None:
     p.add_argument("--model", choices=MODEL_KINDS, default="exact", help="exact or the paper's small-angle model")
     p.add_argument("--chunk-size", type=count, metavar="N", help="designs per task (default: about four per worker)")
     p.add_argument("--out", type=Path, required=True, metavar="FILE.csv", help="the rows (.csv or .parquet)")
+    p.add_argument("--plot", type=Path, metavar="FILE.png",
+                   help="write a figure: the largest settling time against the swept values")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue the sweep whose rows --out holds")
     again.add_argument("--force", action="store_true", help="overwrite --out")
@@ -140,6 +142,7 @@ def _client(address: str) -> Any:
 def _sweep(args: argparse.Namespace) -> int:
     swept = _swept(args)
     out = output_path(args.out, "--out", SUFFIXES)
+    figure = figure_path(args.plot, "--plot")
     if (out.exists() or staging_path(out).exists()) and not (args.resume or args.force):
         raise ParameterError(f"--out: '{out}' exists; --resume continues it, --force overwrites it")
     client = None if args.scheduler is None else _client(args.scheduler)
@@ -153,4 +156,11 @@ def _sweep(args: argparse.Namespace) -> int:
         if client is not None:
             client.close()
     print(result.summary())
+    if figure is not None:
+        from isolator.sweep.figure import plot_sweep
+
+        use_agg()
+        labels = {n: f"{n} (factor on the scenario's)" if n in swept["scale"] else n for n in result.names}
+        save_figure(plot_sweep(result, labels=labels), figure)
+        print(f"figure: {figure}")
     return 0
