@@ -137,6 +137,8 @@ def _optimise_sequence(args: argparse.Namespace, scenario: Scenario, out: Path |
             option = "--" + name.replace("_", "-")
             raise ParameterError(f"{option}: designs a single move; a scenario with a [sequence] is designed for "
                                  "its total time (leave the option out)")
+    if args.samples < 2:
+        raise ParameterError(f"--samples: must be a whole number >= 2, got {args.samples}")
     result = optimise_sequence(scenario, samples=args.samples, progress=not args.json)
     if out:
         write_sequence_scenario(args.scenario, result.scenario, out)

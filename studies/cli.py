@@ -159,6 +159,10 @@ def _robustness(args: argparse.Namespace) -> int:
     from controllers.profiles import ModelVariant, ProfileSettings
     from studies.robustness import parse_tolerances, run_robustness_study
 
+    if args.samples < 1:
+        raise ParameterError(f"--samples: must be a whole number >= 1, got {args.samples}")
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers: must be a whole number >= 1, got {args.workers}")
     tolerances = parse_tolerances(args.tolerance)
     samples = min(args.samples, 12) if args.quick else args.samples
     settings = ProfileSettings(objective="settling", variants=(ModelVariant(),)) if args.quick else None

@@ -70,3 +70,8 @@ def test_single_move_options_are_refused_on_a_sequence(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert err[0].startswith("isolator: error: --shape: designs a single move")
+
+
+def test_too_few_samples_are_named_on_the_command_line(capsys):
+    assert main(["optimise-profile", SCENARIO, "--samples", "1"]) == 2
+    assert capsys.readouterr().err.strip() == "isolator: error: --samples: must be a whole number >= 2, got 1"

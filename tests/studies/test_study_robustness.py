@@ -166,3 +166,15 @@ def test_robustness_command_bad_tolerance(tmp_path, capsys):
     assert code == 2
     assert len(err) == 1
     assert "did you mean 'isolators[*].stiffness'" in err[0]
+
+
+@pytest.mark.parametrize(("options", "match"), [
+    (["--samples", "0"], "--samples: must be a whole number >= 1"),
+    (["--workers", "0"], "--workers: must be a whole number >= 1"),
+    (["--tolerance", "carriages[0].origin.x=+-5%"], "cannot vary by a fraction of its value, which is 0"),
+])
+def test_robustness_command_bad_options(tmp_path, capsys, options, match):
+    assert main(["study", "robustness", SCENARIO, "--out", str(tmp_path / "r"), *options]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1
+    assert match in err[0]
