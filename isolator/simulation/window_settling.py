@@ -19,7 +19,17 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.windows import Window
 from isolator.simulation.points import PointSet
 
-__all__ = ["WindowResult", "plot_windows", "run_points", "window_exit", "window_result"]
+__all__ = ["WindowResult", "moves_per_hour", "plot_windows", "run_points", "window_exit", "window_result"]
+
+
+def moves_per_hour(move_time: float | None, window_settling: float | None) -> float | None:
+    """Moves per hour [1/h] of a machine that repeats a move of ``move_time`` [s] (first carriage's start to the
+    stop) and waits ``window_settling`` [s] after each until every window holds: ``3600 / (move_time +
+    window_settling)``; None when either is unknown or the sum is not > 0."""
+    if move_time is None or window_settling is None:
+        return None
+    cycle = move_time + window_settling
+    return 3600.0 / cycle if math.isfinite(cycle) and cycle > 0 else None
 
 
 def window_exit(

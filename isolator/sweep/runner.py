@@ -10,6 +10,7 @@ from concurrent.futures.process import BrokenProcessPool
 import numpy as np
 
 from isolator.sweep import worker
+from isolator.sweep.metrics import metric_columns
 from isolator.sweep.worker import Chunk, ChunkResult
 
 __all__ = ["ATTEMPTS", "failed_result", "run_chunks"]
@@ -26,7 +27,8 @@ def failed_result(chunk: Chunk, exc: BaseException) -> ChunkResult:
     width = len(chunk.frequencies) * len(worker.TRANSMISSIBILITY_AXES) + chunk.modes
     return ChunkResult(chunk.start, np.full((n, 6), np.nan), np.full((n, 6), np.nan),
                        np.full(n, "failed", dtype=object), np.full(n, f"after {ATTEMPTS} attempts: {why}",
-                                                                   dtype=object), np.full((n, width), np.nan))
+                                                                   dtype=object), np.full((n, width), np.nan),
+                       np.full((n, 6), np.nan), np.full((n, len(metric_columns(chunk.scenario))), np.nan))
 
 
 def run_chunks(

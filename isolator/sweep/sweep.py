@@ -20,6 +20,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import load_scenario
 from isolator.simulation.settling import Band
 from isolator.sweep.designs import Designs, Values, build_designs
+from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
 from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
 from isolator.sweep.result import SweepResult, Tally
@@ -114,9 +115,24 @@ def sweep(
         Columns in design order: one per swept name as given (a scale column holds the factor),
         ``settling_time_max`` [s], ``settling:<signal>`` [s], ``peak:<signal>`` [m or rad], ``status``
         ("ok", "tipped": no stable rest or turned past 0.2 rad, "diverged", "refused": it would need far too
-        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "failed": its
-        chunk failed twice), ``reason``, ``design``, then the
-        transmissibility and mode columns.
+        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "unsettled": a
+        step of the ``[sequence]`` did not settle, named in ``reason``, "failed": its chunk failed twice),
+        ``reason``, ``design``, ``band:<signal>`` (the six half-widths [m or rad] of the band the design's
+        settling time is measured in, as ``isolator simulate --band`` takes them), then the columns of the
+        scenario's kind, then the transmissibility and mode columns.
+
+        A pneumatic scenario, one with ``[[windows]]`` or with a ``[sequence]`` runs each design on its own
+        (``Simulator.run_method`` from its equilibria, or ``run_sequence(..., parameters=p)``), and adds:
+
+        * pneumatic: ``dynamic_settling_time_max`` [s] (the settling about the slowly leveling table),
+          ``leveling_time`` [s] (the largest over the valve groups; NaN when one is not level by the end),
+          ``supply_exhausted`` (1 when a group wanted air at its supply pressure, else 0);
+        * ``[[windows]]`` (a single move): ``window_settling_time_max`` [s] (after the stop) and
+          ``moves_per_hour`` [1/h], ``3600 / (move time + window settling time)`` (the move time from the
+          first carriage's start to the stop);
+        * ``[sequence]`` (instead of the two above): ``total_time`` [s] (first step's start to last step's
+          end), ``throughput_per_hour`` [1/h] (steps per hour) and ``unsettled_step`` (NaN when every step
+          settled); the 5 % settling, peak and band columns are NaN.
 
     Raises
     ------
@@ -129,7 +145,7 @@ def sweep(
     designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
     freqs = _frequencies(frequencies)
     n_modes = 6 if modes else 0
-    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes)
+    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metric_columns(scene))
     path = None if out is None else Path(out)
     done = np.zeros(designs.count, dtype=bool)
     if path is not None:
@@ -194,7 +210,7 @@ def _rows(designs: Designs, result: ChunkResult) -> list[list[Any]]:
             worst = float(np.max(result.settling[r])) if np.all(np.isfinite(result.settling[r])) else math.nan
         out.append([*map(float, designs.values[i]), worst, *map(float, result.settling[r]),
                     *map(float, result.peak[r]), str(result.status[r]), " ".join(str(result.reason[r]).split()), i,
-                    *map(float, result.extras[r])])
+                    *map(float, result.band[r]), *map(float, result.metrics[r]), *map(float, result.extras[r])])
     return out
 
 

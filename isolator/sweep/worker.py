@@ -20,6 +20,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.simulation.batch import run_batch
 from isolator.simulation.settling import Band
 from isolator.simulation.simulator import Simulator
+from isolator.sweep.metrics import Runs, metric_columns, run_each, run_each_sequence, runs_alone
 
 __all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "run_chunk", "scenario_key", "simulator_for"]
 
@@ -86,6 +87,10 @@ class ChunkResult:
     status, reason : ndarray (designs,) of str
     extras : ndarray (designs, k)
         Transmissibility magnitudes [-] (each frequency: x, y, z), then mode frequencies [Hz].
+    band : ndarray (designs, 6)
+        The half-widths of the band each design's settling time is measured in [m or rad]; NaN: no run.
+    metrics : ndarray (designs, len(metric_columns(scenario)))
+        The columns of :func:`isolator.sweep.metrics.metric_columns`.
     """
 
     start: int
@@ -94,6 +99,8 @@ class ChunkResult:
     status: np.ndarray
     reason: np.ndarray
     extras: np.ndarray
+    band: np.ndarray
+    metrics: np.ndarray
 
 
 def simulator_for(chunk: Chunk) -> Simulator:
@@ -127,7 +134,8 @@ def keep_freed_memory() -> None:
 
 
 def run_chunk(chunk: Chunk) -> ChunkResult:
-    """Run a chunk's designs: a batch (tipped and diverged runs recorded), the linear extras of each
+    """Run a chunk's designs: a batch (tipped and diverged runs recorded), or each design on its own when the
+    scenario is pneumatic, has windows or a sequence (:mod:`isolator.sweep.metrics`); the linear extras of each
     design that stands, and designs whose swept entries break a joint rule recorded "invalid"."""
     sim = simulator_for(chunk)
     n = chunk.params.shape[0]
@@ -140,19 +148,28 @@ def run_chunk(chunk: Chunk) -> ChunkResult:
             except IsolatorError as exc:
                 status[r], reason[r] = "invalid", str(exc)
     valid = np.flatnonzero(status == "ok")
-    batch = run_batch(sim, chunk.params[valid], chunk.threads, diverged="record", band=chunk.band,
-                      label=lambda i: "")
-    settling, peak = np.full((n, 6), np.nan), np.full((n, 6), np.nan)
-    settling[valid], peak[valid] = batch.settling_time, batch.peak
-    status[valid] = batch.status
-    for i, why in batch.failures.items():
-        reason[valid[i]] = why
+    columns = metric_columns(chunk.scenario)
+    settling, peak, band = np.full((n, 6), np.nan), np.full((n, 6), np.nan), np.full((n, 6), np.nan)
+    metrics = np.full((n, len(columns)), np.nan)
+    if runs_alone(chunk.scenario):
+        runs: Runs = (run_each_sequence(chunk.scenario, chunk.model, chunk.params[valid])
+                      if chunk.scenario.sequence is not None else run_each(sim, chunk.params[valid], chunk.band))
+        settling[valid], peak[valid], band[valid], metrics[valid] = runs.settling, runs.peak, runs.half_widths, \
+            runs.metrics
+        status[valid], reason[valid] = runs.status, runs.reason
+    else:
+        batch = run_batch(sim, chunk.params[valid], chunk.threads, diverged="record", band=chunk.band,
+                          label=lambda i: "")
+        settling[valid], peak[valid], band[valid] = batch.settling_time, batch.peak, batch.half_widths
+        status[valid] = batch.status
+        for i, why in batch.failures.items():
+            reason[valid[i]] = why
     width = len(chunk.frequencies) * len(TRANSMISSIBILITY_AXES) + chunk.modes
     extras = np.full((n, width), np.nan)
     if width:
         for row in np.flatnonzero((status != "invalid") & (status != "tipped")):
             extras[row] = _linear(sim.scenario, chunk.params[row], chunk.frequencies, chunk.modes)
-    return ChunkResult(chunk.start, settling, peak, status, reason, extras)
+    return ChunkResult(chunk.start, settling, peak, status, reason, extras, band, metrics)
 
 
 def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], count: int) -> np.ndarray:
