@@ -11,7 +11,7 @@ import numpy as np
 
 from isolator import Scenario
 
-from .tradeoff import pareto_front
+from .tradeoff_results import pareto_front
 
 __all__ = ["LONG_WINDOW", "MIN_WINDOW", "ClosedForm", "Optimum", "PneumaticStudy", "Transients"]
 

@@ -5,31 +5,34 @@ from __future__ import annotations
 import csv
 from typing import Any
 
-import numpy as np
-
 from .reporting import band_cell
 
 __all__ = ["write_designs_csv"]
 
 
-def _status(study: Any, i: int, j: int) -> str:
-    if not study.stable[i]:
-        return "tips"
-    if (i, j) in study.failures:
-        return "diverged"
-    return "ok" if np.isfinite(study.settling_time[i, j]) else "no settling time"
-
-
 def write_designs_csv(study: Any) -> None:
-    """``designs.csv`` of a :class:`studies.tradeoff.TradeoffStudy`: one row per design."""
+    """``designs.csv`` of a :class:`studies.tradeoff.TradeoffStudy`: one row per design.
+
+    Columns: the two scales [-], ``settling_time_max_s`` (with a ``[sequence]``: ``total_time_s``), ``band``
+    (``isolator simulate --band``'s form, m and rad; empty for a sequence), with ``[[windows]]``
+    ``window_settling_time_max_s`` and ``moves_per_hour`` (a sequence: ``steps_per_hour``), the
+    transmissibility at the reference frequency and the resonance peak [m/m], its frequency [Hz], ``status``.
+    """
+    throughput = study.has_throughput
+    rate = ["steps_per_hour"] if study.sequence else ["window_settling_time_max_s", "moves_per_hour"]
     with open(study.folder / "designs.csv", "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["stiffness_scale", "damping_scale", "settling_time_max_s", "band",
+        writer.writerow(["stiffness_scale", "damping_scale", "total_time_s" if study.sequence else
+                         "settling_time_max_s", "band", *(rate if throughput else []),
                          f"transmissibility_at_{study.reference_hz:g}_hz", "peak_transmissibility",
                          "peak_frequency_hz", "status"])
         for i, ks in enumerate(study.stiffness):
             for j, cs in enumerate(study.damping):
+                extra = []
+                if throughput:
+                    extra = [f"{study.per_hour[i, j]:.6g}"] if study.sequence else [
+                        f"{study.window_settling[i, j]:.6g}", f"{study.per_hour[i, j]:.6g}"]
                 writer.writerow([f"{ks:.6g}", f"{cs:.6g}", f"{study.settling_time[i, j]:.6g}",
-                                 band_cell(study.band, study.half_widths[i, j]),
+                                 band_cell(study.band, study.half_widths[i, j]), *extra,
                                  f"{study.transmissibility[i, j]:.6g}", f"{study.peak[i, j]:.6g}",
-                                 f"{study.peak_hz[i, j]:.6g}", _status(study, i, j)])
+                                 f"{study.peak_hz[i, j]:.6g}", study.status[i, j]])

@@ -1,57 +1,42 @@
-"""The trade-off study's transient runs for pneumatic tables: settling about the leveling table.
+"""What the trade-off study's two scales mean for air springs: the sweep's columns and the report's note.
 
 A pneumatic table with valves re-levels for seconds after the stop; the 5 %
 settling about the final, level table then measures the valves, not the
-isolators. Here each design is one run, and its settling is the motion's
-settling about the slowly leveling table
-(:attr:`isolator.Response.dynamic_settling_time_max`).
+isolators. The study's settling figure is the motion's settling about the
+slowly leveling table (the sweep's ``dynamic_settling_time_max``,
+:attr:`isolator.Response.dynamic_settling_time_max`).
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
-from isolator import Band, IsolatorError, Scenario, Simulator
+from isolator import ParameterError, Scenario
+from isolator.model.parameters import ParameterLayout
+from isolator.sweep import resolve
 
-__all__ = ["pneumatic_note", "pneumatic_settling"]
+__all__ = ["pneumatic_note", "pneumatic_scales"]
 
 
-def pneumatic_settling(
-    sim: Simulator, stiffness: np.ndarray, damping: np.ndarray, say: Callable[[str], None], band: Band | None = None
-) -> tuple[np.ndarray, dict[int, str], np.ndarray]:
-    """Settling about the leveling table [s] per design (NaN where a run cannot show it), why runs failed, and
-    each design's band's six half-widths [m, rad] (NaN: no run).
-
-    Parameters
-    ----------
-    sim : Simulator
-    stiffness, damping : ndarray (runs,)
-        Scales on every isolator's springs and dampers
-        (:func:`isolator.simulation.scaling.scaled_parameter_sets`).
-    say : callable
-        Progress lines.
-    band : Band, optional
-        The settling band (default: the scenario's rule).
-    """
-    out = np.full(stiffness.size, np.nan)
-    widths = np.full((stiffness.size, 6), np.nan)
-    failures: dict[int, str] = {}
-    params = sim.scaled_parameter_sets(stiffness, damping)
-    step = max(1, stiffness.size // 10)
-    for r, p in enumerate(params):
+def pneumatic_scales(layout: ParameterLayout, stiffness: np.ndarray, damping: np.ndarray) -> dict[str, np.ndarray]:
+    """The sweep's ``scale`` columns [-] of designs with every air spring's stiffness scaled by ``stiffness``
+    and its damping by ``damping`` (arrays, one per design): both chambers' volumes divided by the stiffness
+    scale, the orifice diameter scaled by ``(stiffness damping) ** -0.25`` (its conductance ``G ~ d^4`` by
+    ``stiffness damping``, so the series dashpot scales by ``damping``), the horizontal springs and dampers as a
+    spring-damper's (:func:`isolator.simulation.scaling.scaled_parameter_sets`). Names no isolator has are left
+    out."""
+    k, c = np.asarray(stiffness, dtype=float), np.asarray(damping, dtype=float)
+    wanted = {"isolators[*].volume": 1.0 / k, "isolators[*].damping_volume": 1.0 / k,
+              "isolators[*].orifice.diameter": (k * c) ** -0.25, "isolators[*].horizontal_stiffness": k,
+              "isolators[*].horizontal_damping": c}
+    out = {}
+    for name, values in wanted.items():
         try:
-            run = sim.run(p=p, band=band)
-        except IsolatorError as exc:
-            failures[r] = str(exc)
+            resolve(layout, name, "scale")
+        except ParameterError:
             continue
-        value = run.dynamic_settling_time_max
-        out[r] = np.nan if value is None else value
-        widths[r] = run.band.half_widths
-        if (r + 1) % step == 0 or r + 1 == stiffness.size:
-            say(f"  runs: {r + 1}/{stiffness.size}")
-    return out, failures, widths
+        out[name] = values
+    return out
 
 
 def pneumatic_note(scenario: Scenario) -> list[str]:
