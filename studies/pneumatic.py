@@ -28,24 +28,23 @@ The results: :mod:`studies.pneumatic_results`; figures, ``designs.csv`` and ``re
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 from scipy.optimize import minimize_scalar
 
-from isolator import Scenario, SimulationError, Simulator, UnstableTableError
+from isolator import Scenario, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import default_frequencies, transmissibility
 from isolator.errors import ParameterError
-from isolator.model.equilibrium import Equilibrium
+from isolator.model.parameters import ParameterLayout
+from isolator.scenario.definitions import SIGNALS
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import isolator_rest_pressures
-from isolator.simulation.stepping import Method
+from isolator.sweep import sweep
 
 from .pneumatic_report import write_outputs
 from .pneumatic_results import LONG_WINDOW, MIN_WINDOW, ClosedForm, Optimum, PneumaticStudy, Transients
@@ -69,8 +68,6 @@ DIAMETER_SCALES = np.geomspace(0.4, 2.5, 15)
 RATIOS = 2.0 ** np.linspace(-1.0, 3.0, 11)
 #: an optimum searched beyond the grid's end reaches this factor past it
 EDGE_STRETCH = 2.0
-#: threads running the designs' simulations
-WORKERS = 2
 _TRANSLATIONS = ("x", "y", "z")
 
 
@@ -142,6 +139,7 @@ def run_pneumatic_study(
     ratios: Sequence[float] | np.ndarray | None = None,
     reference_hz: float = 10.0,
     progress: bool = True,
+    workers: int | None = None,
 ) -> PneumaticStudy:
     """Sweep every isolator's orifice and damping-chamber volume; write figures, ``designs.csv``, ``report.md``.
 
@@ -159,6 +157,8 @@ def run_pneumatic_study(
         Frequency of the isolation figure [Hz], > 0.
     progress : bool
         Print a line per stage.
+    workers : int, optional
+        Processes of the runs' sweeps (default: the machine's cores; 1: in this process).
 
     Returns
     -------
@@ -208,19 +208,17 @@ def run_pneumatic_study(
     own_runs = Transients.empty((1, 1))
     if moves:
         base = max(scenario.simulation.duration, scenario.stop_time + MIN_WINDOW)
-        todo = [(i, j) for (i, j) in params if (i, j) not in tips]
-        say(f"pneumatic runs of {len(todo)} designs, {base:.3g} s each ...")
-        _run_designs(scenario, base, [params[ij] for ij in todo], todo, transients, say)
+        todo = [(transients, ij, params[ij]) for ij in params if ij not in tips] + [(own_runs, (0, 0), own_p)]
+        say(f"pneumatic runs of {len(todo) - 1} designs and the scenario's own, {base:.3g} s each ...")
+        _run_designs(scenario, base, todo, say, workers)
         # a longer run for the slow ones; not for those whose valves ran out of supply (they did not level
-        # in longer runs either, and they are the costly, stiff ones)
-        again = [ij for ij in todo if transients.unfinished(ij) and not transients.exhausted[ij]]
+        # in longer runs either, and they are the costly, stiff ones), except the scenario's own
+        again = [(runs, ij, p) for runs, ij, p in todo
+                 if runs.unfinished(ij) and (runs is own_runs or not runs.exhausted[ij])]
         if again:
             long = scenario.stop_time + LONG_WINDOW
             say(f"{len(again)} designs not settled or not level after {base:.3g} s: run again for {long:.3g} s ...")
-            _run_designs(scenario, long, [params[ij] for ij in again], again, transients, say)
-        _run_designs(scenario, base, [own_p], [(0, 0)], own_runs, say)
-        if own_runs.unfinished((0, 0)):
-            _run_designs(scenario, scenario.stop_time + LONG_WINDOW, [own_p], [(0, 0)], own_runs, say)
+            _run_designs(scenario, long, again, say, workers)
     else:
         say("no carriage moves: no settling or leveling times, transmissibility and optima only")
     study = PneumaticStudy(
@@ -333,48 +331,36 @@ def _optimum(sim: Simulator, isolators: Sequence[PneumaticIsolator], d: np.ndarr
     return Optimum(ratio, best, value, hz, tau, bool(at_edge or beyond))
 
 
-def _run_designs(scenario: Scenario, duration: float, params: list[np.ndarray], where: list[tuple[int, int]],
-                 into: Transients, say: Callable[[str], None]) -> None:
-    """Run each design for ``duration`` [s]; its figures into ``into`` at its grid indices.
+def _run_designs(scenario: Scenario, duration: float, designs: list[tuple[Transients, tuple[int, int], np.ndarray]],
+                 say: Callable[[str], None], workers: int | None) -> None:
+    """Run each design for ``duration`` [s]: ``(into, (i, j), p)``, its figures into ``into`` at ``(i, j)``.
 
-    Each run is :meth:`Simulator.run` of the design. The designs are grouped by their integration
-    plan (the step its fastest mode needs), and each group runs on a simulator of its own, which
-    builds that plan's inputs once and lets them go after; :data:`WORKERS` groups at a time, on
-    threads (the compiled stepping and model evaluations release the GIL).
+    The designs are one :func:`isolator.sweep.sweep`, zipped ``set`` columns: every isolator's orifice
+    diameter [m] and damping-chamber volume [m^3], the values of the parameter vectors ``p`` (which
+    differ from the scenario's in those entries only). Each row is :meth:`Simulator.run` of its design: the
+    contract's settling time, the settling about the leveling table, the leveling time, whether the supply ran
+    out, the band, and with ``[[windows]]`` the window settling and moves per hour.
     """
     timed = replace(scenario, simulation=replace(scenario.simulation, duration=duration))
-    sim = Simulator(timed)
-    groups: dict[tuple[int, int], list[tuple[int, Equilibrium, Equilibrium | None, Method]]] = {}
-    for n, p in enumerate(params):
-        try:
-            start, end = sim.equilibria(p)
-        except (SimulationError, UnstableTableError) as exc:
-            into.record_failure(where[n], duration, str(exc))
+    names = [n for n in ParameterLayout.of(scenario).names if n.endswith((".orifice.diameter", ".damping_volume"))]
+    at = [ParameterLayout.of(scenario).names.index(n) for n in names]
+    values = np.array([p for _, _, p in designs])[:, at]
+    rows = sweep(timed, set={n: [float(v) for v in values[:, k]] for k, n in enumerate(names)}, zip=True,
+                 workers=workers).table()
+    valves = any(g.valve is not None for g in scenario.leveling)
+    windows = bool(scenario.windows)
+    for r, (into, ij, _) in enumerate(designs):
+        if rows["status"][r] != "ok":
+            into.record_failure(ij, duration, str(rows["reason"][r]))
             continue
-        method = sim.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        groups.setdefault((method.plan_key, method.substeps), []).append((n, start, end, method))
-    total, done, lock = len(params), [len(params) - sum(len(g) for g in groups.values())], threading.Lock()
+        level = _known(rows["leveling_time"][r])
+        into.record(ij, duration, _known(rows["settling_time_max"][r]), _known(rows["dynamic_settling_time_max"][r]),
+                    {"groups": level} if valves else {}, bool(rows["supply_exhausted"][r]),
+                    tuple(float(rows[f"band:{s}"][r]) for s in SIGNALS),
+                    _known(rows["window_settling_time_max"][r]) if windows else None,
+                    _known(rows["moves_per_hour"][r]) if windows else None)
+    say(f"  runs: {len(designs)} designs, {int(np.sum(rows['status'] != 'ok'))} without a run's figures")
 
-    def cost(group: list[tuple[int, Equilibrium, Equilibrium | None, Method]]) -> float:
-        plan = group[0][3].plan
-        return len(group) * (plan.evaluations if plan is not None else group[0][3].substeps)
 
-    def task(group: list[tuple[int, Equilibrium, Equilibrium | None, Method]]) -> None:
-        own = Simulator(timed)
-        for n, start, end, method in group:
-            try:
-                response = own.run_method(params[n], start, end, method)
-                pneumatic = response.pneumatic
-            except (SimulationError, UnstableTableError) as exc:
-                into.record_failure(where[n], duration, str(exc))
-            else:
-                assert pneumatic is not None
-                into.record(where[n], duration, response.settling_time_max, pneumatic.dynamic_settling_time_max,
-                            pneumatic.leveling_time, bool(pneumatic.supply_exhausted), response.band.half_widths)
-            with lock:
-                done[0] += 1
-                if total >= 10 and done[0] % max(1, total // 10) == 0:
-                    say(f"  runs: {done[0]}/{total} designs")
-
-    with ThreadPoolExecutor(max_workers=WORKERS) as pool:
-        list(pool.map(task, sorted(groups.values(), key=cost, reverse=True)))
+def _known(value: float) -> float | None:
+    return None if math.isnan(value) else float(value)

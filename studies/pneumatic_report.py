@@ -121,29 +121,36 @@ def _status(study: PneumaticStudy, ij: tuple[int, int]) -> str:
 def _write_csv(study: PneumaticStudy) -> None:
     runs = study.runs
     rule = Band.from_settling(study.scenario.settling)
+    windows = bool(study.scenario.windows)
     with open(study.folder / "designs.csv", "w", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["orifice_diameter_m", "volume_ratio", "heave_peak", "heave_peak_hz", "rocking_peak",
                          "rocking_peak_hz", f"transmissibility_at_{study.reference_hz:g}_hz",
                          "dynamic_settling_time_s", "contract_settling_time_s", "band", "leveling_time_s",
+                         *(["window_settling_time_s", "moves_per_hour"] if windows else []),
                          "run_duration_s", "status"])
         for i, d in enumerate(study.diameters):
             for j, n in enumerate(study.ratios):
                 values = (study.heave_peak, study.heave_peak_hz, study.rocking_peak, study.rocking_peak_hz,
                           study.transmissibility, runs.settling, runs.contract_settling)
+                throughput = [f"{runs.window[i, j]:.6g}", f"{runs.per_hour[i, j]:.6g}"] if windows else []
                 writer.writerow([f"{d:.6g}", f"{n:.6g}", *(f"{v[i, j]:.6g}" for v in values),
-                                 band_cell(rule, runs.band[i, j]), f"{runs.leveling[i, j]:.6g}",
+                                 band_cell(rule, runs.band[i, j]), f"{runs.leveling[i, j]:.6g}", *throughput,
                                  f"{runs.duration[i, j]:.6g}", _status(study, (i, j))])
 
 
 _DESIGN_COLUMNS = ["orifice [mm]", "N", "settling, dynamic [s]", "settling, contract [s]", "leveling [s]",
                    "transmissibility at {f:g} Hz", "heave peak", "rocking peak"]
+#: with ``[[windows]]``, after the leveling time
+_WINDOW_COLUMNS = ["window settling [s]", "moves per hour"]
 
 
-def _design_row(d: float, n: float, runs: Transients, ij: tuple[int, int], linear: dict[str, float]) -> str:
+def _design_row(d: float, n: float, runs: Transients, ij: tuple[int, int], linear: dict[str, float],
+                windows: bool = False) -> str:
+    throughput = [fmt(runs.window[ij], ".3f"), fmt(runs.per_hour[ij], ".1f")] if windows else []
     return table_row([f"{d * 1e3:.3g}", f"{n:.3g}", fmt(runs.settling[ij], ".3f"),
-                      fmt(runs.contract_settling[ij], ".3f"), fmt(runs.leveling[ij], ".3f"), fmt(linear["at_ref"]),
-                      f"{linear['heave']:.3f} at {linear['heave_hz']:.2f} Hz",
+                      fmt(runs.contract_settling[ij], ".3f"), fmt(runs.leveling[ij], ".3f"), *throughput,
+                      fmt(linear["at_ref"]), f"{linear['heave']:.3f} at {linear['heave_hz']:.2f} Hz",
                       f"{linear['rocking']:.3f} at {linear['rocking_hz']:.2f} Hz"])
 
 
@@ -152,19 +159,39 @@ def _grid_linear(study: PneumaticStudy, ij: tuple[int, int]) -> dict[str, float]
             "rocking": study.rocking_peak[ij], "rocking_hz": study.rocking_peak_hz[ij]}
 
 
+def _throughput_lines(study: PneumaticStudy) -> list[str]:
+    """With ``[[windows]]``: what the window settling and moves per hour are, and the design that makes most."""
+    if not study.scenario.windows:
+        return []
+    lines = ["", "Throughput: each run's window settling time (after the stop, until every `[[windows]]` point "
+             "holds its window) and the moves per hour of a machine repeating the move and waiting for the "
+             "windows, 3600 / (move time + window settling time)."]
+    rates = study.runs.per_hour
+    if np.any(np.isfinite(rates)):
+        at = int(np.nanargmax(rates))
+        i, j = at // rates.shape[1], at % rates.shape[1]
+        lines[-1] += (f" Most moves per hour on the grid: {rates[i, j]:.1f} with orifice "
+                      f"{study.diameters[i] * 1e3:.3g} mm, N = {study.ratios[j]:.3g} (the scenario's own: "
+                      f"{fmt(study.own_runs.per_hour[0, 0], '.1f')}).")
+    return lines
+
+
 def _write_report(study: PneumaticStudy) -> None:
     sc, d, n = study.scenario, study.diameters, study.ratios
+    windows = bool(sc.windows)
     columns = [c.format(f=study.reference_hz) for c in _DESIGN_COLUMNS]
+    if windows:
+        columns[5:5] = _WINDOW_COLUMNS
     durations = np.unique(study.runs.duration[np.isfinite(study.runs.duration)])
     lengths = f" (run lengths used: {', '.join(f'{v:.3g} s' for v in durations)})" if durations.size else ""
     lines = [f"# Air-spring orifice and damping chamber: {sc.name}", "",
              f"{d.size} orifice diameters ({d[0] * 1e3:.3g} to {d[-1] * 1e3:.3g} mm, log-spaced) x {n.size} "
              f"damping-chamber volume ratios N = V2 / V1r ({n[0]:.3g} to {n[-1]:.3g}), each applied to every "
              f"isolator (damping chamber = N x its spring chamber). The scenario's own design: orifice "
-             f"{study.own_diameter * 1e3:.3g} mm, N = {study.own_ratio:.3g}.", "",
+             f"{study.own_diameter * 1e3:.3g} mm, N = {study.own_ratio:.3g}.", *_throughput_lines(study), "",
              "![maps](maps.png)", "", "![pareto](pareto.png)", ""]
     lines += ["## The scenario's design", "", *table_header(columns),
-              _design_row(study.own_diameter, study.own_ratio, study.own_runs, (0, 0), study.own_linear), ""]
+              _design_row(study.own_diameter, study.own_ratio, study.own_runs, (0, 0), study.own_linear, windows), ""]
     lines += ["## Optimal orifice per volume ratio", "",
               "The orifice that minimises the table's heave transmissibility peak, refined beyond the grid by a "
               "bounded minimisation in log diameter (linearised table). Beside it the optimum of a one-mass "
@@ -189,7 +216,7 @@ def _write_report(study: PneumaticStudy) -> None:
     lines += ["## Pareto-optimal designs", "",
               f"No other design on the grid settles faster and isolates better at {study.reference_hz:g} Hz at once.",
               "", *table_header(columns)]
-    lines += [_design_row(d[i], n[j], study.runs, (i, j), _grid_linear(study, (i, j))) for i, j in front]
+    lines += [_design_row(d[i], n[j], study.runs, (i, j), _grid_linear(study, (i, j)), windows) for i, j in front]
     if not front:
         lines.append(table_row(["(none)"] + [""] * (len(columns) - 1)))
     lines += ["", "## Designs without numbers", ""]

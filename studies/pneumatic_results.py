@@ -97,6 +97,10 @@ class Transients:
     band : ndarray (..., 6)
         The band both settling times are measured in, per design: 5 % of that run's own peaks (the
         scenario's ``[settling]`` rule), six half-widths [m, rad] (NaN: not run).
+    window : ndarray
+        With ``[[windows]]``: the largest window settling time after the stop [s] (NaN: none, or not shown).
+    per_hour : ndarray
+        With ``[[windows]]``: moves per hour repeating the move and waiting for the windows [1/h].
     """
 
     settling: np.ndarray
@@ -107,17 +111,25 @@ class Transients:
     duration: np.ndarray
     failures: dict[tuple[int, int], str] = field(default_factory=dict)
     band: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 6)))
+    window: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    per_hour: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
 
     @classmethod
     def empty(cls, shape: tuple[int, int]) -> Transients:
         """Nothing run yet on a grid of ``shape``."""
         return cls(np.full(shape, np.nan), np.full(shape, np.nan), np.full(shape, np.nan), np.zeros(shape, bool),
-                   np.zeros(shape, bool), np.full(shape, np.nan), {}, np.full((*shape, 6), np.nan))
+                   np.zeros(shape, bool), np.full(shape, np.nan), {}, np.full((*shape, 6), np.nan),
+                   np.full(shape, np.nan), np.full(shape, np.nan))
 
     def record(self, ij: tuple[int, int], duration: float, contract: float | None, dynamic: float | None,
-               levels: dict[str, float | None], exhausted: bool, band: tuple[float, ...] | None = None) -> None:
-        """One run's figures (None: not settled / not level) and its band's half-widths [m, rad]."""
+               levels: dict[str, float | None], exhausted: bool, band: tuple[float, ...] | None = None,
+               window: float | None = None, per_hour: float | None = None) -> None:
+        """One run's figures (None: not settled / not level), its band's half-widths [m, rad], and with
+        ``[[windows]]`` its window settling time [s] and moves per hour [1/h]."""
         self.failures.pop(ij, None)
+        if self.window.shape == self.settling.shape:
+            self.window[ij] = math.nan if window is None else window
+            self.per_hour[ij] = math.nan if per_hour is None else per_hour
         if self.band.shape[:-1] == self.settling.shape:
             self.band[ij] = math.nan if band is None else band
         self.duration[ij] = duration
