@@ -46,12 +46,14 @@ def register(sub: Any) -> None:
     tradeoff = _study(studies, "tradeoff", "isolator stiffness and damping: settling time against "
                       "transmissibility", f"scenario file or bundled name (default: {DEFAULT_SCENARIO})")
     _frequency(tradeoff)
+    _workers(tradeoff)
     tradeoff.set_defaults(handler=_tradeoff)
 
     pneumatic = _study(studies, "pneumatic", "air springs' orifice and damping-chamber volume: transmissibility "
                        "peaks, settling and leveling, the optimal orifice",
                        f"scenario with pneumatic isolators (default: {PNEUMATIC_SCENARIO})")
     _frequency(pneumatic)
+    _workers(pneumatic)
     pneumatic.set_defaults(handler=_pneumatic)
 
     robustness = _study(studies, "robustness", "Monte Carlo over manufacturing tolerances: the settling time's "
@@ -66,6 +68,17 @@ def register(sub: Any) -> None:
     robustness.add_argument("--workers", type=int, default=None, metavar="N",
                             help="processes of the sweeps (default: the machine's cores)")
     robustness.set_defaults(handler=_robustness)
+
+
+def _workers(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--workers", type=int, default=None, metavar="N",
+                        help="processes of the runs' sweep (default: the machine's cores)")
+
+
+def _checked_workers(args: argparse.Namespace) -> int | None:
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers: must be a whole number >= 1, got {args.workers}")
+    return int(args.workers) if args.workers is not None else None
 
 
 def _study(studies: Any, name: str, help_text: str, scenario_help: str | None) -> argparse.ArgumentParser:
@@ -128,9 +141,14 @@ def _tradeoff(args: argparse.Namespace) -> int:
     frequency = _checked_frequency(args)
     stiffness = [0.5, 1.0, 2.0] if args.quick else None
     damping = [0.5, 1.0, 2.0, 4.0] if args.quick else None
-    tradeoff = run_tradeoff_study(args.out, _scenario(args, None), stiffness, damping, reference_hz=frequency)
+    tradeoff = run_tradeoff_study(args.out, _scenario(args, None), stiffness, damping, reference_hz=frequency,
+                                  workers=_checked_workers(args))
     front = tradeoff.pareto()
     print(f"{len(front)} Pareto-optimal designs of {tradeoff.stiffness.size * tradeoff.damping.size}")
+    if tradeoff.has_throughput:
+        best = max(tradeoff.throughput_pareto(), key=lambda p: tradeoff.per_hour[p])
+        print(f"most {tradeoff.rate_label}: {tradeoff.per_hour[best]:.1f} with stiffness "
+              f"x{tradeoff.stiffness[best[0]]:.3g}, damping x{tradeoff.damping[best[1]]:.3g}")
     print(f"report: {args.out / 'report.md'}")
     return 0
 
@@ -146,7 +164,8 @@ def _pneumatic(args: argparse.Namespace) -> int:
 
         own = default_diameters(scenario)
         diameters, ratios = own[[2, 7, 12]], [1.0, 2.0, 4.0]  # 0.52, 1 and 1.92 x the scenario's orifice
-    pneumatic = run_pneumatic_study(args.out, scenario, diameters, ratios, reference_hz=frequency)
+    pneumatic = run_pneumatic_study(args.out, scenario, diameters, ratios, reference_hz=frequency,
+                                    workers=_checked_workers(args))
     for o, c in zip(pneumatic.optima, pneumatic.closed_form, strict=True):
         print(f"N = {o.ratio:.3g}: optimal orifice {o.diameter * 1e3:.4g} mm, heave peak {o.peak:.4g} "
               f"(one-mass closed form {c.peak:.4g} with {c.diameter * 1e3:.4g} mm)")

@@ -90,3 +90,15 @@ def test_the_study_runs_on_a_sequence_in_steps_per_hour(tmp_path):
     with open(tmp_path / "designs.csv") as handle:
         header = next(csv.reader(handle))
     assert header[2:5] == ["total_time_s", "band", "steps_per_hour"]
+
+
+def test_the_command_runs_the_quick_study_on_a_sequence(tmp_path, capsys):
+    from isolator.cli.app import main
+
+    assert main(["study", "tradeoff", "paper-table-3-2-sequence", "--out", str(tmp_path), "--quick",
+                 "--workers", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "Pareto-optimal designs of 12" in out
+    assert "most steps per hour: " in out
+    assert main(["study", "tradeoff", "--out", str(tmp_path), "--workers", "0"]) == 2
+    assert capsys.readouterr().err.strip() == "isolator: error: --workers: must be a whole number >= 1, got 0"
