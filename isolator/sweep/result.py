@@ -33,9 +33,13 @@ class Tally:
     failed : int
         Rows (all of them) whose status is not "ok".
     best : int or None
-        The design with the smallest ``settling_time_max`` among those "ok" (None: none has one).
+        The design with the smallest :attr:`column` among those "ok" (None: none has one).
     best_time : float
-        Its ``settling_time_max`` [s].
+        Its :attr:`column` [s].
+    column : str
+        What "best" is judged by: ``settling_time_max``, or a sequence's ``total_time``.
+    metric : int or None
+        Where :attr:`column` is among a chunk's ``metrics`` (None: ``settling_time_max``, from the settling).
     """
 
     designs: int
@@ -44,16 +48,22 @@ class Tally:
     failed: int = 0
     best: int | None = None
     best_time: float = math.inf
+    column: str = "settling_time_max"
+    metric: int | None = None
 
     def add(self, result: ChunkResult) -> None:
         """Count a chunk's rows."""
         self.runs += result.status.size
         with np.errstate(all="ignore"):
-            worst = np.where(np.all(np.isfinite(result.settling), axis=1), np.max(result.settling, axis=1), np.inf)
+            if self.metric is None:
+                worst = np.where(np.all(np.isfinite(result.settling), axis=1), np.max(result.settling, axis=1),
+                                 np.inf)
+            else:
+                worst = result.metrics[:, self.metric]
         self.count(result.start + np.arange(result.status.size), worst, result.status)
 
     def count(self, designs: np.ndarray, worst: np.ndarray, status: np.ndarray) -> None:
-        """Count rows: their designs, ``settling_time_max`` [s] (NaN or inf: none) and status."""
+        """Count rows: their designs, :attr:`column` [s] (NaN or inf: none) and status."""
         ok = status == "ok"
         self.failed += int(np.sum(~ok))
         value = np.where(ok & np.isfinite(worst), worst, np.inf)
@@ -128,11 +138,12 @@ class SweepResult:
         return self.tally.runs / self.wall_time if self.wall_time > 0 else math.nan
 
     def best(self) -> Mapping[str, float] | None:
-        """The swept values and ``settling_time_max`` of the design that settles first (None: none did)."""
+        """The swept values and ``settling_time_max`` (a sequence: ``total_time``) of the design that settles
+        (finishes) first (None: none did)."""
         if self.tally.best is None:
             return None
         values = {n: float(self[n][self._row(self.tally.best)]) for n in self.names}
-        return {**values, "settling_time_max": self.tally.best_time}
+        return {**values, self.tally.column: self.tally.best_time}
 
     def _row(self, design: int) -> int:
         rows = self["design"]

@@ -145,7 +145,9 @@ def sweep(
     designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
     freqs = _frequencies(frequencies)
     n_modes = 6 if modes else 0
-    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metric_columns(scene))
+    metrics = metric_columns(scene)
+    best_by = "total_time" if "total_time" in metrics else "settling_time_max"  # a sequence: finished first
+    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metrics)
     path = None if out is None else Path(out)
     done = np.zeros(designs.count, dtype=bool)
     if path is not None:
@@ -158,10 +160,11 @@ def sweep(
                                  "(--force) overwrites it")
         if exists and resume:
             done = done_designs(path, columns, designs.names, designs.values)
-            on_disk = read_columns(path, ["settling_time_max", "status", "design"])
-    tally = Tally(designs.count, int(np.sum(done)))
+            on_disk = read_columns(path, [best_by, "status", "design"])
+    tally = Tally(designs.count, int(np.sum(done)), column=best_by,
+                  metric=metrics.index(best_by) if best_by in metrics else None)
     if tally.resumed:
-        tally.count(on_disk["design"].astype(int), on_disk["settling_time_max"], on_disk["status"])
+        tally.count(on_disk["design"].astype(int), on_disk[tally.column], on_disk["status"])
         if path is not None and not staging_path(path).exists():  # a finished .parquet
             if not done.all():
                 raise ParameterError(f"out: '{path}' is a finished sweep of other designs; --force starts again")

@@ -113,3 +113,21 @@ def test_sequence_rows_carry_total_time_throughput_and_the_step_that_did_not_set
     assert cut["unsettled_step"][0] == step
     assert f"step {step} did not settle" in cut["reason"][0]
     assert np.isnan(cut["total_time"][0])
+
+
+def test_a_sequence_sweep_is_judged_by_its_total_time_and_resumes(tmp_path):
+    scale = {"isolators[*].damping": [0.5, 1.0, 2.0]}
+    out = tmp_path / "rows.csv"
+    first = sweep("paper-table-3-2-sequence", scale=scale, workers=1, out=out)
+    rows = first.table()
+    best = first.best()
+    assert best is not None
+    assert best["isolators[*].damping"] == 2.0
+    assert best["total_time"] == pytest.approx(first["total_time"][2], rel=1e-12)
+    assert "total_time = " in first.summary()
+    lines = out.read_text().splitlines(keepends=True)
+    out.write_text("".join(lines[:2]))  # interrupted after the first design
+    again = sweep("paper-table-3-2-sequence", scale=scale, workers=1, out=out, resume=True)
+    assert again.tally.resumed == 1
+    assert again.best() == best
+    same(again.table(), rows)
