@@ -16,7 +16,12 @@ and from the exact pneumatic run of the scenario's moves (valves leveling):
   (``Response.pneumatic.dynamic_settling_time_max``, the study's settling figure) and the
   contract's settling time about the final level equilibrium (``settling_time_max``);
 * the leveling time, the largest over the valve groups (NaN when a group is not level by
-  the end of the run).
+  the end of the run);
+* with ``[[windows]]``, the window settling time and the moves per hour of a machine repeating
+  the move (``3600 / (move time + window settling time)``).
+
+The runs are one :func:`isolator.sweep.sweep` over the designs' orifice diameters and
+damping-chamber volumes (and one more, longer, for the designs not settled or not level).
 
 Per volume ratio it then refines the orifice that minimises the heave peak beyond the grid
 (a bounded 1-D minimisation in log diameter, linearisation only) and sets it beside the
