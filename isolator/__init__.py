@@ -60,7 +60,7 @@ from isolator.simulation.sequence import run_sequence
 from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.settling import SettlingResult, settling_time
 from isolator.simulation.simulator import Simulator, simulate
-from isolator.sweep import SweepResult, sweep
+from isolator.sweep import SweepResult
 
 __all__ = [
     "EXACT",
@@ -134,7 +134,6 @@ __all__ = [
     "simulate",
     "stability",
     "static_equilibrium",
-    "sweep",
     "table_signals",
     "transmissibility",
     "trapezoid",

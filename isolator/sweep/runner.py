@@ -75,29 +75,46 @@ def run_chunks(
             order.append(chunk.start)
             submit(chunk, 1)
 
-    fill()
-    while pending:
-        finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
-        for future in finished:
-            chunk, attempt, born = pending.pop(future)
-            try:
-                ready[chunk.start] = future.result()
-                continue
-            except Exception as exc:  # a chunk's failure is recorded, never the sweep's
-                error: BaseException = exc
-            if isinstance(error, BrokenProcessPool) and renew is not None and born == generation[0]:
-                pool[0].shutdown(wait=False, cancel_futures=True)
-                pool[0] = renew()
-                generation[0] += 1
-            if attempt < ATTEMPTS:
-                submit(chunk, attempt + 1)
-            else:
-                ready[chunk.start] = failed_result(chunk, error)
-        while order and order[0] in ready:
-            done(ready.pop(order.pop(0)))
+    try:
         fill()
+        while pending:
+            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
+            for future in finished:
+                chunk, attempt, born = pending.pop(future)
+                try:
+                    ready[chunk.start] = future.result()
+                    continue
+                except Exception as exc:  # a chunk's failure is recorded, never the sweep's
+                    error: BaseException = exc
+                if isinstance(error, BrokenProcessPool) and renew is not None and born == generation[0]:
+                    pool[0].shutdown(wait=False, cancel_futures=True)
+                    pool[0] = renew()
+                    generation[0] += 1
+                if attempt < ATTEMPTS:
+                    submit(chunk, attempt + 1)
+                else:
+                    ready[chunk.start] = failed_result(chunk, error)
+            while order and order[0] in ready:
+                done(ready.pop(order.pop(0)))
+            fill()
+    except BaseException:  # an interrupt: no worker left running; the rows given to ``done`` are kept
+        for future in pending:
+            future.cancel()
+        if renew is not None:
+            _stop(pool[0])
+        raise
     if renew is not None:
         pool[0].shutdown()
+
+
+def _stop(pool: Executor) -> None:
+    """Stop a process pool the sweep made, at once: its workers terminated, its queued chunks dropped."""
+    processes = getattr(pool, "_processes", None) or {}  # no public way to stop them before Python 3.14
+    for process in list(processes.values()):
+        process.terminate()
+    for process in list(processes.values()):
+        process.join(timeout=2.0)
+    pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _serial(chunk: Chunk) -> ChunkResult:

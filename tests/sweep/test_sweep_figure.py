@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from isolator import sweep
 from isolator.cli.app import main
+from isolator.sweep import sweep
 from isolator.sweep.figure import plot_sweep
 
 
