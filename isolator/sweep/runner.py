@@ -112,9 +112,7 @@ def _stop(pool: Executor) -> None:
     processes = getattr(pool, "_processes", None) or {}  # no public way to stop them before Python 3.14
     for process in list(processes.values()):
         process.terminate()
-    for process in list(processes.values()):
-        process.join(timeout=2.0)
-    pool.shutdown(wait=False, cancel_futures=True)
+    pool.shutdown(wait=True, cancel_futures=True)  # the pool sees its workers gone and ends
 
 
 def _serial(chunk: Chunk) -> ChunkResult:
