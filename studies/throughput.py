@@ -11,16 +11,9 @@ from __future__ import annotations
 import math
 
 from isolator import Response
+from isolator.simulation.window_settling import moves_per_hour
 
 __all__ = ["moves_per_hour", "window_cycle"]
-
-
-def moves_per_hour(move_time: float | None, window_settling: float | None) -> float | None:
-    """``3600 / (move_time + window_settling)`` [1/h]; None when either is unknown or the sum is not > 0."""
-    if move_time is None or window_settling is None:
-        return None
-    cycle = move_time + window_settling
-    return 3600.0 / cycle if math.isfinite(cycle) and cycle > 0 else None
 
 
 def window_cycle(response: Response) -> tuple[float | None, float | None]:
