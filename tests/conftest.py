@@ -127,3 +127,16 @@ def asymmetric_3d_dict(duration: float = 5.0) -> dict[str, Any]:
 @pytest.fixture
 def base() -> dict[str, Any]:
     return base_dict()
+
+
+def same_columns(a: dict[str, Any], b: dict[str, Any], rtol: float = 1e-12) -> None:
+    """Two sweeps' columns (``SweepResult.table()``) equal: the same names, text columns identical, numbers
+    to ``rtol`` (0: exactly), NaN where NaN."""
+    import numpy as np
+
+    assert list(a) == list(b)
+    for name in a:
+        if a[name].dtype == object:
+            assert a[name].tolist() == b[name].tolist(), name
+        else:
+            np.testing.assert_allclose(a[name], b[name], rtol=rtol, atol=0, equal_nan=True, err_msg=name)

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from conftest import same_columns
 from isolator import Simulator, load_scenario, run_sequence
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.window_settling import moves_per_hour
@@ -27,15 +28,6 @@ def window_scenario(folder: Path) -> Path:
     path = folder / "table-3-2-window.toml"
     path.write_text((DATA / "paper-table-3-2.toml").read_text() + WINDOW)
     return path
-
-
-def same(a: dict[str, np.ndarray], b: dict[str, np.ndarray]) -> None:
-    assert list(a) == list(b)
-    for name in a:
-        if a[name].dtype == object:
-            assert a[name].tolist() == b[name].tolist(), name
-        else:
-            np.testing.assert_allclose(a[name], b[name], rtol=1e-12, atol=0, equal_nan=True, err_msg=name)
 
 
 def test_the_band_columns_are_each_designs_band():
@@ -67,7 +59,7 @@ def test_pneumatic_rows_carry_the_settling_about_the_leveling_table_and_the_leve
         assert serial["leveling_time"][r] == pytest.approx(max(pneumatic.leveling_time.values()), abs=1e-12)
         assert serial["supply_exhausted"][r] == float(bool(pneumatic.supply_exhausted))
         np.testing.assert_allclose([serial[f"band:{s}"][r] for s in SIGNALS], run.band.half_widths, rtol=1e-12)
-    same(serial.table(), sweep("paper-table-3-2-pneumatic", scale=scale, workers=2, chunk_size=1).table())
+    same_columns(serial.table(), sweep("paper-table-3-2-pneumatic", scale=scale, workers=2, chunk_size=1).table())
 
 
 def test_window_rows_carry_window_settling_and_moves_per_hour(tmp_path):
@@ -86,7 +78,7 @@ def test_window_rows_carry_window_settling_and_moves_per_hour(tmp_path):
         assert result["moves_per_hour"][r] == pytest.approx(expected, rel=1e-12)
         assert result["settling_time_max"][r] == pytest.approx(run.settling_time_max, abs=1e-12)
     assert np.all(np.diff(result["window_settling_time_max"]) < 0)  # damping shortens the window settling
-    same(read_columns(out), sweep(path, scale=scale, workers=1).table())
+    same_columns(read_columns(out), sweep(path, scale=scale, workers=1).table())
 
 
 def test_sequence_rows_carry_total_time_throughput_and_the_step_that_did_not_settle():
@@ -104,7 +96,7 @@ def test_sequence_rows_carry_total_time_throughput_and_the_step_that_did_not_set
         assert result["throughput_per_hour"][r] == pytest.approx(one.throughput, rel=1e-12)
         assert np.isnan(result["unsettled_step"][r])
     assert result["throughput_per_hour"][1] > result["throughput_per_hour"][0]
-    same(result.table(), sweep(sc, scale=scale, workers=2, chunk_size=1).table())
+    same_columns(result.table(), sweep(sc, scale=scale, workers=2, chunk_size=1).table())
     short = sc.with_changes(simulation=replace(sc.simulation, duration=30.0))
     cut = sweep(short, scale={"isolators[*].damping": [0.5]}, workers=1)
     step = run_sequence(short, parameters=sim.scaled_parameters(1.0, 0.5)).unsettled
@@ -130,4 +122,4 @@ def test_a_sequence_sweep_is_judged_by_its_total_time_and_resumes(tmp_path):
     again = sweep("paper-table-3-2-sequence", scale=scale, workers=1, out=out, resume=True)
     assert again.tally.resumed == 1
     assert again.best() == best
-    same(again.table(), rows)
+    same_columns(again.table(), rows)
