@@ -1,5 +1,10 @@
 """Chunks out to an executor, results back in design order: a bounded number in flight (memory flat),
-a chunk that fails (its worker died, or it raised) retried once, then its rows recorded "failed"."""
+a chunk that fails (its worker died, or it raised) retried once, then its rows recorded "failed".
+
+When a worker of the sweep's own process pool dies, the pool is renewed; which of the chunks in flight
+killed it is unknown, so each of them is run again alone (one at a time), without charging it an attempt.
+A chunk that breaks the pool while it runs alone is the culprit: that counts as its attempt. Once the
+suspects are cleared the chunks are handed out as before."""
 
 from __future__ import annotations
 
@@ -51,23 +56,28 @@ def run_chunks(
     done : callable
         Called with each chunk's result, in order.
     renew : callable, optional
-        A fresh executor when the current one broke (a process pool whose worker died); None: the
-        chunks then fail.
+        A fresh executor when the current one broke (a process pool whose worker died): the chunks that
+        were in flight then run again alone, uncharged (see the module's description); None: a chunk
+        whose executor broke is retried like one that raised.
     """
     if executor is None:
         for chunk in chunks:
             done(_serial(chunk))
         return
-    pending: dict[Future[ChunkResult], tuple[Chunk, int, int]] = {}
+    pending: dict[Future[ChunkResult], tuple[Chunk, int, bool]] = {}  # chunk, attempt, run alone
     ready: dict[int, ChunkResult] = {}
     order: list[int] = []
-    generation = [0]
+    suspects: list[tuple[Chunk, int]] = []  # in flight when the pool broke: each to run alone
     pool = [executor]
 
-    def submit(chunk: Chunk, attempt: int) -> None:
-        pending[pool[0].submit(worker.run_chunk, chunk)] = (chunk, attempt, generation[0])
+    def submit(chunk: Chunk, attempt: int, alone: bool = False) -> None:
+        pending[pool[0].submit(worker.run_chunk, chunk)] = (chunk, attempt, alone)
 
     def fill() -> None:
+        if suspects:  # one at a time, so that a break is the running chunk's
+            if not pending:
+                submit(*suspects.pop(0), alone=True)
+            return
         while len(pending) + len(ready) < in_flight:
             chunk = next(chunks, None)
             if chunk is None:
@@ -75,25 +85,42 @@ def run_chunks(
             order.append(chunk.start)
             submit(chunk, 1)
 
+    def broke(chunk: Chunk, attempt: int) -> None:
+        """The pool broke while several chunks ran: a fresh pool, and each of them a suspect."""
+        suspects.append((chunk, attempt))
+        for future, (other, tries, _) in pending.items():
+            if future.done() and not future.cancelled() and future.exception() is None:
+                ready[other.start] = future.result()  # it finished before the break
+            else:
+                suspects.append((other, tries))
+        pending.clear()
+        suspects.sort(key=lambda s: s[0].start)
+
     try:
         fill()
         while pending:
             finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
             for future in finished:
-                chunk, attempt, born = pending.pop(future)
+                if future not in pending:  # dropped with its broken pool
+                    continue
+                chunk, attempt, alone = pending.pop(future)
                 try:
                     ready[chunk.start] = future.result()
                     continue
                 except Exception as exc:  # a chunk's failure is recorded, never the sweep's
                     error: BaseException = exc
-                if isinstance(error, BrokenProcessPool) and renew is not None and born == generation[0]:
+                if isinstance(error, BrokenProcessPool) and renew is not None:
                     pool[0].shutdown(wait=False, cancel_futures=True)
                     pool[0] = renew()
-                    generation[0] += 1
-                if attempt < ATTEMPTS:
-                    submit(chunk, attempt + 1)
-                else:
+                    if not alone:  # not known to be this chunk's doing: no attempt charged
+                        broke(chunk, attempt)
+                        continue
+                if attempt >= ATTEMPTS:
                     ready[chunk.start] = failed_result(chunk, error)
+                elif alone:
+                    suspects.insert(0, (chunk, attempt + 1))
+                else:
+                    submit(chunk, attempt + 1)
             while order and order[0] in ready:
                 done(ready.pop(order.pop(0)))
             fill()

@@ -4,6 +4,7 @@ recorded per row (a design that tips, a chunk that raises, a worker that dies), 
 from __future__ import annotations
 
 import functools
+import importlib
 import os
 import sys
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -139,6 +140,28 @@ def test_a_process_pool_whose_worker_died_is_renewed_and_nothing_lost(monkeypatc
     table = result.table()
     assert table["status"].tolist() == ["ok"] * 6  # every chunk in flight when the pool broke ran again
     same_columns(table, sweep(SCENARIO, scale=GRID, workers=1).table())
+
+
+def _always_dies(chunk: worker.Chunk) -> worker.ChunkResult:
+    """Kill the worker process whenever the chunk starting at design 0 comes."""
+    if chunk.start == 0:
+        os._exit(1)
+    return ORIGINAL(chunk)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="the patched task reaches the workers by fork")
+def test_a_chunk_that_always_kills_its_worker_fails_alone(monkeypatch):
+    damping = {"isolators[*].damping": [0.5 + 0.1 * i for i in range(12)]}
+    monkeypatch.setattr(importlib.import_module("isolator.sweep.worker"), "run_chunk", _always_dies)
+    result = sweep(SCENARIO, scale=damping, workers=2, chunk_size=2)
+    monkeypatch.setattr(importlib.import_module("isolator.sweep.worker"), "run_chunk", ORIGINAL)
+    table = result.table()
+    assert table["status"].tolist() == ["failed"] * 2 + ["ok"] * 10  # the chunks in flight with it were spared
+    assert table["reason"][0].startswith("after 2 attempts: the worker died")
+    assert table["design"].tolist() == list(range(12))
+    serial = sweep(SCENARIO, scale=damping, workers=1).table()
+    np.testing.assert_allclose(table["settling_time_max"][2:], serial["settling_time_max"][2:], rtol=1e-9)
+    np.testing.assert_allclose(table["peak:z"][2:], serial["peak:z"][2:], rtol=1e-9)
 
 
 def test_transmissibility_and_modes_per_design():
