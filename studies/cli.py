@@ -190,7 +190,8 @@ def _robustness(args: argparse.Namespace) -> int:
     for name, m in study.methods.items():
         print(f"{name:>10}: settling P50 {m.percentile(50):.3g} s, P95 {m.percentile(95):.3g} s, "
               f"worst {m.worst:.3g} s")
-    top = ", ".join(f"{n} ({rho:+.2f})" for n, rho in study.ranking()[:3])
+    ranked = [(n, rho) for n, rho in study.ranking()[:3] if not math.isnan(rho)]
+    top = ", ".join(f"{n} ({rho:+.2f})" for n, rho in ranked) or "too few machines to rank the tolerances"
     print(f"matters most: {top}")
     print(f"report: {args.out / 'report.md'}")
     return 0

@@ -9,13 +9,13 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.stats import spearmanr
+from scipy.stats import rankdata, spearmanr
 
 from isolator import Band, Scenario
 
 from .tolerances import Varied
 
-__all__ = ["MethodSpread", "RobustnessStudy"]
+__all__ = ["MethodSpread", "RobustnessStudy", "upper_percentile"]
 
 
 @dataclass(frozen=True)
@@ -26,21 +26,32 @@ class MethodSpread:
     ----------
     name : str
     nominal : float or None
-        On the nominal machine [s].
+        Settling time on the nominal machine [s].
     settling_time : ndarray (samples,)
         Largest settling time per machine [s]; NaN where a run tips, diverges or does not settle in time.
+    move_time : float
+        The method's move, from the command to the stop [s] (prescribed: the same on every machine; a
+        shaped move is longer than the paper's).
     """
 
     name: str
     nominal: float | None
     settling_time: np.ndarray
+    move_time: float = 0.0
 
-    def percentile(self, q: float) -> float:
-        """The ``q``-th percentile [s] over the machines, counting a machine without a settling time as
-        slower than any (NaN when more than ``100 - q`` % have none)."""
-        values = np.where(np.isnan(self.settling_time), np.inf, self.settling_time)
-        value = float(np.percentile(values, q, method="higher"))
-        return value if math.isfinite(value) else math.nan
+    @property
+    def cycle_time(self) -> np.ndarray:
+        """Move + settling per machine [s]; inf where the machine has no settling time."""
+        return np.where(np.isnan(self.settling_time), np.inf, self.move_time + self.settling_time)
+
+    def percentile(self, q: float, of: str = "settling") -> float:
+        """The ``q``-th percentile [s] of the settling (``of="settling"``) or cycle time (``"cycle"``) over
+        the machines: the upper order statistic (the smallest value at least ``q`` % of the machines do not
+        exceed; numpy's ``method="higher"``, so with few machines P95 is the worst), a machine without a
+        settling time counted as slower than any (NaN when the percentile falls on one)."""
+        values = self.cycle_time if of == "cycle" else np.where(np.isnan(self.settling_time), np.inf,
+                                                                 self.settling_time)
+        return upper_percentile(values, q)
 
     @property
     def worst(self) -> float:
@@ -51,6 +62,17 @@ class MethodSpread:
     def failed(self) -> int:
         """How many machines have no settling time."""
         return int(np.isnan(self.settling_time).sum())
+
+
+def upper_percentile(values: np.ndarray, q: float) -> float:
+    """The ``q``-th percentile of ``values`` as the upper order statistic (numpy ``method="higher"``),
+    NaN entries left out; NaN when none is left or the percentile is infinite."""
+    known = np.asarray(values, dtype=float)
+    known = known[~np.isnan(known)]
+    if not known.size:
+        return math.nan
+    value = float(np.percentile(known, q, method="higher"))
+    return value if math.isfinite(value) else math.nan
 
 
 @dataclass(frozen=True)
@@ -79,22 +101,23 @@ class RobustnessStudy:
     folder: Path
 
     def benefit(self, name: str) -> np.ndarray:
-        """Per machine, how much sooner [s] method ``name`` settles than the paper profile (NaN where
-        either has no settling time)."""
-        return self.methods["paper"].settling_time - self.methods[name].settling_time
+        """Per machine, how much shorter [s] the cycle (move + settling) of method ``name`` is than the paper
+        profile's: a longer shaped move counts against it. +inf where only the paper profile does not
+        settle, -inf where only the method does not, NaN where neither does."""
+        with np.errstate(invalid="ignore"):
+            return self.methods["paper"].cycle_time - self.methods[name].cycle_time
 
     def sensitivity(self, name: str) -> np.ndarray:
-        """Spearman's rank correlation of each varied parameter with method ``name``'s settling time
-        (machines without one left out; NaN where a column does not vary)."""
-        y = self.methods[name].settling_time
-        keep = ~np.isnan(y)
+        """Spearman's rank correlation of each varied parameter with method ``name``'s settling time, a
+        machine without one ranked slowest (NaN where a column or the times do not vary)."""
+        y = rankdata(np.where(np.isnan(self.methods[name].settling_time), np.inf, self.methods[name].settling_time))
         rho = np.full(len(self.varied), np.nan)
-        if keep.sum() < 3:
+        if y.size < 3 or np.ptp(y) == 0:
             return rho
         for j in range(len(self.varied)):
-            x = self.samples[keep, j]
-            if np.ptp(x) > 0 and np.ptp(y[keep]) > 0:
-                rho[j] = float(spearmanr(x, y[keep]).statistic)
+            x = self.samples[:, j]
+            if np.ptp(x) > 0:
+                rho[j] = float(spearmanr(x, y).statistic)
         return rho
 
     def ranking(self, name: str = "paper") -> list[tuple[str, float]]:
@@ -113,23 +136,21 @@ class RobustnessStudy:
             "methods": {},
         }
         for name, m in self.methods.items():
-            entry: dict[str, Any] = {"nominal": m.nominal, "p50": _none(m.percentile(50)),
-                                     "p95": _none(m.percentile(95)), "worst": _none(m.worst), "failed": m.failed,
+            entry: dict[str, Any] = {"nominal": m.nominal, "move_time": m.move_time,
+                                     "p50": _none(m.percentile(50)), "p95": _none(m.percentile(95)),
+                                     "worst": _none(m.worst), "failed": m.failed,
+                                     "cycle_p50": _none(m.percentile(50, "cycle")),
+                                     "cycle_p95": _none(m.percentile(95, "cycle")),
                                      "sensitivity": dict(self.ranking(name))}
             if name != "paper":
                 b = self.benefit(name)
-                entry["benefit"] = {"p5": _none(_nanpct(b, 5)), "p50": _none(_nanpct(b, 50)),
-                                    "p95": _none(_nanpct(b, 95)),
-                                    "better_share": float(np.mean(b[~np.isnan(b)] > 0)) if np.any(~np.isnan(b))
-                                    else None}
+                known = b[~np.isnan(b)]
+                entry["benefit"] = {"p5": _none(upper_percentile(b, 5)), "p50": _none(upper_percentile(b, 50)),
+                                    "p95": _none(upper_percentile(b, 95)),
+                                    "better_share": float(np.mean(known > 0)) if known.size else None}
             out["methods"][name] = entry
         return out
 
 
 def _none(value: float) -> float | None:
     return None if math.isnan(value) else value
-
-
-def _nanpct(values: np.ndarray, q: float) -> float:
-    known = values[~np.isnan(values)]
-    return float(np.percentile(known, q)) if known.size else math.nan

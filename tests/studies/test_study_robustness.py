@@ -178,3 +178,27 @@ def test_robustness_command_bad_options(tmp_path, capsys, options, match):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1
     assert match in err[0]
+
+
+def test_the_benefit_is_in_cycle_time_and_failures_rank_slowest():
+    rng = np.random.default_rng(1)
+    samples = np.column_stack([rng.uniform(0.8, 1.2, 40), rng.uniform(0.95, 1.05, 40)])
+    paper = np.full(40, 2.0)
+    paper[samples[:, 0] < 0.85] = np.nan  # the least damped machines do not settle with the paper profile
+    shaped = np.full(40, 0.5)
+    study = _study(samples, {"paper": paper, "ZVD": shaped})
+    study.methods["paper"] = MethodSpread("paper", 2.0, paper, move_time=7.4)
+    study.methods["ZVD"] = MethodSpread("ZVD", 0.5, shaped, move_time=7.7)
+    benefit = study.benefit("ZVD")
+    settled = ~np.isnan(paper)
+    assert np.allclose(benefit[settled], (7.4 + 2.0) - (7.7 + 0.5))  # 1.2 s, not the 1.5 s of settling alone
+    assert np.all(np.isposinf(benefit[~settled]))  # a machine the paper profile never settles on
+    assert study.methods["paper"].percentile(50, "cycle") == pytest.approx(9.4)
+    # the damping decides which machines fail: it ranks first though those machines have no settling time
+    assert study.ranking("paper")[0][0] == "isolators[0].damping"
+    assert study.ranking("paper")[0][1] < -0.5
+
+
+def test_the_robustness_study_refuses_a_sequence(tmp_path, capsys):
+    assert main(["study", "robustness", "paper-table-3-2-sequence", "--out", str(tmp_path / "r")]) == 2
+    assert "robustness study varies a single move" in capsys.readouterr().err
