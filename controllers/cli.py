@@ -56,7 +56,7 @@ def register(sub: Any) -> None:
     opt.add_argument("--out", type=Path, metavar="OPTIMISED.toml", help="write the scenario with the optimised "
                      "profiles")
     opt.add_argument("--json", action="store_true", help="print JSON instead of text")
-    opt.add_argument("--samples", type=int, default=32, metavar="N",
+    opt.add_argument("--samples", type=int, default=None, metavar="N",
                      help="with a [sequence]: designs tried per distinct move and profile family in the first "
                      "round (default 32)")
 
@@ -97,6 +97,8 @@ def _optimise_profile(args: argparse.Namespace) -> int:
     check_run_memory(scenario)
     if scenario.sequence is not None:
         return _optimise_sequence(args, scenario, out)
+    if args.samples is not None:
+        raise ParameterError("--samples: designs the steps of a [sequence]; this scenario has none (leave it out)")
     settings = ProfileSettings(
         objective=args.objective, transcription=args.transcription, shape=args.shape,
         max_move_time_increase=args.max_move_time_increase,
@@ -137,9 +139,10 @@ def _optimise_sequence(args: argparse.Namespace, scenario: Scenario, out: Path |
             option = "--" + name.replace("_", "-")
             raise ParameterError(f"{option}: designs a single move; a scenario with a [sequence] is designed for "
                                  "its total time (leave the option out)")
-    if args.samples < 2:
-        raise ParameterError(f"--samples: must be a whole number >= 2, got {args.samples}")
-    result = optimise_sequence(scenario, samples=args.samples, progress=not args.json)
+    samples = 32 if args.samples is None else args.samples
+    if samples < 2:
+        raise ParameterError(f"--samples: must be a whole number >= 2, got {samples}")
+    result = optimise_sequence(scenario, samples=samples, progress=not args.json)
     if out:
         write_sequence_scenario(args.scenario, result.scenario, out)
     return report(args.json, result.to_dict(), result.summary(), [("optimised scenario", out)])

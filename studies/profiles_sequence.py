@@ -4,8 +4,8 @@
 method moves the same steps and is judged by the same window rule on the exact time-varying model
 (:func:`isolator.simulation.sequence.run_sequence`):
 
-* ``S-curve at the limits``: the sequence as written (each step a seven-segment S-curve at the carriages'
-  limits);
+* ``S-curve at the limits``: each step a seven-segment S-curve at the carriages' limits (per-step limits,
+  delays and shapers of the file left out: an optimised sequence is compared from where it started);
 * ``time-optimal (ruckig)``: ruckig's jerk-limited time-optimal move per step (for rest-to-rest moves it is
   the S-curve at the limits: the two agree, a check of both);
 * ``ZV`` and ``ZVD``: the S-curves convolved with input shapers tuned per step to the mode the carriage
@@ -21,7 +21,7 @@ file, ``scenarios/optimised.toml`` (the optimised sequence, for ``isolator seque
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -31,6 +31,7 @@ import numpy as np
 from controllers.profiles.sequence_baselines import shaped_moves, time_optimal_moves
 from controllers.profiles.sequence_design import SequenceOptimisation, optimise_sequence, write_sequence_scenario
 from isolator import Scenario, ScenarioError
+from isolator.scenario.sequence import Move, Step
 from isolator.simulation.sequence import SequenceResult, run_sequence
 
 from .figures import save_figure
@@ -110,6 +111,7 @@ def run_sequence_profile_study(
         raise ScenarioError("sequence: the sequence study needs a scenario with a [sequence]")
     out = output_folder(folder)
     say = progress_printer(progress)
+    scenario = _at_the_limits(scenario)
     runs: dict[str, SequenceResult] = {}
     say("sequence: the S-curves at the limits, ruckig's time-optimal moves, ZV and ZVD ...")
     runs[_BASELINE] = run_sequence(scenario)
@@ -131,6 +133,15 @@ def run_sequence_profile_study(
     save_figure(fig, out / "sequence.png")
     _write_report(study)
     return study
+
+
+def _at_the_limits(scenario: Scenario) -> Scenario:
+    """The scenario with every step a plain target (the S-curve at the carriages' limits): a sequence
+    written with per-step limits, delays or shapers (an optimised one) is compared from where it started."""
+    seq = scenario.sequence
+    assert seq is not None
+    steps = tuple(Step(tuple((name, Move(move.target)) for name, move in step.moves)) for step in seq.steps)
+    return replace(scenario, sequence=replace(seq, steps=steps))
 
 
 def _plot_throughput(study: SequenceProfileStudy) -> None:
