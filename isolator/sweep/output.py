@@ -151,9 +151,14 @@ def done_designs(path: Path, columns: Sequence[str], names: Sequence[str], value
     done = np.zeros(values.shape[0], dtype=bool)
     if not staging.exists():
         if path.exists():  # a finished .parquet
-            table = read_columns(path)
-            _check_header(path, list(table), columns)
-            done[table["design"].astype(int)] = True
+            from pyarrow import parquet
+
+            _check_header(path, parquet.read_schema(path).names, columns)
+            table = read_columns(path, ["design", *names])
+            got = np.column_stack([table[n] for n in names]) if names else np.zeros((table["design"].size, 0))
+            for i, row in zip(table["design"], got, strict=True):
+                _check_row(path, i, row, values)
+                done[int(i)] = True
         return done
     raw = staging.read_bytes()
     if raw and not raw.endswith(b"\n"):  # the last row was cut short
@@ -167,13 +172,20 @@ def done_designs(path: Path, columns: Sequence[str], names: Sequence[str], value
     _check_header(path, header, columns)
     at = header.index("design")
     for row in rows:
-        i = int(float(row[at]))
-        got = np.array([float(v) for v in row[: len(names)]])
-        if not 0 <= i < done.size or not np.array_equal(got, values[i]):
-            raise ParameterError(f"out: '{path}' holds another sweep's rows (design {i} differs); "
-                                 "--force (force=True) starts again")
-        done[i] = True
+        i = float(row[at])
+        _check_row(path, i, np.array([float(v) for v in row[: len(names)]]), values)
+        done[int(i)] = True
     return done
+
+
+def _check_row(path: Path, design: float, got: np.ndarray, values: np.ndarray) -> None:
+    """A row's design index is one of this sweep's and its swept values are that design's."""
+    if not (design.is_integer() and 0 <= design < values.shape[0]):
+        raise ParameterError(f"out: '{path}' holds another sweep's rows (design {design:g} is not one of this "
+                             f"sweep's {values.shape[0]}); --force (force=True) starts again")
+    if not np.array_equal(got, values[int(design)]):
+        raise ParameterError(f"out: '{path}' holds another sweep's rows (design {int(design)} differs); "
+                             "--force (force=True) starts again")
 
 
 def _check_header(path: Path, header: Sequence[str], columns: Sequence[str]) -> None:

@@ -111,3 +111,21 @@ def test_existing_output_and_extensions(tmp_path: Path, capsys):
     assert status == 2
     assert len(err) == 1
     assert "not allowed with argument" in err[0]
+
+
+def test_resume_of_a_finished_parquet_checks_its_designs(tmp_path: Path, capsys):
+    pytest.importorskip("pyarrow")
+    out = tmp_path / "rows.parquet"
+    first = ["sweep", "--scale", "isolators[*].stiffness=0.5:2:4", "--out", str(out), "--workers", "1"]
+    assert run(first, capsys)[0] == 0
+    status, text, err = run([*first, "--resume"], capsys)
+    assert status == 0, err
+    assert "4 from the file" in text
+    for values, named in (("3:5:4", "design 0 differs"), ("3:5:2", "design 0 differs"),
+                          ("0.5,1", "design 2 is not one of this sweep's 2")):
+        status, _, err = run(["sweep", "--scale", f"isolators[*].stiffness={values}", "--out", str(out),
+                              "--workers", "1", "--resume"], capsys)
+        assert status == 2
+        assert len(err) == 1, err
+        assert "holds another sweep's rows" in err[0], err
+        assert named in err[0], err
