@@ -8,17 +8,14 @@ throughput (:class:`isolator.SequenceResult`).
 
 from __future__ import annotations
 
-import math
-
 from isolator import Response
-from isolator.simulation.window_settling import moves_per_hour
 
-__all__ = ["moves_per_hour", "window_cycle"]
+__all__ = ["window_cycle"]
 
 
 def window_cycle(response: Response) -> tuple[float | None, float | None]:
-    """A run's largest window settling time [s] and moves per hour (None, None without ``[[windows]]``)."""
-    if response.windows is None or not math.isfinite(response.stop_time):
+    """A run's largest window settling time [s] and moves per hour (:attr:`Response.moves_per_hour`);
+    (None, None) without ``[[windows]]``."""
+    if response.windows is None:
         return None, None
-    settle = response.window_settling_time_max
-    return settle, moves_per_hour(response.stop_time - response.move_start, settle)
+    return response.window_settling_time_max, response.moves_per_hour

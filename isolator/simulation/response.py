@@ -15,7 +15,7 @@ from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
 from isolator.simulation.settling import Band, SettlingResult
-from isolator.simulation.window_settling import WindowResult, plot_windows
+from isolator.simulation.window_settling import WindowResult, moves_per_hour, plot_windows
 
 __all__ = ["Response"]
 
@@ -134,6 +134,14 @@ class Response:
     def window_settling_time_max(self) -> float | None:
         """The largest window settling time [s]; None without windows or when one is not shown."""
         return None if self.windows is None else self.windows.settling_time_max
+
+    @property
+    def moves_per_hour(self) -> float | None:
+        """Moves per hour [1/h] of a machine repeating this move and waiting after each until every window
+        holds: ``3600 / (stop_time - move_start + window_settling_time_max)``; None without windows."""
+        if self.windows is None or not math.isfinite(self.stop_time):
+            return None
+        return moves_per_hour(self.stop_time - self.move_start, self.window_settling_time_max)
 
     def plot_windows(self, title: str = "") -> Any:
         """Each window's point deviation from its settled position against time, the window shaded.

@@ -17,7 +17,6 @@ from isolator.simulation.sequence import run_sequence
 from isolator.simulation.settling import Band
 from isolator.simulation.simulator import Simulator
 from isolator.simulation.stepping import MAX_TURN
-from isolator.simulation.window_settling import moves_per_hour
 
 __all__ = ["PNEUMATIC_COLUMNS", "SEQUENCE_COLUMNS", "WINDOW_COLUMNS", "Runs", "metric_columns", "run_each",
            "run_each_sequence", "runs_alone"]
@@ -88,9 +87,7 @@ def _single_metrics(scenario: Scenario, response: Response) -> list[float]:
                 max(known) if known and len(known) == len(levels) else math.nan,
                 1.0 if pneumatic.supply_exhausted else 0.0]
     if scenario.windows:
-        settle = response.window_settling_time_max
-        per_hour = moves_per_hour(response.stop_time - response.move_start, settle)
-        out += [_number(settle), _number(per_hour)]
+        out += [_number(response.window_settling_time_max), _number(response.moves_per_hour)]
     return out
 
 

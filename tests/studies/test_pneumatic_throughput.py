@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from isolator import Simulator, load_scenario
+from isolator.simulation.window_settling import moves_per_hour
 from studies.pneumatic import default_diameters, run_pneumatic_study
-from studies.throughput import moves_per_hour
 
 DATA = Path(__file__).resolve().parents[2] / "isolator" / "data" / "scenarios"
 # +-50 um: the window is about the final level rest, and the valves' deadband is 20 um (a narrower window

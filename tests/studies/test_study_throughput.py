@@ -11,7 +11,8 @@ import tomli_w
 from isolator import Simulator, load_scenario
 from isolator.cli.app import main
 from isolator.scenario.reader import resolve_scenario_path
-from studies.throughput import moves_per_hour, window_cycle
+from isolator.simulation.window_settling import moves_per_hour
+from studies.throughput import window_cycle
 
 
 def _with_window(source: str, path, half_width: float):

@@ -12,8 +12,8 @@ import pytest
 
 from isolator import Simulator, load_scenario, run_sequence
 from isolator.scenario.definitions import SIGNALS
+from isolator.simulation.window_settling import moves_per_hour
 from isolator.sweep import build_designs
-from studies.throughput import moves_per_hour
 from studies.tradeoff import run_tradeoff_study, tradeoff_sweep
 from studies.tradeoff_pneumatic import pneumatic_scales
 
