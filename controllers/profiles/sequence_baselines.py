@@ -15,9 +15,9 @@ in the step's local time.
 from __future__ import annotations
 
 from dataclasses import replace
-from functools import cache
+from functools import lru_cache
 
-from isolator.errors import ScenarioError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import MotionLimits, Scenario
 from isolator.scenario.profile_shapes import scurve, shaped
 from isolator.scenario.profiles import Profile
@@ -36,13 +36,15 @@ def shaped_moves(scenario: Scenario, kind: str = "zvd") -> MoveDesign:
     Raises
     ------
     ScenarioError
-        The scenario has no ``[sequence]``, or ``kind`` is unknown.
+        The scenario has no ``[sequence]``.
+    ParameterError
+        ``kind`` is unknown.
     """
     sequence = scenario.sequence
     if sequence is None:
         raise ScenarioError("sequence: shaped moves are designed for a [sequence]")
     if kind not in SHAPERS:
-        raise ScenarioError(f"kind: one of {', '.join(SHAPERS)}, got {kind!r}")
+        raise ParameterError(f"kind: must be one of {', '.join(SHAPERS)}, got {kind!r}")
     names = [c.name for c in scenario.carriages]
     configurations = sequence.configurations(names)
 
@@ -68,7 +70,7 @@ def dominant_mode(scenario: Scenario, carriage: int, parked: tuple[float, ...]) 
     return _dominant(scenario, carriage, tuple(map(float, parked)))
 
 
-@cache
+@lru_cache(maxsize=64)
 def _dominant(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> ExcitedMode:
     at_rest = replace(scenario, carriages=tuple(replace(c, profile=held(q))
                                                 for c, q in zip(scenario.carriages, parked, strict=True)))

@@ -312,7 +312,9 @@ def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray,
 
 def _scaled(limit: float | None, fraction: float) -> float:
     """``fraction`` of ``limit``, never above it (a fraction of 1 gives the limit itself)."""
-    assert limit is not None  # a sequence's carriages have full limits (checked on reading)
+    if limit is None:  # the reader refuses a sequence's carriage without full limits; a hand-built one may not
+        raise ScenarioError("carriages.limits: a carriage a [sequence] moves needs velocity, acceleration and jerk "
+                            "limits")
     return float(limit) if fraction >= 1.0 else min(float(limit), float(limit) * float(fraction))
 
 
