@@ -1,22 +1,25 @@
 """A sweep's rows written as they arrive: CSV, or Parquet when the path ends in ``.parquet`` (rows go to a
 CSV beside it, ``<out>.partial.csv``, turned into Parquet when the sweep ends, so that an interrupted
-sweep leaves a readable file either way); read back, column by column; resumed from what is on disk."""
+sweep leaves a readable file either way); read back, column by column; resumed from what is on disk, the
+sweep that wrote it named in a sidecar ``<out>.sweep.json`` (:func:`check_sidecar`)."""
 
 from __future__ import annotations
 
 import csv
+import json
 import math
 import os
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.scenario.definitions import SIGNALS
 
-__all__ = ["SUFFIXES", "TEXT_COLUMNS", "RowSink", "check_format", "column_names", "done_designs", "read_columns",
-           "staging_path"]
+__all__ = ["SUFFIXES", "TEXT_COLUMNS", "RowSink", "check_format", "check_sidecar", "column_names", "done_designs",
+           "read_columns", "sidecar_path", "staging_path", "write_sidecar"]
 
 #: the output formats, by extension
 SUFFIXES = (".csv", ".parquet")
@@ -192,3 +195,47 @@ def _check_header(path: Path, header: Sequence[str], columns: Sequence[str]) -> 
     if list(header) != list(columns):
         raise ParameterError(f"out: '{path}' holds other columns than this sweep's ({', '.join(header[:4])}, ...); "
                              "--force (force=True) starts again")
+
+
+def sidecar_path(path: Path) -> Path:
+    """Where the sweep that writes ``path`` is described: ``<out>.sweep.json``."""
+    return path.with_name(path.name + ".sweep.json")
+
+
+def _plain(identity: Mapping[str, Any]) -> dict[str, Any]:
+    """As JSON gives it back (tuples as lists)."""
+    return dict(json.loads(json.dumps(dict(identity))))
+
+
+def write_sidecar(path: Path, identity: Mapping[str, Any]) -> None:
+    """Describe the sweep that writes ``path`` (JSON beside it), replacing any description there."""
+    sidecar = sidecar_path(path)
+    temporary = sidecar.with_name(sidecar.name + ".tmp")
+    temporary.write_text(json.dumps(_plain(identity), indent=1) + "\n", encoding="utf-8")
+    os.replace(temporary, sidecar)
+
+
+def check_sidecar(path: Path, identity: Mapping[str, Any]) -> None:
+    """For ``resume``: the sweep described beside ``path`` must be this one (a file without a description,
+    written before there were any, is taken as it is).
+
+    Raises
+    ------
+    ParameterError
+        One line naming what differs (the scenario, the model, the band, the sampling, the extras).
+    """
+    sidecar = sidecar_path(path)
+    if not sidecar.exists():
+        return
+    try:
+        stored = json.loads(sidecar.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise ParameterError(f"out: cannot read '{sidecar}' ({exc}); --force (force=True) starts again") from None
+    wanted = _plain(identity)
+    differ = [k for k in wanted if not isinstance(stored, dict) or stored.get(k) != wanted[k]]
+    if differ:
+        if "model" in differ and "scenario_key" in differ:  # the hash is of the scenario and the model
+            differ.remove("scenario_key")
+        shown = ", ".join("the scenario" if k == "scenario_key" else k for k in differ)
+        raise ParameterError(f"out: '{path}' was written by another sweep (it differs in: {shown}; see "
+                             f"'{sidecar.name}'); --force (force=True) starts again")

@@ -19,6 +19,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import load_scenario
 from isolator.simulation.settling import Band
+from isolator.sweep import output
 from isolator.sweep.designs import Designs, Values, build_designs
 from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
@@ -99,9 +100,16 @@ def sweep(
         Write the rows as they arrive, ``.csv`` or ``.parquet`` (needs pyarrow); the result then reads
         its columns back from the file (memory flat in the number of designs).
     resume : bool
-        Continue the sweep whose rows ``out`` holds (designs already there are skipped).
+        Continue the sweep whose rows ``out`` holds (designs already there are skipped). A sweep describes
+        itself beside ``out`` in ``<out>.sweep.json`` when it starts: the :func:`~isolator.sweep.worker.scenario_key`
+        hash of the scenario and model, the model, the band (:meth:`Band.to_dict`, null: the scenario's
+        rule), the sampling (``samples``, ``method`` and ``seed`` when sampled, ``zip``), ``frequencies``
+        and ``modes``; a resume that differs in any is refused, naming what differs (a file without the
+        description, from an older version, is resumed as it is). The file's columns and each row's swept
+        values must also be this sweep's.
     force : bool
-        Overwrite ``out`` (without ``resume`` or ``force`` an existing ``out`` is an error).
+        Overwrite ``out`` and its description (without ``resume`` or ``force`` an existing ``out`` is an
+        error).
     progress : bool
         A progress bar on stderr (only when it is a terminal).
     chunk_size : int, optional
@@ -150,6 +158,10 @@ def sweep(
     columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metrics)
     path = None if out is None else Path(out)
     done = np.zeros(designs.count, dtype=bool)
+    key = scenario_key(scene, model)
+    identity = {"scenario_key": key, "model": model, "band": None if band is None else band.to_dict(),
+                "samples": samples, "method": None if samples is None else method,
+                "seed": None if samples is None else seed, "zip": zip, "frequencies": freqs, "modes": n_modes}
     if path is not None:
         check_format(path)
         if resume and force:
@@ -159,6 +171,7 @@ def sweep(
             raise ParameterError(f"out: '{path}' exists; resume=True (--resume) continues it, force=True "
                                  "(--force) overwrites it")
         if exists and resume:
+            output.check_sidecar(path, identity)
             done = done_designs(path, columns, designs.names, designs.values)
             on_disk = read_columns(path, [best_by, "status", "design"])
     tally = Tally(designs.count, int(np.sum(done)), column=best_by,
@@ -171,10 +184,11 @@ def sweep(
             return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
     n_workers = _workers(workers, executor)
     size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
-    key = scenario_key(scene, model)
     swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
     template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
     simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
+    if path is not None:
+        output.write_sidecar(path, identity)
     sink = None if path is None else RowSink(path, columns, append=resume)
     if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
         path.unlink()

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
@@ -9,6 +10,7 @@ import pytest
 
 from conftest import same_columns
 from isolator.errors import ParameterError
+from isolator.simulation.settling import Band
 from isolator.sweep import sweep, worker
 
 SCENARIO = "paper-table-3-2"
@@ -54,6 +56,29 @@ def test_resume_refuses_another_sweeps_file(tmp_path: Path):
         sweep(SCENARIO, scale={**GRID, "isolators[*].stiffness": [0.6, 1.1, 1.7]}, workers=1, out=out, resume=True)
     forced = sweep(SCENARIO, scale={"isolators[*].stiffness": [1.0]}, set={}, workers=1, out=out, force=True)
     assert len(forced["design"]) == 1
+
+
+def test_resume_refuses_a_file_of_another_scenario_model_or_band(tmp_path: Path):
+    out, scale = tmp_path / "rows.csv", {"isolators[*].damping": [0.5, 1.0]}
+    sweep("paper-table-3-2", scale=scale, workers=1, out=out)
+    sidecar = tmp_path / "rows.csv.sweep.json"
+    described = json.loads(sidecar.read_text())
+    assert described["model"] == "exact"
+    assert described["band"] is None
+    assert described["frequencies"] == []
+    for kwargs, named in (({"scenario": "paper-table-3-1"}, "differs in: the scenario;"),
+                          ({"model": "paper"}, "differs in: model;"),
+                          ({"band": Band("absolute", None, None, (1e-6,) * 6)}, "differs in: band;"),
+                          ({"frequencies": [10.0], "modes": True}, "differs in: frequencies, modes;")):
+        with pytest.raises(ParameterError, match="was written by another sweep") as caught:
+            sweep(**{"scenario": "paper-table-3-2", **kwargs}, scale=scale, workers=1, out=out, resume=True)
+        assert named in str(caught.value)
+    forced = sweep("paper-table-3-1", scale=scale, workers=1, out=out, force=True)  # --force: a new description
+    assert sidecar.exists()
+    assert sweep("paper-table-3-1", scale=scale, workers=1, out=out, resume=True).tally.resumed == 2
+    sidecar.unlink()  # a file from before the description: resumed as it is
+    assert sweep("paper-table-3-2", scale=scale, workers=1, out=out, resume=True).tally.resumed == 2
+    assert forced.tally.runs == 2
 
 
 def test_bad_output_paths(tmp_path: Path):
