@@ -1,9 +1,10 @@
-"""A sweep's figure: the largest settling time against the swept values (``isolator sweep --plot``).
+"""A sweep's figure: the largest settling time against the swept values (``isolator sweep --plot``); for a
+scenario with a ``[sequence]`` (whose 5 % settling columns are NaN by design) its total time instead.
 
 Two crossed names (a grid): one line per value of the first name (the outer one) against the second; any
 other sweep: one panel per swept name (at most four), every design a dot. Designs that did not give a
-settling time (tipped, diverged, refused, invalid, failed, or not settled within the run) are marked with
-a red cross along the top of each panel, so a gap in the curve says why it is there.
+settling time (tipped, diverged, refused, invalid, failed, or not settled within the run), or no total
+time, are marked with a red cross along the top of each panel, so a gap in the curve says why it is there.
 """
 
 from __future__ import annotations
@@ -32,7 +33,7 @@ def plot_sweep(result: SweepResult, title: str = "", grid: bool | None = None,
     ----------
     result : SweepResult
     title : str
-        Above the panels (default: the number of designs and how many gave no settling time).
+        Above the panels (default: the number of designs and how many gave no value to plot).
     grid : bool, optional
         Whether the designs are a crossed grid (lines per outer value); default: two names whose values
         cross completely.
@@ -42,17 +43,21 @@ def plot_sweep(result: SweepResult, title: str = "", grid: bool | None = None,
     import matplotlib.pyplot as plt
 
     table = result.table()
-    y = np.asarray(table["settling_time_max"], dtype=float)
+    sequence = "total_time" in result.columns  # the column ``best`` judges by (sweep.py)
+    y = np.asarray(table["total_time" if sequence else "settling_time_max"], dtype=float)
+    what = "total time" if sequence else "settling time"
+    y_label = "total time of the sequence [s]" if sequence else "largest settling time after the stop [s]"
     status = np.asarray(table["status"], dtype=object)
     names = list(result.names)
     label = {n: (labels or {}).get(n, n) for n in names}
     bad = ~np.isfinite(y)
     why = sorted({"not settled within the run" if s == "ok" else str(s) for s in status[bad]})
-    heading = title or f"{len(y)} designs, {int(bad.sum())} without a settling time ({', '.join(why) or 'none'})"
+    heading = title or f"{len(y)} designs, {int(bad.sum())} without a {what} ({', '.join(why) or 'none'})"
     crossed = _crossed(table, names) if grid is None else grid
     if crossed:
         fig, ax = plt.subplots(figsize=(8.5, 5), constrained_layout=True)
         _grid_panel(ax, table, names, y, bad, label)
+        _failures(ax, np.asarray(table[names[1]], dtype=float), bad, y, what)
         axes = [ax]
     else:
         shown = names[:MAX_PANELS]
@@ -62,10 +67,10 @@ def plot_sweep(result: SweepResult, title: str = "", grid: bool | None = None,
         for ax, name in zip(axes, shown, strict=True):
             x = np.asarray(table[name], dtype=float)
             ax.plot(x[~bad], y[~bad], "o", ms=3, alpha=0.7, color="tab:blue", label="designs")
-            _failures(ax, x, bad, y)
+            _failures(ax, x, bad, y, what)
             ax.set_xlabel(label[name])
             _log_if_wide(ax, x)
-        axes[0].set_ylabel("largest settling time after the stop [s]")
+    axes[0].set_ylabel(y_label)
     for ax in axes:
         ax.grid(True, alpha=0.3)
         if ax.get_legend_handles_labels()[0]:
@@ -92,19 +97,17 @@ def _grid_panel(ax: Any, table: dict[str, np.ndarray], names: list[str], y: np.n
         pick = (outer == level) & ~bad
         order = np.argsort(inner[pick])
         ax.plot(inner[pick][order], y[pick][order], "o-", ms=3, lw=1.3, color=colour, label=f"{level:.4g}")
-    _failures(ax, inner, bad, y)
     ax.set_xlabel(label[names[1]])
-    ax.set_ylabel("largest settling time after the stop [s]")
     _log_if_wide(ax, inner)
 
 
-def _failures(ax: Any, x: np.ndarray, bad: np.ndarray, y: np.ndarray) -> None:
-    """Red crosses along the top for the designs without a settling time."""
+def _failures(ax: Any, x: np.ndarray, bad: np.ndarray, y: np.ndarray, what: str) -> None:
+    """Red crosses along the top for the designs without a value (a settling or total time)."""
     if not bad.any():
         return
     known = y[~bad]
     top = float(np.max(known)) * 1.08 if known.size else 1.0
-    ax.plot(x[bad], np.full(int(bad.sum()), top), "x", color="tab:red", ms=5, label="no settling time")
+    ax.plot(x[bad], np.full(int(bad.sum()), top), "x", color="tab:red", ms=5, label=f"no {what}")
 
 
 def _log_if_wide(ax: Any, x: np.ndarray) -> None:
