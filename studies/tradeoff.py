@@ -44,11 +44,11 @@ import numpy as np
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import transmissibility
+from isolator.simulation.scaling import scale_columns
 from isolator.sweep import SweepResult, sweep
 
 from .reporting import output_folder, progress_printer
 from .tradeoff_designs import write_designs_csv
-from .tradeoff_pneumatic import pneumatic_scales
 from .tradeoff_report import plot_maps, plot_throughput, plot_tradeoff, write_tradeoff_report
 from .tradeoff_results import TradeoffStudy, pareto_front
 
@@ -160,14 +160,12 @@ def run_tradeoff_study(
 def tradeoff_sweep(scenario: Scenario, stiffness: np.ndarray, damping: np.ndarray, band: Band | None = None,
                    workers: int | None = None, progress: bool = False) -> SweepResult:
     """The study's designs as one :func:`isolator.sweep.sweep`, zipped: every isolator's stiffness and damping
-    scaled by ``stiffness[r]`` and ``damping[r]`` [-] (pneumatic isolators: the names of
-    :func:`~studies.tradeoff_pneumatic.pneumatic_scales`), the designs' parameter vectors those of
+    scaled by ``stiffness[r]`` and ``damping[r]`` [-] (the columns of
+    :func:`isolator.simulation.scaling.scale_columns`: for air springs the volumes, the orifice and the
+    horizontal springs and dampers), the designs' parameter vectors those of
     :func:`isolator.simulation.scaling.scaled_parameter_sets`."""
-    k, c = np.asarray(stiffness, dtype=float), np.asarray(damping, dtype=float)
-    if scenario.is_pneumatic:
-        scale = pneumatic_scales(Simulator(scenario).layout, k, c)
-    else:
-        scale = {"isolators[*].stiffness": k, "isolators[*].damping": c}
+    scale = scale_columns(Simulator(scenario).layout, np.asarray(stiffness, dtype=float),
+                          np.asarray(damping, dtype=float))
     return sweep(scenario, scale={n: list(v) for n, v in scale.items()}, zip=True, band=band, workers=workers,
                  progress=progress)
 

@@ -9,34 +9,9 @@ slowly leveling table (the sweep's ``dynamic_settling_time_max``,
 
 from __future__ import annotations
 
-import numpy as np
+from isolator import Scenario
 
-from isolator import ParameterError, Scenario
-from isolator.model.parameters import ParameterLayout
-from isolator.sweep import resolve
-
-__all__ = ["pneumatic_note", "pneumatic_scales"]
-
-
-def pneumatic_scales(layout: ParameterLayout, stiffness: np.ndarray, damping: np.ndarray) -> dict[str, np.ndarray]:
-    """The sweep's ``scale`` columns [-] of designs with every air spring's stiffness scaled by ``stiffness``
-    and its damping by ``damping`` (arrays, one per design): both chambers' volumes divided by the stiffness
-    scale, the orifice diameter scaled by ``(stiffness damping) ** -0.25`` (its conductance ``G ~ d^4`` by
-    ``stiffness damping``, so the series dashpot scales by ``damping``), the horizontal springs and dampers as a
-    spring-damper's (:func:`isolator.simulation.scaling.scaled_parameter_sets`). Names no isolator has are left
-    out."""
-    k, c = np.asarray(stiffness, dtype=float), np.asarray(damping, dtype=float)
-    wanted = {"isolators[*].volume": 1.0 / k, "isolators[*].damping_volume": 1.0 / k,
-              "isolators[*].orifice.diameter": (k * c) ** -0.25, "isolators[*].horizontal_stiffness": k,
-              "isolators[*].horizontal_damping": c}
-    out = {}
-    for name, values in wanted.items():
-        try:
-            resolve(layout, name, "scale")
-        except ParameterError:
-            continue
-        out[name] = values
-    return out
+__all__ = ["pneumatic_note"]
 
 
 def pneumatic_note(scenario: Scenario) -> list[str]:

@@ -20,7 +20,19 @@ import numpy as np
 from isolator.errors import ParameterError
 from isolator.model.parameters import ParameterLayout
 
-__all__ = ["scaled_parameter_sets"]
+__all__ = ["PNEUMATIC_SCALING", "SPRING_DAMPER_SCALING", "scale_columns", "scaled_parameter_sets"]
+
+#: what the stiffness scale ``s`` and the damping scale ``c_s`` do to an isolator's parameters: (the
+#: parameter's name under ``isolators[i].``, exponent of ``s``, exponent of ``c_s``); the one rule both
+#: :func:`scaled_parameter_sets` and the sweep columns of :func:`scale_columns` follow
+SPRING_DAMPER_SCALING: tuple[tuple[str, float, float], ...] = (("stiffness", 1.0, 0.0), ("damping", 0.0, 1.0))
+PNEUMATIC_SCALING: tuple[tuple[str, float, float], ...] = (
+    ("volume", -1.0, 0.0),
+    ("damping_volume", -1.0, 0.0),
+    ("orifice.diameter", -0.25, -0.25),
+    ("horizontal_stiffness", 1.0, 0.0),
+    ("horizontal_damping", 0.0, 1.0),
+)
 
 
 def _scales(values: float | Sequence[float] | np.ndarray, key: str, positive: bool) -> np.ndarray:
@@ -67,17 +79,27 @@ def scaled_parameter_sets(
     c = _scales(damping, "damping", positive=pneumatic)
     if k.size != c.size:
         raise ParameterError(f"damping: needs one scale per stiffness scale ({k.size}), got {c.size}")
-    names = layout.names
-    k, c = k[:, None], c[:, None]
-
-    def where(*parts: str) -> np.ndarray:
-        return np.array([any(part in n for part in parts) for n in names])[None, :]
-
-    if pneumatic:
-        scale = np.where(where(".volume", ".damping_volume"), 1.0 / k, 1.0)
-        scale = np.where(where(".orifice.diameter"), (k * c) ** -0.25, scale)
-        scale = np.where(where(".horizontal_stiffness."), k, scale)
-        scale = np.where(where(".horizontal_damping."), c, scale)
-    else:
-        scale = np.where(where(".stiffness."), k, np.where(where(".damping."), c, 1.0))
+    scale = np.ones((k.size, layout.size))
+    for name, ek, ec in _rule(layout):
+        entries = [i for i, n in enumerate(layout.names) if _member(n, name)]
+        scale[:, entries] = (k**ek * c**ec)[:, None]
     return np.asarray(parameters)[None, :] * scale
+
+
+def scale_columns(layout: ParameterLayout, stiffness: np.ndarray, damping: np.ndarray) -> dict[str, np.ndarray]:
+    """The same scaling as sweep ``scale`` columns [-], by name (``isolators[*].volume``, ...), one factor
+    per design: a sweep with these zipped gives the parameter vectors of :func:`scaled_parameter_sets`.
+    Parameters no isolator of the scenario has are left out."""
+    k, c = np.asarray(stiffness, dtype=float), np.asarray(damping, dtype=float)
+    return {f"isolators[*].{name}": k**ek * c**ec for name, ek, ec in _rule(layout)
+            if any(_member(n, name) for n in layout.names)}
+
+
+def _rule(layout: ParameterLayout) -> tuple[tuple[str, float, float], ...]:
+    return PNEUMATIC_SCALING if layout.pneumatic is not None else SPRING_DAMPER_SCALING
+
+
+def _member(entry: str, name: str) -> bool:
+    """Whether the layout entry ``isolators[i].<name>`` or ``isolators[i].<name>.<axis>`` is one of ``name``'s."""
+    head, _, rest = entry.partition("].")
+    return head.startswith("isolators[") and (rest == name or rest.startswith(name + "."))

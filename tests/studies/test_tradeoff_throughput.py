@@ -12,10 +12,10 @@ import pytest
 
 from isolator import Simulator, load_scenario, run_sequence
 from isolator.scenario.definitions import SIGNALS
+from isolator.simulation.scaling import scale_columns
 from isolator.simulation.window_settling import moves_per_hour
 from isolator.sweep import build_designs
 from studies.tradeoff import run_tradeoff_study, tradeoff_sweep
-from studies.tradeoff_pneumatic import pneumatic_scales
 
 DATA = Path(__file__).resolve().parents[2] / "isolator" / "data" / "scenarios"
 WINDOW = ('\n[[points]]\nname = "probe"\nposition = [0.0, 0.0, 0.5]\n\n'
@@ -34,11 +34,18 @@ def test_the_sweep_gives_the_batch_it_replaced():
     np.testing.assert_allclose(widths, batch.half_widths, rtol=1e-12)
 
 
-def test_the_pneumatic_scale_columns_are_the_scaled_parameter_sets():
-    sim = Simulator(load_scenario("paper-table-3-2-pneumatic"))
+@pytest.mark.parametrize("name", ["paper-table-3-2-pneumatic", "paper-table-3-2"])
+def test_the_scale_columns_are_the_scaled_parameter_sets(name):
+    sim = Simulator(load_scenario(name))
     k, c = np.array([0.7, 1.0, 1.3]), np.array([0.5, 1.0, 2.0])
-    designs = build_designs(sim.layout, sim.parameters, None, pneumatic_scales(sim.layout, k, c), True)
+    designs = build_designs(sim.layout, sim.parameters, None, scale_columns(sim.layout, k, c), True)
     np.testing.assert_array_equal(designs.parameters(0, 3), sim.scaled_parameter_sets(k, c))
+    # and by hand: every isolator's damping doubled at c = 2
+    scaled = sim.scaled_parameter_sets([1.0], [2.0])[0]
+    for i, entry in enumerate(sim.layout.names):
+        factor = 2.0 if (".damping." in entry or ".horizontal_damping." in entry) else (
+            2.0 ** -0.25 if entry.endswith("orifice.diameter") else 1.0)
+        assert scaled[i] == pytest.approx(sim.parameters[i] * factor, rel=1e-15)
 
 
 def test_a_single_move_with_a_window_gives_moves_per_hour(tmp_path):
