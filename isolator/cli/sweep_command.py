@@ -38,7 +38,14 @@ def register(sub: Any) -> None:
         "sweep", help="run many designs (a grid, zipped lists or samples of any parameters); rows to a file",
         description="Run a scenario for many designs of any named parameters (Simulator.layout.names; [*] for "
         "every element, a vector's name for all its components) and write one row per design: the swept "
-        "values, settling_time_max, settling:<signal>, peak:<signal>, status, reason, design.",
+        "values, settling_time_max, settling:<signal>, peak:<signal>, status (ok, tipped, diverged, refused, "
+        "invalid, unsettled: a step of the [sequence] did not settle, failed: its chunk failed twice), reason, "
+        "design, band:<signal> (the half-widths of the settling band), then the columns of the scenario's kind "
+        "(pneumatic: dynamic_settling_time_max, leveling_time, supply_exhausted; [[windows]]: "
+        "window_settling_time_max, moves_per_hour; a [sequence], instead of these: total_time, "
+        "throughput_per_hour, unsettled_step), then transmissibility:<axis>@<f>Hz and mode:<k>. The sweep is "
+        "described beside the file in <out>.sweep.json (scenario, model, band, sampling, extras): --resume "
+        "refuses a file another sweep wrote.",
     )
     scenario_argument(p)
     p.add_argument("--set", action=_Swept, dest="swept", metavar="NAME=VALUES",
@@ -60,10 +67,11 @@ def register(sub: Any) -> None:
     p.add_argument("--chunk-size", type=count, metavar="N", help="designs per task (default: about four per worker)")
     p.add_argument("--out", type=Path, required=True, metavar="FILE.csv", help="the rows (.csv or .parquet)")
     p.add_argument("--plot", type=Path, metavar="FILE.png",
-                   help="write a figure: the largest settling time against the swept values")
+                   help="write a figure: the largest settling time (a sequence: its total time) against the "
+                   "swept values")
     again = p.add_mutually_exclusive_group()
     again.add_argument("--resume", action="store_true", help="continue the sweep whose rows --out holds")
-    again.add_argument("--force", action="store_true", help="overwrite --out")
+    again.add_argument("--force", action="store_true", help="overwrite --out (and its .sweep.json)")
     p.set_defaults(handler=_sweep, swept=None)
 
 

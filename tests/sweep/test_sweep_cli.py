@@ -129,3 +129,13 @@ def test_resume_of_a_finished_parquet_checks_its_designs(tmp_path: Path, capsys)
         assert len(err) == 1, err
         assert "holds another sweep's rows" in err[0], err
         assert named in err[0], err
+
+
+def test_the_help_names_every_status_and_column(capsys):
+    status, text, _ = run(["sweep", "--help"], capsys)
+    assert status == 0
+    words = " ".join(text.split())
+    for named in ("unsettled", "failed", "design, band:<signal>", "dynamic_settling_time_max", "leveling_time",
+                  "supply_exhausted", "window_settling_time_max", "moves_per_hour", "total_time",
+                  "throughput_per_hour", "unsettled_step", "mode:<k>", ".sweep.json"):
+        assert named in words, named
