@@ -168,7 +168,7 @@ def _plot_throughput(study: SequenceProfileStudy) -> None:
     bx.bar(x, rates, color=["0.45" if n == _BASELINE else "tab:blue" for n in names])
     for xi, n, r in zip(x, names, rates, strict=True):
         g = study.gain(n)
-        bx.text(float(xi), r * 1.01, f"{r:.0f}" + ("" if g is None or n == _BASELINE else f"\n({g * 100:+.0f} %)"),
+        bx.text(float(xi), r * 1.01, f"{r:.0f}" + ("" if g is None or n == _BASELINE else f"\n({round(g * 100):+d} %)"),
                 ha="center", va="bottom", fontsize=8)
     bx.set_xticks(x, names, rotation=15)
     bx.set_ylabel("throughput [steps per hour]")

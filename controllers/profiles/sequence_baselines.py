@@ -27,7 +27,7 @@ from isolator.simulation.sequence import MoveDesign
 from .input_shaping import SHAPERS, ExcitedMode, dominant_modes, shaper
 from .time_optimal import time_optimal_profile
 
-__all__ = ["dominant_mode", "shaped_moves", "time_optimal_moves"]
+__all__ = ["dominant_mode", "dominant_modes_at", "shaped_moves", "time_optimal_moves"]
 
 
 def shaped_moves(scenario: Scenario, kind: str = "zvd") -> MoveDesign:
@@ -65,16 +65,22 @@ def shaped_moves(scenario: Scenario, kind: str = "zvd") -> MoveDesign:
 
 def dominant_mode(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> ExcitedMode:
     """The table mode carriage ``carriage``'s acceleration excites most with the carriages parked at
-    ``parked`` [m] (:func:`~controllers.profiles.input_shaping.dominant_modes`; cached per scenario and
-    configuration)."""
-    return _dominant(scenario, carriage, tuple(map(float, parked)))
+    ``parked`` [m] (:func:`dominant_modes_at`)."""
+    return dominant_modes_at(scenario, carriage, parked)[0]
+
+
+def dominant_modes_at(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> list[ExcitedMode]:
+    """The table's modes by how much carriage ``carriage``'s acceleration excites them with the carriages
+    parked at ``parked`` [m] (:func:`~controllers.profiles.input_shaping.dominant_modes`; cached per
+    scenario and configuration)."""
+    return list(_dominant(scenario, carriage, tuple(map(float, parked))))
 
 
 @lru_cache(maxsize=64)
-def _dominant(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> ExcitedMode:
+def _dominant(scenario: Scenario, carriage: int, parked: tuple[float, ...]) -> tuple[ExcitedMode, ...]:
     at_rest = replace(scenario, carriages=tuple(replace(c, profile=held(q))
                                                 for c, q in zip(scenario.carriages, parked, strict=True)))
-    return dominant_modes(at_rest, carriage)[0]
+    return tuple(dominant_modes(at_rest, carriage))
 
 
 def time_optimal_moves() -> MoveDesign:

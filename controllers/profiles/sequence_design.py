@@ -40,7 +40,7 @@ from isolator.simulation.sequence import SequenceResult, run_sequence
 
 from .export import absolute_files
 from .input_shaping import ExcitedMode
-from .sequence_baselines import dominant_mode
+from .sequence_baselines import dominant_modes_at
 
 __all__ = ["LOWEST_FRACTION", "SequenceOptimisation", "optimise_sequence", "write_sequence_scenario"]
 
@@ -48,8 +48,16 @@ __all__ = ["LOWEST_FRACTION", "SequenceOptimisation", "optimise_sequence", "writ
 LOWEST_FRACTION = 0.05
 #: the longest start delay of a step's second and later carriages [s]
 MAX_DELAY = 0.5
-#: the profile families searched: the S-curve alone, and S-curves convolved with ZV and ZVD shapers
-FAMILIES = ("scurve", "zv", "zvd")
+#: the profile families searched, by name: the S-curve alone, and S-curves convolved with shapers, one per
+#: mode the move excites most (the first shaper for the first mode, ...)
+FAMILIES: dict[str, tuple[str, ...]] = {
+    "scurve": (),
+    "zv": ("zv",),
+    "zvd": ("zvd",),
+    "zv+zv": ("zv", "zv"),
+    "zvd+zv": ("zvd", "zv"),
+    "zv+zv+zv": ("zv", "zv", "zv"),
+}
 #: a shaper's frequency is searched within this factor of the dominant mode's
 SHAPER_RANGE = 1.4
 #: the largest damping ratio a shaper is designed for
@@ -120,8 +128,8 @@ class SequenceOptimisation:
             what = ", ".join(f"{n} {s * 1e3:+.4g} mm" for n, s in key)
             limits = "; ".join(f"{n}: v {f[0]:.3g}, a {f[1]:.3g}, j {f[2]:.3g} of its limits"
                                + (f", delay {dl:.3g} s" if dl else "")
-                               + ("" if sh is None else f", {sh['kind'].upper()} shaper at {sh['frequency']:.4g} Hz, "
-                                  f"damping {sh['damping']:.3g}")
+                               + "".join(f", {t['kind'].upper()} shaper at {t['frequency']:.4g} Hz, damping "
+                                         f"{t['damping']:.3g}" for t in sh)
                                for n, f, dl, sh in zip(d["carriages"], d["fractions"], d["delays"], d["shapers"],
                                                        strict=True))
             lines.append(f"move {what}: {d['before']:.3f} s -> {d['after']:.3f} s from rest ({limits})")
@@ -235,18 +243,21 @@ def _design_move(
     names = tuple(c.name for c in scenario.carriages)
     moving = [n for n, _ in _move_key(step, q, names)]
     parked = tuple(map(float, sequence.configurations(names)[index + 1]))
-    modes = [dominant_mode(scenario, names.index(n), parked) for n in moving]
+    deepest = max(len(kinds) for kinds in FAMILIES.values())
+    modes = [dominant_modes_at(scenario, names.index(n), parked)[:deepest] for n in moving]
     best: tuple[float, str, np.ndarray] | None = None
     first = math.inf
-    for family in FAMILIES:
-        low, high, start = _box(family, len(moving))
+    for family, kinds in FAMILIES.items():
+        if any(len(found) < len(kinds) for found in modes):
+            continue  # fewer excited modes than the family shapes
+        low, high, start = _box(len(kinds), len(moving))
 
-        def cost(x: np.ndarray, family: str = family) -> float:
+        def cost(x: np.ndarray, kinds: tuple[str, ...] = kinds) -> float:
             counter[0] += 1
-            return _step_time(scenario, model, _candidate(scenario, step, moving, x, family, modes), q, limit)
+            return _step_time(scenario, model, _candidate(scenario, step, moving, x, kinds, modes), q, limit)
 
         best_x, value = start, cost(start)
-        if family == "scurve":
+        if not kinds:
             first = value  # the step as written: every carriage at its limits
         centre, half, count = (low + high) / 2, (high - low) / 2, samples
         for r in range(rounds + 1):
@@ -260,36 +271,37 @@ def _design_move(
             best = (value, family, best_x)
     assert best is not None
     value, family, x = best
-    chosen = dict(_candidate(scenario, step, moving, x, family, modes).moves)
+    chosen = dict(_candidate(scenario, step, moving, x, FAMILIES[family], modes).moves)
     return {"step": index, "family": family, "carriages": moving,
             "fractions": np.exp(x[: 3 * len(moving)]).reshape(len(moving), 3).tolist(),
             "delays": [chosen[n].delay for n in moving],
             "limits": [[chosen[n].velocity, chosen[n].acceleration, chosen[n].jerk] for n in moving],
-            "shapers": [None if (sh := chosen[n].shaper) is None else
-                        {"kind": sh.kind, "frequency": sh.frequency, "damping": sh.damping} for n in moving],
+            "shapers": [[{"kind": t.kind, "frequency": t.frequency, "damping": t.damping} for t in chosen[n].shapers]
+                        for n in moving],
             "before": first, "after": value, "chosen": chosen}
 
 
-def _box(family: str, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The search box (low, high) of a family's parameters and its start: per moving carriage the log
-    fractions of its velocity, acceleration and jerk limits, the delays of all but the first, and for a
-    shaped family each carriage's log shaper frequency over its dominant mode's and the shaper's damping."""
+def _box(shapers: int, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The search box (low, high) of a family's parameters and its start: per moving carriage (``n``) the log
+    fractions of its velocity, acceleration and jerk limits, the delays of all but the first, then for each of
+    its ``shapers`` the log frequency over its mode's, and the shapers' damping ratios."""
     low = [math.log(LOWEST_FRACTION)] * (3 * n) + [0.0] * (n - 1)
     high = [0.0] * (3 * n) + [MAX_DELAY] * (n - 1)
     start = [0.0] * (3 * n) + [0.0] * (n - 1)
-    if family != "scurve":
-        low += [math.log(1 / SHAPER_RANGE)] * n + [0.0] * n
-        high += [math.log(SHAPER_RANGE)] * n + [MAX_SHAPER_DAMPING] * n
-        start += [0.0] * n + [-1.0] * n  # -1: the dominant mode's damping (see _candidate)
+    if shapers:
+        low += [math.log(1 / SHAPER_RANGE)] * (n * shapers) + [0.0] * (n * shapers)
+        high += [math.log(SHAPER_RANGE)] * (n * shapers) + [MAX_SHAPER_DAMPING] * (n * shapers)
+        start += [0.0] * (n * shapers) + [-1.0] * (n * shapers)  # -1: the mode's own damping (see _candidate)
     return np.array(low), np.array(high), np.array(start)
 
 
-def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray, family: str = "scurve",
-               modes: list[ExcitedMode] | None = None) -> Step:
-    """``step`` with each moving carriage's limits scaled by ``exp(x)``, its delay from ``x`` and, for a
-    shaped family, its shaper tuned from its dominant mode by ``x`` (a damping below 0: the mode's own)."""
+def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray, kinds: tuple[str, ...] = (),
+               modes: list[list[ExcitedMode]] | None = None) -> Step:
+    """``step`` with each moving carriage's limits scaled by ``exp(x)``, its delay from ``x`` and, for each of
+    the shaper ``kinds``, a shaper tuned from the carriage's next most excited mode by ``x`` (a damping
+    below 0: the mode's own)."""
     limits = {c.name: c.limits for c in scenario.carriages}
-    n = len(moving)
+    n, m = len(moving), len(kinds)
     moves = []
     for name, move in step.moves:
         if name not in moving:
@@ -299,14 +311,15 @@ def _candidate(scenario: Scenario, step: Step, moving: list[str], x: np.ndarray,
         lim = limits[name]
         f = np.exp(x[3 * k: 3 * k + 3])
         delay = float(x[3 * n + k - 1]) if k > 0 else 0.0
-        train = None
-        if family != "scurve" and modes is not None:
-            mode = modes[k]
-            frequency = float(mode.frequency) * math.exp(float(x[4 * n - 1 + k]))
-            given = float(x[5 * n - 1 + k])
-            train = shaper(family, frequency, float(mode.damping) if given < 0 else given)
+        trains = []
+        for j, kind in enumerate(kinds if modes is not None else ()):
+            mode = modes[k][j] if modes is not None else None
+            assert mode is not None
+            frequency = float(mode.frequency) * math.exp(float(x[4 * n - 1 + k * m + j]))
+            given = float(x[4 * n - 1 + n * m + k * m + j])
+            trains.append(shaper(kind, frequency, float(mode.damping) if given < 0 else given))
         moves.append((name, Move(move.target, _scaled(lim.velocity, f[0]), _scaled(lim.acceleration, f[1]),
-                                 _scaled(lim.jerk, f[2]), delay, train)))
+                                 _scaled(lim.jerk, f[2]), delay, tuple(trains))))
     return Step(tuple(moves))
 
 

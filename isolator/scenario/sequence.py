@@ -5,8 +5,8 @@ their writer (the ``[sequence]`` table back from a :class:`StepSequence`) and th
 A step names, per carriage, a target [m]: a number (the seven-segment S-curve at the carriage's
 ``limits``), or an inline table ``{ target, velocity, acceleration, jerk, delay }`` whose optional
 ``velocity``, ``acceleration``, ``jerk`` lower that step's S-curve limits, whose ``delay`` [s] starts
-that carriage that long after the step's start, and whose ``shaper = { kind, frequency, damping }``
-convolves the S-curve with an input shaper (:mod:`isolator.scenario.shapers`). What needs the carriages
+that carriage that long after the step's start, and whose ``shaper = { kind, frequency, damping }`` (or a
+list of them) convolves the S-curve with input shapers (:mod:`isolator.scenario.shapers`). What needs the carriages
 (known names, limits, the table's footprint) is checked by :func:`isolator.scenario.validation.check_sequence`.
 """
 
@@ -54,8 +54,9 @@ class Move:
         None: the carriage's.
     delay : float
         The carriage starts this long after the step's start [s], >= 0.
-    shaper : Shaper or None
-        An input shaper the S-curve is convolved with (the move then lasts the shaper's duration longer).
+    shapers : tuple of Shaper
+        Input shapers the S-curve is convolved with, one after the other (each for a mode; the move then
+        lasts the shapers' durations longer); empty: none.
     """
 
     target: float
@@ -63,13 +64,13 @@ class Move:
     acceleration: float | None = None
     jerk: float | None = None
     delay: float = 0.0
-    shaper: Shaper | None = None
+    shapers: tuple[Shaper, ...] = ()
 
     @property
     def plain(self) -> bool:
         """Whether the move is just a target (written back as a number)."""
         return (self.velocity is None and self.acceleration is None and self.jerk is None and self.delay == 0.0
-                and self.shaper is None)
+                and not self.shapers)
 
     def limits(self, velocity: float, acceleration: float, jerk: float) -> tuple[float, float, float]:
         """This move's S-curve limits: its own where given, else the carriage's (the arguments)."""
@@ -190,16 +191,26 @@ def _read_move(r: KeyReader) -> Move:
     limits = {k: r.number(k, positive=True) if r.has(k) else None for k in MOVE_LIMITS}
     r.used.update(MOVE_LIMITS)
     delay = r.number("delay", 0.0, nonnegative=True)
-    train = _read_shaper(r.key("shaper"), r.raw("shaper")) if r.has("shaper") else None
+    trains = _read_shapers(r.key("shaper"), r.raw("shaper")) if r.has("shaper") else ()
     r.finish()
-    return Move(target=target, delay=delay, shaper=train, **limits)
+    return Move(target=target, delay=delay, shapers=trains, **limits)
+
+
+def _read_shapers(key: str, raw: Any) -> tuple[Shaper, ...]:
+    """``shaper``: one table or a list of them (convolved, one per mode)."""
+    if isinstance(raw, list):
+        if not raw:
+            raise ScenarioError(f"{key}: an empty list; give one shaper table or leave the key out")
+        return tuple(_read_shaper(f"{key}[{i}]", item) for i, item in enumerate(raw))
+    return (_read_shaper(key, raw),)
 
 
 def _read_shaper(key: str, raw: Any) -> Shaper:
     """``shaper = { kind = "zvd", frequency = 3.4, damping = 0.1 }``: a ZV, ZVD or EI shaper of a mode of
     this undamped frequency [Hz] and damping ratio."""
     if not isinstance(raw, Mapping):
-        raise ScenarioError(f"{key}: must be a table {{ kind = \"zvd\", frequency = HZ, damping = RATIO }}")
+        raise ScenarioError(f"{key}: must be a table {{ kind = \"zvd\", frequency = HZ, damping = RATIO }} or a list "
+                            "of them")
     r = KeyReader(raw, key)
     kind = r.string("kind")
     if kind not in SHAPERS:
@@ -237,9 +248,10 @@ def _move_table(move: Move) -> dict[str, Any]:
             out[k] = float(value)
     if move.delay:
         out["delay"] = float(move.delay)
-    if move.shaper is not None:
-        out["shaper"] = {"kind": move.shaper.kind, "frequency": float(move.shaper.frequency),
-                         "damping": float(move.shaper.damping)}
+    if move.shapers:
+        tables = [{"kind": sh.kind, "frequency": float(sh.frequency), "damping": float(sh.damping)}
+                  for sh in move.shapers]
+        out["shaper"] = tables[0] if len(tables) == 1 else tables
     return out
 
 
@@ -265,11 +277,18 @@ def _number(value: float) -> str:
 def _inline(table: Mapping[str, Any]) -> str:
     items = []
     for key, value in table.items():
-        text = (_inline(value) if isinstance(value, Mapping) else _quoted(value) if isinstance(value, str)
-                else _number(value))
+        text = _value(value)
         bare = key.replace("-", "").replace("_", "").isalnum() and key.isascii()
         items.append(f"{key if bare else _quoted(key)} = {text}")
     return "{ " + ", ".join(items) + " }"
+
+
+def _value(value: Any) -> str:
+    if isinstance(value, Mapping):
+        return _inline(value)
+    if isinstance(value, list):
+        return "[" + ", ".join(_value(v) for v in value) + "]"
+    return _quoted(value) if isinstance(value, str) else _number(value)
 
 
 def _quoted(key: str) -> str:

@@ -54,13 +54,18 @@ def step_profiles(
 
 def _scurve_move(mv: Move, q: float, velocity: float, acceleration: float, jerk: float) -> Profile:
     """A step's own move from ``q`` [m] in its local time: the S-curve at these limits [m/s, m/s^2, m/s^3]
-    starting at the move's ``delay``, convolved with its ``shaper`` if it has one; held when already there."""
+    starting at the move's ``delay``, convolved with its shapers if it has any; held when already there."""
     if mv.target == q:
         return held(q)
     move = scurve(q, mv.target - q, velocity, acceleration, jerk, t0=mv.delay)
-    if mv.shaper is None:
+    if not mv.shapers:
         return move
-    return shaped(move, list(mv.shaper.amplitudes), list(mv.shaper.times), kind=f"{mv.shaper.kind}-shaped")
+    amplitudes, times = np.ones(1), np.zeros(1)
+    for train in mv.shapers:  # convolved: every pair of impulses
+        amplitudes = np.outer(amplitudes, train.amplitudes).ravel()
+        times = np.add.outer(times, train.times).ravel()
+    kind = "+".join(train.kind for train in mv.shapers)
+    return shaped(move, list(amplitudes), list(times), kind=f"{kind}-shaped")
 
 
 def _designed(design: MoveDesign, index: int, name: str, q0: float, q1: float, limits: MotionLimits) -> Profile:

@@ -32,7 +32,7 @@ def _with_steps(steps: list[dict]) -> dict:
 def test_a_step_shaper_is_read_and_written_back():
     data = _with_steps([{"x-stage": {"target": -0.5, "shaper": {"kind": "zvd", "frequency": 3.4, "damping": 0.1}}}])
     move = scenario_from_dict(data).sequence.steps[0].move("x-stage")
-    assert move.shaper == shaper("zvd", 3.4, 0.1)
+    assert move.shapers == (shaper("zvd", 3.4, 0.1),)
     table = sequence_table(scenario_from_dict(data).sequence)
     assert table["steps"][0]["x-stage"]["shaper"] == {"kind": "zvd", "frequency": 3.4, "damping": 0.1}
 
@@ -68,7 +68,7 @@ def test_a_shaped_step_is_the_shaped_design():
         moves = []
         for name, mv in step.moves:
             mode = dominant_mode(sc, names.index(name), tuple(configs[k + 1]))
-            moves.append((name, Move(mv.target, shaper=shaper("zv", mode.frequency, mode.damping))))
+            moves.append((name, Move(mv.target, shapers=(shaper("zv", mode.frequency, mode.damping),))))
         written.append(Step(tuple(moves)))
     by_file = run_sequence(replace(sc, sequence=replace(sc.sequence, steps=tuple(written))))
     for a, b in zip(by_design.steps, by_file.steps, strict=True):
@@ -88,3 +88,29 @@ def test_a_sequence_starts_where_its_initial_says():
     assert result.steps[0].stop == result.steps[0].start
     assert result.steps[0].settle == 0.0
     assert names == ["x-stage", "y-stage"]
+
+
+def test_a_list_of_shapers_is_convolved_and_written_back():
+    """``shaper = [ {...}, {...} ]``: the move convolved with both (its impulses every pair's product at every
+    pair's sum of times), read, simulated and written back as a list."""
+    tables = [{"kind": "zv", "frequency": 3.37, "damping": 0.106}, {"kind": "zv", "frequency": 6.2, "damping": 0.196}]
+    data = _with_steps([{"x-stage": {"target": -0.5, "shaper": tables}}])
+    sc = scenario_from_dict(data)
+    move = sc.sequence.steps[0].move("x-stage")
+    assert move.shapers == tuple(shaper(t["kind"], t["frequency"], t["damping"]) for t in tables)
+    assert sequence_table(sc.sequence)["steps"][0]["x-stage"]["shaper"] == tables
+    q = sc.sequence.initial_positions([c.name for c in sc.carriages])
+    profiles, _, stop = step_profiles(sc, 0, q, None)
+    one, two = move.shapers
+    only_first = replace(sc, sequence=replace(sc.sequence, steps=(Step((("x-stage", Move(-0.5, shapers=(one,))),)),)))
+    _, _, stop_one = step_profiles(only_first, 0, q, None)
+    assert stop == pytest.approx(stop_one + two.duration, abs=1e-12)  # each shaper lengthens the move by its own
+    assert profiles[0].kind == "zv+zv-shaped"
+    result = run_sequence(sc)
+    assert result.steps[0].settled is not None
+
+
+def test_an_empty_shaper_list_is_refused():
+    data = _with_steps([{"x-stage": {"target": -0.5, "shaper": []}}])
+    with pytest.raises(ScenarioError, match=r"shaper: an empty list"):
+        scenario_from_dict(data)
