@@ -109,8 +109,10 @@ def run_robustness_study(
         nominal = evaluate_move(sc, name, command, band=band)
         result = sweep(sc, set=absolute or None, scale=relative or None, zip=True, band=band, workers=workers,
                        progress=progress)
-        methods[name] = MethodSpread(name, nominal.settling_time_max, np.asarray(result["settling_time_max"],
-                                                                                dtype=float), nominal.move_time)
+        # air springs: the settling about the leveling table, as evaluate_move measures the nominal machine
+        column = "dynamic_settling_time_max" if sc.is_pneumatic else "settling_time_max"
+        methods[name] = MethodSpread(name, nominal.settling_time_max, np.asarray(result[column], dtype=float),
+                                     nominal.move_time)
     study = RobustnessStudy(scenario, varied, values, methods, band, out)
     _write_samples(study)
     write_json(out, study.to_dict())

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
+from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
@@ -24,20 +25,29 @@ def _colour(name: str) -> str:
 
 
 def _ecdf(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Sorted finite values and their cumulative share of all machines (those without a value count as
-    above every value, so the curve stops below 1)."""
-    known = np.sort(values[~np.isnan(values)])
-    share = np.arange(1, known.size + 1) / max(values.size, 1)
-    return np.concatenate([known[:1], known]), np.concatenate([[0.0], share])
+    """Sorted finite values and their cumulative share of all machines, starting at the share below the
+    first (machines at -inf), ending below 1 when some are at +inf or NaN; empty when none is finite."""
+    finite = np.sort(values[np.isfinite(values)])
+    below = float(np.isneginf(values).sum()) / max(values.size, 1)
+    share = below + np.arange(1, finite.size + 1) / max(values.size, 1)
+    return np.concatenate([finite[:1], finite]), np.concatenate([[below], share])[: finite.size + 1]
+
+
+def _curve(ax: Any, values: np.ndarray, colour: str, label: str) -> None:
+    """An ECDF step curve, or only a legend entry when no machine has a finite value."""
+    x, y = _ecdf(values)
+    if x.size:
+        ax.step(x, y, where="post", color=colour, lw=1.6, label=label)
+    else:
+        ax.plot([], [], color=colour, lw=1.6, label=f"{label} (no machine settles)")
 
 
 def plot_cdf(study: RobustnessStudy) -> Path:
     """``cdf.png``: each method's settling-time distribution, and its benefit over the paper profile."""
     fig, (ax, bx) = plt.subplots(1, 2, figsize=(13, 5), constrained_layout=True)
     for name, m in study.methods.items():
-        x, y = _ecdf(m.settling_time)
-        ax.step(x, y, where="post", color=_colour(name), lw=1.6,
-                label=f"{name}: P50 {fmt(m.percentile(50))} s, P95 {fmt(m.percentile(95))} s")
+        _curve(ax, m.settling_time, _colour(name),
+               f"{name}: P50 {fmt(m.percentile(50))} s, P95 {fmt(m.percentile(95))} s")
         p95 = m.percentile(95)
         if math.isfinite(p95):
             ax.plot([p95], [0.95], "o", color=_colour(name), ms=5)
@@ -54,8 +64,11 @@ def plot_cdf(study: RobustnessStudy) -> Path:
     for name in study.methods:
         if name == "paper":
             continue
-        x, y = _ecdf(study.benefit(name))
-        bx.step(x, y, where="post", color=_colour(name), lw=1.6, label=name)
+        b = study.benefit(name)
+        only = [f"{int(np.isneginf(b).sum())} where only {name} does not settle" if np.isneginf(b).any() else "",
+                f"{int(np.isposinf(b).sum())} where only the paper profile does not" if np.isposinf(b).any() else ""]
+        note = "; ".join(t for t in only if t)
+        _curve(bx, b, _colour(name), name + (f" ({note}: off the axis)" if note else ""))
     bx.axvline(0.0, color="k", lw=0.8)
     bx.set_xlabel("cycle time (move + settling) saved against the paper profile on the same machine [s]")
     bx.set_ylabel("share of machines [-]")
@@ -96,6 +109,12 @@ def plot_sensitivity(study: RobustnessStudy) -> Path:
     return path
 
 
+def _benefit(value: float | str | None) -> str:
+    if isinstance(value, str):
+        return "+∞ (the paper profile does not settle)" if value == "+inf" else "−∞ (the method does not settle)"
+    return fmt(value)
+
+
 def write_robustness_report(study: RobustnessStudy) -> Path:
     """``report.md``: tolerances, the settling time's spread per method, benefits, the ranking."""
     n = study.samples.shape[0]
@@ -113,23 +132,27 @@ def write_robustness_report(study: RobustnessStudy) -> Path:
                                 fmt(m.percentile(95)), fmt(m.worst), fmt(m.percentile(50, "cycle"), ".3f"),
                                 fmt(m.percentile(95, "cycle"), ".3f"), f"{m.failed} of {n}"]))
     lines += ["", "Settling after the stop; cycle = move (from the command to the stop) + settling. Percentiles are "
-              "upper order statistics (the smallest value that the given share of machines does not exceed: with "
-              "20 machines or fewer, P95 is the worst); a machine without a settling time (it tips, diverges or "
-              "does not settle within the run) counts as slower than any.", "",
+              "upper order statistics (of the n sorted machines, the one of rank ceil(q/100 (n - 1)) + 1: with 20 "
+              "machines or fewer, P95 is the worst); a machine without a settling time (it tips, diverges or does "
+              "not settle within the run) counts as slower than any.", "",
               "## Benefit over the paper profile, machine by machine", "",
               "The paper profile's cycle minus the method's on the same machine: a shaped move's extra length "
-              "counts against it.", ""]
-    lines += table_header(["method", "P5 [s]", "P50 [s]", "P95 [s]", "faster on"])
+              "counts against it. Percentiles are lower order statistics (the rank floor(q/100 (n - 1)) + 1 of "
+              "the n machines compared), the side that does not flatter the method; +inf: only the paper profile "
+              "does not settle, -inf: only the method does not; machines where neither settles are left out.", ""]
+    lines += table_header(["method", "P5 [s]", "P50 [s]", "P95 [s]", "faster on", "only this one unsettled",
+                           "only the paper's unsettled"])
     data = study.to_dict()["methods"]
     for name in study.methods:
         if name == "paper":
             continue
         b = data[name]["benefit"]
-        share = "n/a" if b["better_share"] is None else f"{b['better_share'] * 100:.0f} % of machines"
-        lines.append(table_row([name, fmt(b["p5"]), fmt(b["p50"]), fmt(b["p95"]), share]))
+        share = "n/a" if b["better_share"] is None else f"{b['better_share'] * 100:.0f} % of {b['compared']} machines"
+        lines.append(table_row([name, *(_benefit(b[f"p{q}"]) for q in (5, 50, 95)), share,
+                                b["only_method_unsettled"], b["only_paper_unsettled"]]))
     lines += ["", "## What matters most", "",
-              "Spearman's rank correlation of each varied parameter with the settling time (machines with one); "
-              "positive: a larger value settles later.", ""]
+              "Spearman's rank correlation of each varied parameter with the settling time (machines without one "
+              "ranked slowest); positive: a larger value settles later.", ""]
     lines += table_header(["parameter", *study.methods])
     rhos = {name: dict(study.ranking(name)) for name in study.methods}
     for name, _ in study.ranking("paper")[:_SHOWN]:

@@ -15,7 +15,7 @@ from isolator import Band, Scenario
 
 from .tolerances import Varied
 
-__all__ = ["MethodSpread", "RobustnessStudy", "upper_percentile"]
+__all__ = ["MethodSpread", "RobustnessStudy", "order_statistic", "upper_percentile"]
 
 
 @dataclass(frozen=True)
@@ -46,9 +46,10 @@ class MethodSpread:
 
     def percentile(self, q: float, of: str = "settling") -> float:
         """The ``q``-th percentile [s] of the settling (``of="settling"``) or cycle time (``"cycle"``) over
-        the machines: the upper order statistic (the smallest value at least ``q`` % of the machines do not
-        exceed; numpy's ``method="higher"``, so with few machines P95 is the worst), a machine without a
-        settling time counted as slower than any (NaN when the percentile falls on one)."""
+        the machines: the upper order statistic (of the ``n`` sorted machines, the one of rank
+        ``ceil(q/100 (n - 1)) + 1``, numpy's ``method="higher"``: with 20 machines or fewer P95 is the
+        worst), a machine without a settling time counted as slower than any (NaN when the percentile falls
+        on one)."""
         values = self.cycle_time if of == "cycle" else np.where(np.isnan(self.settling_time), np.inf,
                                                                  self.settling_time)
         return upper_percentile(values, q)
@@ -67,12 +68,18 @@ class MethodSpread:
 def upper_percentile(values: np.ndarray, q: float) -> float:
     """The ``q``-th percentile of ``values`` as the upper order statistic (numpy ``method="higher"``),
     NaN entries left out; NaN when none is left or the percentile is infinite."""
+    value = order_statistic(values, q, "higher")
+    return value if math.isfinite(value) else math.nan
+
+
+def order_statistic(values: np.ndarray, q: float, side: str) -> float:
+    """The ``q``-th percentile of ``values`` (NaN entries left out) as the ``side`` ("higher" or "lower")
+    order statistic, infinities kept; NaN when nothing is left."""
     known = np.asarray(values, dtype=float)
     known = known[~np.isnan(known)]
     if not known.size:
         return math.nan
-    value = float(np.percentile(known, q, method="higher"))
-    return value if math.isfinite(value) else math.nan
+    return float(np.percentile(known, q, method=side))  # type: ignore[call-overload]
 
 
 @dataclass(frozen=True)
@@ -145,11 +152,20 @@ class RobustnessStudy:
             if name != "paper":
                 b = self.benefit(name)
                 known = b[~np.isnan(b)]
-                entry["benefit"] = {"p5": _none(upper_percentile(b, 5)), "p50": _none(upper_percentile(b, 50)),
-                                    "p95": _none(upper_percentile(b, 95)),
-                                    "better_share": float(np.mean(known > 0)) if known.size else None}
+                entry["benefit"] = {**{f"p{q}": _signed(order_statistic(b, q, "lower")) for q in (5, 50, 95)},
+                                    "better_share": float(np.mean(known > 0)) if known.size else None,
+                                    "compared": int(known.size),
+                                    "only_paper_unsettled": int(np.isposinf(b).sum()),
+                                    "only_method_unsettled": int(np.isneginf(b).sum())}
             out["methods"][name] = entry
         return out
+
+
+def _signed(value: float) -> float | str | None:
+    """A benefit for JSON: the number, "+inf"/"-inf" (only one of the two settles), or None (no machine)."""
+    if math.isnan(value):
+        return None
+    return value if math.isfinite(value) else ("+inf" if value > 0 else "-inf")
 
 
 def _none(value: float) -> float | None:

@@ -1,23 +1,25 @@
-"""Step-and-settle sequences designed for throughput: each step's S-curves chosen to cut move + settle.
+"""Step-and-settle sequences designed for throughput: each step's moves chosen to cut move + settle.
 
 A sequence's total time is the sum over its steps of move, settle (until every window holds) and measure.
 The measure is fixed; the rest of a step depends on how its carriages move. This module designs, for
-every step, the same profile family the sequence runs (seven-segment S-curves) with its own limits
-(speed, acceleration and jerk, each at most the carriage's ``limits``) and, when a step moves several
-carriages, a start delay for each but the first, judged by the window rule on the exact time-varying
-model (:func:`isolator.simulation.sequence.run_sequence`).
+every distinct move, one of several profile families (:data:`FAMILIES`): the seven-segment S-curve alone,
+or convolved with input shapers, one per mode the move excites most (ZV or ZVD on the first, ZVD + ZV,
+ZV on two or three modes). Within a family it chooses each carriage's S-curve limits (speed,
+acceleration, jerk, each at most the carriage's ``limits``), a start delay for each carriage but the
+first, and each shaper's frequency and damping about its mode's, judged by the window rule on the exact
+time-varying model (:func:`isolator.simulation.sequence.run_sequence`).
 
 The window rule makes the step time a step function of the design (an oscillation peak crossing a
 window edge moves the settled time by half a period), so gradients say nothing; the search is a
-derivative-free one: a scrambled Sobol set over the limits as fractions of the carriage's (log scale,
-down to :data:`LOWEST_FRACTION`), then Sobol sets in shrinking boxes around the best designs. Steps that
-make the same move (the same stroke for each carriage) share one design, tuned on the first of them from
-rest at its start; the whole optimised sequence is then simulated, and any step that came out slower
-than in the starting sequence gets its starting move back, so the result is never slower step by step
-(up to the small state a step inherits from the previous one). Each family's start (the carriages' limits;
-for the shaped families, the shaper of the mode the move excites most) is tried first, so the result is
-never worse than the shaped baselines tuned the same way; on the bundled grid those starts win, and the
-search's part is choosing the family per move.
+derivative-free one: a scrambled Sobol set over each family's box (limits as log fractions of the
+carriage's, down to :data:`LOWEST_FRACTION`), then Sobol sets in shrinking boxes around the best design.
+Steps that make the same move (the same stroke for each carriage) share one design, tuned on the first of
+them from rest at its start; the whole optimised sequence is then simulated, and any step that came out
+slower than in the starting sequence gets its starting move back, so the result is never slower step by
+step (up to the small state a step inherits from the previous one). Each family's start (the carriages'
+limits; every shaper at its own mode's frequency and damping) is tried first, so the result is never
+worse than those shaped baselines; on the bundled grid those starts win, and the search's part is
+choosing the family per move.
 """
 
 from __future__ import annotations

@@ -66,6 +66,13 @@ class Move:
     delay: float = 0.0
     shapers: tuple[Shaper, ...] = ()
 
+    def __post_init__(self) -> None:
+        if isinstance(self.shapers, Shaper):  # one shaper given where the tuple goes
+            object.__setattr__(self, "shapers", (self.shapers,))
+        if not isinstance(self.shapers, tuple) or not all(isinstance(t, Shaper) for t in self.shapers):
+            raise ScenarioError(f"shapers: must be Shaper objects (isolator.scenario.shapers.shaper), got "
+                                f"{self.shapers!r}")
+
     @property
     def plain(self) -> bool:
         """Whether the move is just a target (written back as a number)."""

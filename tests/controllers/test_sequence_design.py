@@ -75,3 +75,37 @@ def test_single_move_options_are_refused_on_a_sequence(capsys):
 def test_too_few_samples_are_named_on_the_command_line(capsys):
     assert main(["optimise-profile", SCENARIO, "--samples", "1"]) == 2
     assert capsys.readouterr().err.strip() == "isolator: error: --samples: must be a whole number >= 2, got 1"
+
+
+@pytest.mark.parametrize("family", ["zv+zv", "zvd+zv", "zv+zv+zv"])
+def test_the_design_vector_reaches_the_intended_limits_delays_and_shapers(family):
+    """Two carriages, several shapers each: every entry of the search vector lands where _box says."""
+    import numpy as np
+
+    from controllers.profiles import sequence_design as sd
+    from controllers.profiles.sequence_baselines import dominant_modes_at
+
+    sc = load_scenario(SCENARIO)
+    names = tuple(c.name for c in sc.carriages)
+    step = sc.sequence.steps[0]  # moves both carriages
+    parked = tuple(sc.sequence.configurations(names)[1])
+    kinds = sd.FAMILIES[family]
+    n, m = 2, len(kinds)
+    modes = [dominant_modes_at(sc, i, parked)[:m] for i in range(n)]
+    low, high, start = sd._box(m, n)
+    assert low.size == 3 * n + (n - 1) + 2 * n * m
+    x = low + (high - low) * np.linspace(0.1, 0.9, low.size)  # distinct values, inside the box
+    moves = dict(sd._candidate(sc, step, list(names), x, kinds, modes).moves)
+    for k, name in enumerate(names):
+        lim = sc.carriages[k].limits
+        mv = moves[name]
+        assert mv.velocity == pytest.approx(lim.velocity * np.exp(x[3 * k]))
+        assert mv.jerk == pytest.approx(lim.jerk * np.exp(x[3 * k + 2]))
+        assert mv.delay == (0.0 if k == 0 else pytest.approx(x[3 * n]))
+        for j, train in enumerate(mv.shapers):
+            assert train.kind == kinds[j]
+            assert train.frequency == pytest.approx(modes[k][j].frequency * np.exp(x[4 * n - 1 + k * m + j]))
+            assert train.damping == pytest.approx(x[4 * n - 1 + n * m + k * m + j])
+    at_start = dict(sd._candidate(sc, step, list(names), start, kinds, modes).moves)
+    for k, name in enumerate(names):
+        assert [t.damping for t in at_start[name].shapers] == pytest.approx([md.damping for md in modes[k]])

@@ -114,3 +114,10 @@ def test_an_empty_shaper_list_is_refused():
     data = _with_steps([{"x-stage": {"target": -0.5, "shaper": []}}])
     with pytest.raises(ScenarioError, match=r"shaper: an empty list"):
         scenario_from_dict(data)
+
+
+def test_a_single_shaper_given_for_the_list_is_wrapped_and_a_wrong_one_named():
+    one = shaper("zv", 3.4, 0.1)
+    assert Move(0.1, shapers=one).shapers == (one,)  # type: ignore[arg-type]
+    with pytest.raises(ScenarioError, match=r"shapers: must be Shaper objects"):
+        Move(0.1, shapers=("zv",))  # type: ignore[arg-type]

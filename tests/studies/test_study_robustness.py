@@ -202,3 +202,29 @@ def test_the_benefit_is_in_cycle_time_and_failures_rank_slowest():
 def test_the_robustness_study_refuses_a_sequence(tmp_path, capsys):
     assert main(["study", "robustness", "paper-table-3-2-sequence", "--out", str(tmp_path / "r")]) == 2
     assert "robustness study varies a single move" in capsys.readouterr().err
+
+
+def test_figures_and_report_when_a_method_never_settles(tmp_path):
+    """No settled machine for a method: the CDF has a legend entry instead of a curve, the report says so."""
+    from studies.robustness_report import plot_cdf, write_robustness_report
+
+    samples = np.column_stack([np.linspace(0.8, 1.2, 6), np.linspace(0.95, 1.05, 6)])
+    study = _study(samples, {"paper": np.full(6, np.nan), "ZVD": np.array([0.4, 0.5, np.nan, 0.6, 0.5, 0.4])})
+    band = Band.absolute({"x": 2e-5, "y": 4e-6, "z": 3e-7, "rx": 2e-5, "ry": 1e-4, "rz": 3e-7})
+    study = RobustnessStudy(study.scenario, study.varied, study.samples, study.methods, band, tmp_path)
+    assert plot_cdf(study).stat().st_size > 0
+    report = write_robustness_report(study).read_text()
+    assert "+∞ (the paper profile does not settle)" in report
+    data = study.to_dict()["methods"]["ZVD"]["benefit"]
+    assert data["only_paper_unsettled"] == 5
+    assert data["compared"] == 5  # machine 2: neither settles
+    assert data["p50"] == "+inf"
+
+
+def test_benefit_percentiles_are_the_lower_order_statistic():
+    samples = np.column_stack([np.linspace(0.8, 1.2, 4), np.linspace(0.95, 1.05, 4)])
+    study = _study(samples, {"paper": np.array([2.0, 2.0, 2.0, 2.0]), "ZVD": np.array([1.0, 1.5, 0.5, np.nan])})
+    data = study.to_dict()["methods"]["ZVD"]["benefit"]
+    assert data["p5"] == "-inf"  # the machine ZVD does not settle on
+    assert data["p50"] == pytest.approx(0.5)  # of -inf, 0.5, 1.0, 1.5: the lower middle one
+    assert data["only_method_unsettled"] == 1
