@@ -23,7 +23,7 @@ from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import shaped
 from isolator.scenario.profiles import PiecewisePolynomialProfile
-from isolator.scenario.shapers import EI_TOLERANCE, SHAPERS, Shaper, residual_vibration, shaper
+from isolator.scenario.shapers import EI_TOLERANCE, SHAPERS, Shaper, convolved, residual_vibration, shaper
 
 from .move_metrics import with_moves
 
@@ -119,12 +119,9 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
         profile = carriage.profile
         if not isinstance(profile, PiecewisePolynomialProfile) or math.isinf(profile.stop_time):
             raise ScenarioError(f"carriages[{i}].profile: input shaping needs a rest-to-rest move")
-        amps, times = np.array([1.0]), np.array([0.0])
-        for mode in dominant_modes(scenario, i, peaks)[:modes]:
-            train = shaper(kind, mode.frequency, mode.damping)
-            amps = np.outer(amps, train.amplitudes).ravel()
-            times = np.add.outer(times, train.times).ravel()
-        profiles.append(shaped(profile, list(amps), list(times), kind=f"{kind}-shaped"))
+        excited = dominant_modes(scenario, i, peaks)[:modes]
+        amps, times = convolved([shaper(kind, m.frequency, m.damping) for m in excited])
+        profiles.append(shaped(profile, amps, times, kind=f"{kind}-shaped"))
     return with_moves(scenario, profiles)
 
 

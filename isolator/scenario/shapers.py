@@ -9,13 +9,14 @@ Pure formulas of a mode's frequency and damping: scenario files can give a step'
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from isolator.errors import ParameterError
 
-__all__ = ["EI_TOLERANCE", "SHAPERS", "Shaper", "residual_vibration", "shaper"]
+__all__ = ["EI_TOLERANCE", "SHAPERS", "Shaper", "convolved", "residual_vibration", "shaper"]
 
 SHAPERS = ("zv", "zvd", "ei")
 
@@ -99,3 +100,13 @@ def residual_vibration(train: Shaper, frequency: float, damping: float) -> float
     a = np.asarray(train.amplitudes)
     total = np.sum(a * np.exp(damping * w * t) * np.exp(1j * wd * t))
     return float(np.exp(-damping * w * t[-1]) * abs(total))
+
+
+def convolved(trains: Sequence[Shaper]) -> tuple[list[float], list[float]]:
+    """The impulse train of shapers applied one after the other (one per mode): every combination of their
+    impulses, amplitudes multiplied [-] and times added [s]; ``([1], [0])`` for none."""
+    amplitudes, times = np.ones(1), np.zeros(1)
+    for train in trains:
+        amplitudes = np.outer(amplitudes, train.amplitudes).ravel()
+        times = np.add.outer(times, train.times).ravel()
+    return [float(a) for a in amplitudes], [float(t) for t in times]

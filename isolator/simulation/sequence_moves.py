@@ -14,6 +14,7 @@ from isolator.scenario.definitions import MotionLimits, Scenario
 from isolator.scenario.profile_shapes import scurve, shaped
 from isolator.scenario.profiles import Profile
 from isolator.scenario.sequence import Move, held
+from isolator.scenario.shapers import convolved
 
 __all__ = ["MoveDesign", "step_profiles"]
 
@@ -60,12 +61,9 @@ def _scurve_move(mv: Move, q: float, velocity: float, acceleration: float, jerk:
     move = scurve(q, mv.target - q, velocity, acceleration, jerk, t0=mv.delay)
     if not mv.shapers:
         return move
-    amplitudes, times = np.ones(1), np.zeros(1)
-    for train in mv.shapers:  # convolved: every pair of impulses
-        amplitudes = np.outer(amplitudes, train.amplitudes).ravel()
-        times = np.add.outer(times, train.times).ravel()
+    amplitudes, times = convolved(mv.shapers)
     kind = "+".join(train.kind for train in mv.shapers)
-    return shaped(move, list(amplitudes), list(times), kind=f"{kind}-shaped")
+    return shaped(move, amplitudes, times, kind=f"{kind}-shaped")
 
 
 def _designed(design: MoveDesign, index: int, name: str, q0: float, q1: float, limits: MotionLimits) -> Profile:
