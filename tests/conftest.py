@@ -85,6 +85,17 @@ def active_dict(max_force: float = 500.0, bandwidth: float | None = None) -> dic
     return data
 
 
+def tipping_dict(height: float) -> dict[str, Any]:
+    """The base table without carriages, 4400 kg, its isolators ``height`` [m] below the mass centre (the
+    hand-calculated tipping cases: rocking stiffness against weight times height)."""
+    data = base_dict()
+    data["carriages"] = []
+    data["table"] = {"mass": 4400.0, "inertia": [400.0, 1500.0, 1800.0]}
+    for iso in data["isolators"]:
+        iso["position"][2] = -height
+    return data
+
+
 def make(data: dict[str, Any]) -> Scenario:
     return scenario_from_dict(copy.deepcopy(data))
 

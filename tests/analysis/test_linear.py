@@ -17,7 +17,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from conftest import asymmetric_3d_dict, base_dict, make
+from conftest import asymmetric_3d_dict, base_dict, make, tipping_dict
 from isolator import ParameterError, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes, modes_over_travel
@@ -185,17 +185,8 @@ def test_linear_response_matches_full_simulation_for_small_floor_motion():
 
 
 # -- tipping, hand calculation --------------------------------------------------------
-def _tipping_dict(height: float) -> dict:
-    data = base_dict()
-    data["carriages"] = []
-    data["table"] = {"mass": 4400.0, "inertia": [400.0, 1500.0, 1800.0]}
-    for iso in data["isolators"]:
-        iso["position"][2] = -height
-    return data
-
-
 def test_rocking_margin_and_tipping_limit_match_hand_calculation():
-    data = _tipping_dict(0.2)
+    data = tipping_dict(0.2)
     scenario = make(data)
     weight = scenario.gravity * scenario.total_mass
     kz_y2 = sum(iso.stiffness[2] * iso.position[1] ** 2 for iso in scenario.isolators)
@@ -207,7 +198,7 @@ def test_rocking_margin_and_tipping_limit_match_hand_calculation():
     assert rock.weakest_axis == "rx"
     assert rock.elastic[0] == pytest.approx(kz_y2, rel=1e-9)
     critical = kz_y2 / weight
-    below, above = make(_tipping_dict(0.98 * critical)), make(_tipping_dict(1.02 * critical))
+    below, above = make(tipping_dict(0.98 * critical)), make(tipping_dict(1.02 * critical))
     assert stability(below).stable
     report = stability(above)
     assert not report.stable

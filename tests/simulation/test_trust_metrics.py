@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from conftest import active_dict, asymmetric_3d_dict, base_dict, make
+from conftest import active_dict, asymmetric_3d_dict, base_dict, make, tipping_dict
 from isolator import Simulator
 from isolator.errors import ScenarioError
 from isolator.simulation.actuation import ForceHistory
@@ -113,24 +113,15 @@ def test_a_batch_gives_the_single_runs_metrics_at_a_coarse_output_rate():
 
 
 # -- stability and simulation agree near the tipping limit ---------------------------------
-def _tipping_dict(height: float) -> dict:
-    data = base_dict()
-    data["carriages"] = []
-    data["table"] = {"mass": 4400.0, "inertia": [400.0, 1500.0, 1800.0]}
-    for iso in data["isolators"]:
-        iso["position"][2] = -height
-    return data
-
-
 @pytest.mark.parametrize("factor", [1 - 1e-3, 1 - 1e-6, 1 + 1e-9, 1 + 1e-6, 1 + 1e-3])
 def test_simulate_refuses_exactly_what_stability_calls_unstable_in_its_words(factor):
     from isolator.analysis.stability import stability
     from isolator.errors import UnstableTableError
 
-    reference = make(_tipping_dict(0.2))
+    reference = make(tipping_dict(0.2))
     weight = reference.gravity * reference.total_mass
     critical = sum(iso.stiffness[2] * iso.position[1] ** 2 for iso in reference.isolators) / weight  # W h = sum kz y^2
-    scenario = make(_tipping_dict(factor * critical))
+    scenario = make(tipping_dict(factor * critical))
     report = stability(scenario)
     assert report.stable == (factor < 1)
     if report.stable:
