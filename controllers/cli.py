@@ -61,7 +61,8 @@ def register(sub: Any) -> None:
                      "round (default 32)")
 
     ff.set_defaults(handler=_feedforward)
-    opt.set_defaults(handler=_optimise_profile)
+    opt.set_defaults(handler=_optimise_profile,  # the parser's own defaults: a sequence refuses anything else
+                     single_move_defaults={name: opt.get_default(name) for name in _SINGLE_MOVE_OPTIONS})
 
 
 def _feedforward(args: argparse.Namespace) -> int:
@@ -126,15 +127,14 @@ def _optimise_profile(args: argparse.Namespace) -> int:
     return report(args.json, data, _profile_summary(result, spread), [("optimised scenario", out)])
 
 
-#: optimise-profile's options that design a single move, with their defaults (not for a sequence)
-_SINGLE_MOVE_OPTIONS = {"objective": "settling", "shape": "scurve", "transcription": "single",
-                        "max_move_time_increase": 0.05, "nominal": False}
+#: optimise-profile's options that design a single move (not for a sequence)
+_SINGLE_MOVE_OPTIONS = ("objective", "shape", "transcription", "max_move_time_increase", "nominal")
 
 
 def _optimise_sequence(args: argparse.Namespace, scenario: Scenario, out: Path | None) -> int:
     from controllers.profiles.sequence_design import optimise_sequence, write_sequence_scenario
 
-    for name, default in _SINGLE_MOVE_OPTIONS.items():
+    for name, default in args.single_move_defaults.items():
         if getattr(args, name) != default:
             option = "--" + name.replace("_", "-")
             raise ParameterError(f"{option}: designs a single move; a scenario with a [sequence] is designed for "
