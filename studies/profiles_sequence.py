@@ -27,6 +27,7 @@ from typing import Any
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.ticker import MaxNLocator
 
 from controllers.profiles.sequence_baselines import shaped_moves, time_optimal_moves
 from controllers.profiles.sequence_design import SequenceOptimisation, optimise_sequence, write_sequence_scenario
@@ -184,8 +185,10 @@ def _plot_steps(study: SequenceProfileStudy) -> None:
     fig, ax = plt.subplots(figsize=(12, 4.5), constrained_layout=True)
     for name, r in study.runs.items():
         steps = [s for s in r.steps if s.settled is not None]
-        ax.plot([s.index for s in steps], [s.settled - s.start for s in steps if s.settled is not None], "o-",
+        ax.plot([s.index for s in steps], [s.settled - s.start for s in steps if s.settled is not None],
+                "o--" if name.startswith("time-optimal") else "o-",  # on top of the S-curve: dashed to show both
                 ms=3, lw=1.2, label=name, color="0.3" if name == _BASELINE else None)
+    ax.xaxis.set_major_locator(MaxNLocator(integer=True))
     ax.set_xlabel("step")
     ax.set_ylabel("move + settle [s]")
     ax.set_ylim(bottom=0)
