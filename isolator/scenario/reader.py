@@ -51,6 +51,7 @@ from isolator.scenario.validation import (
     check_strokes,
     check_unique_names,
 )
+from isolator.scenario.sensors import read_sensors
 from isolator.scenario.windows_reader import read_windows
 
 __all__ = ["bundled_scenarios", "load_scenario", "load_spectrum", "read_csv_columns", "resolve_scenario_path",
@@ -165,6 +166,7 @@ def scenario_from_dict(
     top.used.add("points")
     check_unique_names([pt.name for pt in points], "points")
     windows = read_windows(top, data, [pt.name for pt in points])
+    sensors = read_sensors(top, data)
     top.finish()
     scenario = Scenario(
         name=name,
@@ -181,6 +183,7 @@ def scenario_from_dict(
         leveling=leveling,
         windows=windows,
         sequence=sequence,
+        sensors=sensors,
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
     check_sequence(scenario)

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -12,8 +11,10 @@ from typing import Any
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
+from isolator.scenario.sensors import Sensor
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
+from isolator.simulation.response_csv import write_response_csv
 from isolator.simulation.settling import Band, SettlingResult
 from isolator.simulation.window_settling import WindowResult, moves_per_hour, plot_windows
 
@@ -64,6 +65,8 @@ class Response:
         The scenario's ``[[points]]`` (read their motion with :meth:`point`).
     window_result : WindowResult or callable or None
         With ``[[windows]]``: the window settling (read :attr:`windows`).
+    sensor_set : tuple of Sensor
+        The scenario's ``[[sensors]]`` (read their signals with :meth:`sensor`, :attr:`sensor_signals`).
     """
 
     name: str
@@ -87,6 +90,8 @@ class Response:
     point_set: PointSet | None = field(default=None, repr=False)
     window_result: WindowResult | Callable[[], WindowResult] | None = field(default=None, repr=False, compare=False)
     point_history: np.ndarray | None = field(default=None, repr=False, compare=False)
+    sensor_set: tuple[Sensor, ...] = field(default=(), repr=False)
+    sensor_history: np.ndarray | Callable[[], np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     def _evaluated(self, name: str) -> Any:
         """The field ``name``, computed on first use: a callable there is called once and replaced by its value."""
@@ -111,6 +116,23 @@ class Response:
             object.__setattr__(self, "point_history", moved)
         assert self.point_history is not None
         return self.point_history
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        """The scenario's ``[[sensors]]`` names."""
+        return tuple(s.name for s in self.sensor_set)
+
+    @property
+    def sensor_signals(self) -> np.ndarray:
+        """Every sensor's noise-free signal (sensors, N) in its SI quantity (the columns ``s:<sensor>``)."""
+        value = self._evaluated("sensor_history")
+        return np.zeros((0, self.t.size)) if value is None else value
+
+    def sensor(self, name: str) -> np.ndarray:
+        """The sensor ``name``'s signal (N,) [m, m/s or m/s^2]; a KeyError naming the known sensors."""
+        if name not in self.sensor_names:
+            raise KeyError(f"sensor: unknown '{name}' (sensors: {', '.join(self.sensor_names) or 'none'})")
+        return self.sensor_signals[self.sensor_names.index(name)]
 
     def point(self, name: str) -> np.ndarray:
         """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]."""
@@ -247,29 +269,10 @@ class Response:
 
     def to_csv(self, path: str | Path) -> Path:
         """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``<point>:x,<point>:y,<point>:z``
-        per ``[[points]]`` entry [m], ``f:<actuator>...`` [N] when actuators applied forces, then for
-        pneumatic runs ``p:<isolator>...`` [Pa] and
-        ``h:<group>...`` [m], to ``path``."""
-        path = Path(path)
-        header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names]]
-        columns = [self.t, self.signals.T, self.q.T]
-        if self.point_names:
-            header += [f"{n}:{a}" for n in self.point_names for a in "xyz"]
-            columns.append(self.point_signals.reshape(-1, self.t.size).T)
-        if self.actuator_forces.size and np.any(self.actuator_forces):
-            header += [f"f:{n}" for n in self.actuator_names]
-            columns.append(self.actuator_forces.T)
-        if self.pneumatic is not None:
-            extra = self.pneumatic.columns
-            header += list(extra)
-            columns.append(np.array(list(extra.values())).T)
-        data = np.column_stack(columns)
-        with open(path, "w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(header)
-            for row in data:
-                writer.writerow([f"{v:.10g}" for v in row])
-        return path
+        per ``[[points]]`` entry [m], ``s:<sensor>`` per ``[[sensors]]`` entry (its SI quantity, noise-free),
+        ``f:<actuator>...`` [N] when actuators applied forces, then for pneumatic runs ``p:<isolator>...``
+        [Pa] and ``h:<group>...`` [m], to ``path``."""
+        return write_response_csv(self, path)
 
     def summary(self) -> str:
         """A text table of peaks, final values and settling times per signal."""

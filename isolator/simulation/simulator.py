@@ -27,6 +27,7 @@ from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
+from isolator.simulation.sensors import sensor_signals
 from isolator.simulation.settling import Band, SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
@@ -355,6 +356,9 @@ class Simulator:
             pneumatic_result=pneumatic,
             point_set=points,
             window_result=windows,
+            sensor_set=self.scenario.sensors,
+            sensor_history=(lambda: sensor_signals(self.scenario, self.model, t, run_states(), at_samples, p,
+                                                   start.state)) if self.scenario.sensors else None,
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
             move_start=min((b for c in self.scenario.carriages for b in c.profile.breakpoints[:1]), default=0.0),
         )
