@@ -227,7 +227,9 @@ def _check_time(t: np.ndarray, at: Callable[[int], str]) -> None:
     mean = (t[-1] - t[0]) / (t.size - 1)
     off = np.abs(step - mean) > UNIFORM_TOLERANCE * mean
     if off.any():
-        i = int(np.argmax(off)) + 1
+        # named: where the spacing first changes (the mean is shifted by a jump, so every step is "off")
+        jump = np.abs(step - step[0]) > UNIFORM_TOLERANCE * mean
+        i = int(np.argmax(jump if jump.any() else off)) + 1
         raise ScenarioError(f"{at(i)}: t = {t[i]:.9g} is {step[i - 1]:.9g} s after the previous sample; the "
                             f"mean spacing is {mean:.9g} s (a record must be uniformly sampled, each spacing "
                             f"within {UNIFORM_TOLERANCE:g} of the mean)")

@@ -304,3 +304,19 @@ def test_uff_bad_mapping(tmp_path, uff, reason):
     path = _uff(tmp_path, [_dataset(1, 3, np.zeros(8))])
     with pytest.raises(ParameterError, match=re.escape(reason)):
         read_record(path, SENSORS, uff)
+
+
+def test_uff_uneven_abscissa_accepted_when_uniform(tmp_path):
+    """A dataset written with an uneven abscissa (x stored per sample) is read when its x is uniform."""
+    data = np.arange(40.0)
+    uneven = _dataset(1, 3, data, binary=0)
+    uneven["abscissa_spacing"] = 0
+    record = read_record(_uff(tmp_path, [uneven]), SENSORS, {"a-z": (1, "Z")})
+    np.testing.assert_allclose(record.t, 0.002 * np.arange(40), atol=1e-12)
+    np.testing.assert_allclose(record.channels["a-z"], data)
+    skewed = _dataset(1, 3, data, binary=0)
+    skewed["abscissa_spacing"] = 0
+    skewed["x"] = 0.002 * np.arange(40.0)
+    skewed["x"][25:] += 0.0005
+    _refused(_uff(tmp_path, [skewed], name="skewed.uff"), "channel node 1 +Z, sample 25", "uniformly sampled",
+             uff={"a-z": (1, "Z")})
