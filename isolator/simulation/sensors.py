@@ -45,13 +45,18 @@ def _motion_function(model: Model) -> ca.Function:
     return ca.Function("sensed_rates", [x, c, p, ref], [motion, rates])
 
 
+@lru_cache(maxsize=16)
+def _mapped(model: Model, n: int) -> ca.Function:
+    """:func:`_motion_function` for ``n`` states at once."""
+    return _motion_function(model).map(n)
+
+
 def table_motion(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.ndarray, start: np.ndarray
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The mass centre's velocity and acceleration, the table's angular velocity and angular acceleration
     (each (N, 3), world axes, [m/s], [m/s^2], [rad/s], [rad/s^2]) at states (N, n_states) with the model's
     inputs (N, input size) there and the parameter vector ``p``."""
-    n = states.shape[0]
-    fn = _motion_function(model).map(n)
+    fn = _mapped(model, states.shape[0])
     motion, rates = fn(np.asarray(states, dtype=float).T, np.asarray(inputs, dtype=float).T, np.asarray(p, dtype=float),
                        np.asarray(start, dtype=float))
     motion, rates = np.asarray(motion).T, np.asarray(rates).T
