@@ -13,8 +13,8 @@ import numpy as np
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
-from isolator.scenario.sequence import StepSequence
 from isolator.scenario.sensors import Sensor
+from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import Window
 
 __all__ = [

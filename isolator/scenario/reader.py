@@ -35,6 +35,7 @@ from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pne
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
 from isolator.scenario.rules import check_scenario_values
+from isolator.scenario.sensors import read_sensors
 from isolator.scenario.sequence import StepSequence, held, read_sequence
 from isolator.scenario.tables import (
     SPECTRUM_KINDS,
@@ -51,7 +52,6 @@ from isolator.scenario.validation import (
     check_strokes,
     check_unique_names,
 )
-from isolator.scenario.sensors import read_sensors
 from isolator.scenario.windows_reader import read_windows
 
 __all__ = ["bundled_scenarios", "load_scenario", "load_spectrum", "read_csv_columns", "resolve_scenario_path",

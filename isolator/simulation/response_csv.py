@@ -4,20 +4,17 @@ from __future__ import annotations
 
 import csv
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import Any
 
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
 
-if TYPE_CHECKING:
-    from isolator.simulation.response import Response
-
 __all__ = ["write_response_csv"]
 
 
-def write_response_csv(response: Response, path: str | Path) -> Path:
-    """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m], ``s:<sensor>``
+def write_response_csv(response: Any, path: str | Path) -> Path:
+    """Write a :class:`~isolator.simulation.response.Response`'s ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m], ``s:<sensor>``
     per sensor (its SI quantity), ``f:<actuator>`` [N] when actuators applied forces, then a pneumatic run's
     ``p:<isolator>`` [Pa] and ``h:<group>`` [m] columns, to ``path``; returns the path."""
     path = Path(path)
