@@ -4,19 +4,17 @@ the nominal and the fitted model, the move experiments' traces, and the paramete
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-    from isolator.calibration.result import CalibrationResult, Curves
-
 __all__ = ["calibration_figure"]
 
 
-def _floor_rows(curves: Curves) -> list[tuple[str, int, int]]:
+def _floor_rows(curves: Any) -> list[tuple[str, int, int]]:
     """(label, sensor, input) per table sensor: the floor input it responds to most."""
     rows = []
     for s, name in enumerate(curves.outputs):
@@ -25,8 +23,8 @@ def _floor_rows(curves: Curves) -> list[tuple[str, int, int]]:
     return rows
 
 
-def calibration_figure(result: CalibrationResult) -> Figure:
-    """The figure (a matplotlib Figure, not shown)."""
+def calibration_figure(result: Any) -> Figure:
+    """A :class:`~isolator.calibration.result.CalibrationResult`'s figure (a matplotlib Figure, not shown)."""
     from matplotlib.figure import Figure
 
     floors = [(n, c) for n, c in result.curves.items() if c.kind == "floor"]

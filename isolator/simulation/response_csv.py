@@ -14,7 +14,8 @@ __all__ = ["write_response_csv"]
 
 
 def write_response_csv(response: Any, path: str | Path) -> Path:
-    """Write a :class:`~isolator.simulation.response.Response`'s ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m], ``s:<sensor>``
+    """Write a :class:`~isolator.simulation.response.Response`'s samples to ``path``:
+    ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m], ``s:<sensor>``
     per sensor (its SI quantity), ``f:<actuator>`` [N] when actuators applied forces, then a pneumatic run's
     ``p:<isolator>`` [Pa] and ``h:<group>`` [m] columns, to ``path``; returns the path."""
     path = Path(path)
