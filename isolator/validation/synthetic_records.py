@@ -74,12 +74,14 @@ class FloorMotion:
     count: int = 400
     rms: float = 0.01
     seed: int = 0
+    axes: str = "xyz"
 
     def components(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         rng = np.random.default_rng(self.seed)
         w = 2 * np.pi * rng.uniform(self.low, self.high, size=(3, self.count))
         phase = rng.uniform(0, 2 * np.pi, size=(3, self.count))
         amp = self.rms * np.sqrt(2.0 / self.count) / w**2  # acceleration amplitude rms*sqrt(2/count) per line
+        amp[[k for k, a in enumerate("xyz") if a not in self.axes]] = 0.0
         return w, phase, amp
 
     def at(self, t: np.ndarray | float) -> np.ndarray:
