@@ -42,6 +42,7 @@ from isolator.simulation.stepping import (
     staged_parameters,
     with_start,
 )
+from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
 from isolator.simulation.window_settling import run_points
 
@@ -280,10 +281,12 @@ class Simulator:
             signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
                               polynomials[..., None], start.state[None, :], self.model.variant.signals)
-            def measure(rule: Band) -> dict[str, SettlingResult]:
-                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals)
-
             x0, dense = start.state, polynomials
+            tail, note = run_tail(self.scenario, self.model, p, start, end,
+                                  DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)
+
+            def measure(rule: Band) -> dict[str, SettlingResult]:
+                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals, tail, note)
 
             @cache  # the states at the samples, once for the response, leveling and windows
             def history() -> np.ndarray:
@@ -317,9 +320,15 @@ class Simulator:
             fine = cache(lambda: (grid.nodes, every))  # the internal grid, >= 1 kHz (typed as in the other branch)
             on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
             signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
+            # forces or feedback act to the end: no free motion after it, the run must show the signal settled
+            free = (None, "") if forces is not None or feedback is not None else run_tail(
+                self.scenario, self.model, p, start, end, every[-1], float(grid.nodes[-1]))
+
+            peaks = signal_peaks(on_grid)  # the metrics on every node, the entry into a band interpolated
+            check_turn(peaks, grid.nodes, on_grid)
 
             def measure(rule: Band) -> dict[str, SettlingResult]:
-                return self._metrics(on_grid, final, hold, rule)
+                return settling_metrics(grid.nodes, on_grid, final, self.stop_time, rule, hold, peaks, True, *free)
 
         t = grid.samples
         run_states = history if states is None else (lambda: states)
@@ -358,15 +367,6 @@ class Simulator:
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
             move_start=min((b for c in self.scenario.carriages for b in c.profile.breakpoints[:1]), default=0.0),
         )
-
-    def _metrics(self, signals: np.ndarray, final: np.ndarray | None, hold: float,
-                 rule: Band) -> dict[str, SettlingResult]:
-        """Settling of the six signals (6, nodes) of an RK4 run without NaN, on every node of the internal
-        grid (the instant a signal enters its band interpolated between two nodes)."""
-        t = self.grid.nodes
-        peaks = signal_peaks(signals)
-        check_turn(peaks, t, signals)
-        return settling_metrics(t, signals, final, self.stop_time, rule, hold, peaks, True)
 
     def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``
