@@ -29,10 +29,11 @@ from isolator.errors import (
     UnstableTableError,
 )
 from isolator.model.cache import get_model
-from isolator.model.equilibrium import Equilibrium, RockingStiffness, static_equilibrium
+from isolator.model.equilibrium import Equilibrium, RockingStiffness
 from isolator.model.parameters import ParameterLayout
 from isolator.model.signals import table_signals
 from isolator.model.variants import EXACT, MODEL_KINDS, PAPER, Model, ModelVariant, build_model
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -133,7 +134,6 @@ __all__ = [
     "shaped",
     "simulate",
     "stability",
-    "static_equilibrium",
     "table_signals",
     "transmissibility",
     "trapezoid",
@@ -141,3 +141,5 @@ __all__ = [
 ]
 
 __version__ = "0.1.0"
+
+check_public(globals(), foreign=True)  # what the modules defining them do not check (the sweep's result)

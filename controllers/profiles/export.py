@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.reader import resolve_scenario_path
 
 from .move_design import MoveDesign
@@ -86,3 +87,6 @@ def absolute_files(data: Any, base: Path) -> None:
     elif isinstance(data, list):
         for item in data:
             absolute_files(item, base)
+
+
+check_public(globals())

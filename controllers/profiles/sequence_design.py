@@ -34,6 +34,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import resolve_scenario_path
 from isolator.scenario.sequence import Move, Step, sequence_table
@@ -380,3 +381,5 @@ def write_sequence_scenario(source: str | Path | None, scenario: Scenario, path:
         tomli_w.dump(data, handle)
     return target
 
+
+check_public(globals())

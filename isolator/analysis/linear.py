@@ -35,6 +35,7 @@ from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness,
 from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation, skew
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.rules import check_value, closest
@@ -358,3 +359,6 @@ def _state_space(
         a, a @ b1 + b0, c, c @ b1,
         inputs=inputs, outputs=out_names, states=states, name=scenario.name,
     )
+
+
+check_public(globals(), ("LinearModel", "linearise"))

@@ -9,6 +9,7 @@ import numpy as np
 
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.model.equilibrium import DOF_NAMES
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 __all__ = ["ModeTravel", "Modes", "modes", "modes_over_travel"]
@@ -236,3 +237,6 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
         freqs.append(np.array([m.frequencies_hz for m in rows]))
         zetas.append(np.array([m.damping_ratios for m in rows]))
     return ModeTravel(tuple(names), positions, freqs, zetas)
+
+
+check_public(globals(), ("Modes", "modes", "modes_over_travel"))

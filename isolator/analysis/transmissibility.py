@@ -11,6 +11,7 @@ from scipy.optimize import brentq, minimize_scalar
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
 from isolator.model.equilibrium import DOF_NAMES
+from isolator.scenario.arguments import check_public
 
 __all__ = ["FrequencyResponse", "compliance", "default_frequencies", "transmissibility"]
 
@@ -203,3 +204,6 @@ def _response(
 ) -> FrequencyResponse:
     f = default_frequencies(lin) if frequency_hz is None else np.asarray(frequency_hz, dtype=float)
     return FrequencyResponse(kind, f, lin.frequency_response(f, inputs, DOF_NAMES), inputs, lin)
+
+
+check_public(globals(), ("FrequencyResponse", "compliance", "transmissibility"))

@@ -14,6 +14,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.model.rotations import quaternion_to_matrix
+from isolator.scenario.arguments import check_public
 
 __all__ = [
     "SensedMotion",
@@ -111,3 +112,6 @@ def signal_jacobian(variant: SensedMotion, n_states: int) -> ca.Function:
     [m or rad per state unit]."""
     x, reference = ca.SX.sym("x", n_states), ca.SX.sym("x_ref", n_states)
     return ca.Function("signal_jacobian", [x, reference], [ca.jacobian(variant.sensed_motion(x, reference)[:6], x)])
+
+
+check_public(globals(), ("table_signals"))

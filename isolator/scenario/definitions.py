@@ -10,6 +10,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
@@ -354,3 +355,7 @@ class Scenario:
     def with_changes(self, **changes: object) -> Scenario:
         """A copy with top-level fields replaced (see :func:`dataclasses.replace`)."""
         return replace(self, **changes)  # type: ignore[arg-type]
+
+
+check_public(globals(), ("Actuator", "Carriage", "Isolator", "MotionLimits", "Point", "Scenario", "Settling",
+                         "SimulationSettings", "Table"))

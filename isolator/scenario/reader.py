@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ScenarioError
+from isolator.scenario.arguments import check_public, register_conversion
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -29,6 +30,7 @@ from isolator.scenario.definitions import (
     SimulationSettings,
     Table,
 )
+from isolator.scenario.field_checks import register_field_checks
 from isolator.scenario.keys import KeyReader, load_toml, number, number_list, table_of_tables
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
@@ -379,3 +381,6 @@ def _read_settling(r: KeyReader) -> Settling:
     return Settling(fraction=fraction)
 
 
+register_conversion(Scenario, load_scenario)
+register_field_checks()
+check_public(globals(), ("bundled_scenarios", "load_scenario", "scenario_from_dict"))

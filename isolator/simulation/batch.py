@@ -25,6 +25,7 @@ from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
 from isolator.numerics.dop853 import DenseStepper
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.resources import check_memory
@@ -363,3 +364,6 @@ def scale_label(stiffness: Sequence[float] | float, damping: Sequence[float] | f
     """How a batch of scaled designs names run ``i``: ``run i (stiffness x1.2, damping x0.5)``."""
     k, c = np.asarray(stiffness, dtype=float).reshape(-1), np.asarray(damping, dtype=float).reshape(-1)
     return lambda i: f"run {i} (stiffness x{k[i]:g}, damping x{c[i]:g})"
+
+
+check_public(globals(), ("BatchResult"))

@@ -28,6 +28,7 @@ from scipy.interpolate import CubicSpline
 
 from isolator.model.equilibrium import Equilibrium, air_in_groups, closed_rest_states
 from isolator.model.variants import Model
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.simulation.band import Band
@@ -340,3 +341,6 @@ def pneumatic_result(
         dynamic=dynamic,
         supply_exhausted=exhausted,
     )
+
+
+check_public(globals(), ("PneumaticResult"))

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
@@ -394,3 +395,6 @@ class Response:
         ax.set_title("residual vibration after the stop, in units of each signal's settling band (settled below 1)")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(loc="upper right", fontsize=8, ncol=7)
+
+
+check_public(globals(), ("Response"))

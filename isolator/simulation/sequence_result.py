@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile
 from isolator.simulation.points import point_positions
@@ -323,3 +324,6 @@ def chain_profiles(result: SequenceResult) -> tuple[PiecewisePolynomialProfile, 
         padded = tuple(tuple(c) + (0.0,) * (width - len(c)) for c in coefficients)
         out.append(PiecewisePolynomialProfile(tuple(knots), padded, kind="chain"))
     return tuple(out)
+
+
+check_public(globals(), ("SequenceResult", "StepResult"))

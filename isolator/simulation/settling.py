@@ -7,6 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Settling
 from isolator.simulation.band import MOTION_FLOOR, Band, as_band
 from isolator.simulation.free_tail import FreeTail
@@ -333,3 +334,6 @@ def settling_results(
             time, reason = float(times[i]), ""
         out[name] = SettlingResult(time, float(peaks[i]), float(bands[i]), reason)
     return out
+
+
+check_public(globals(), ("SettlingResult", "settling_time"))

@@ -12,10 +12,12 @@ import numpy as np
 from isolator.errors import SimulationError, UnstableTableError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
+from isolator.model.names import expand_changes
 from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.numerics.step_plan import PROBES
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
@@ -94,8 +96,9 @@ class Simulator:
 
     # -- parameters ------------------------------------------------------------
     def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
-        """The parameter vector with named entries changed (names: ``layout.names``), each checked by the
-        rules the file reader checks by (:mod:`isolator.scenario.rules`).
+        """The parameter vector with named entries changed (names: ``layout.names``, or as ``isolator.sweep``
+        takes them: ``isolators[*].damping.z``, ``isolators[0].stiffness``), each checked by the rules the file
+        reader checks by (:mod:`isolator.scenario.rules`).
 
         Raises
         ------
@@ -103,7 +106,7 @@ class Simulator:
             Naming the entry, ``changes['isolators[0].damping.z']: must be >= 0, got -5``; an unknown
             name with the closest valid one.
         """
-        return self.layout.with_changes(self.parameters, changes)
+        return self.layout.with_changes(self.parameters, expand_changes(self.layout, changes))  # type: ignore[arg-type]
 
     def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
         """Parameter vector with all isolator stiffness and damping scaled (:func:`scaled_parameter_sets`)."""
@@ -215,7 +218,7 @@ class Simulator:
         Parameters
         ----------
         changes : mapping, optional
-            Parameter values by name, e.g. ``{"isolators[0].stiffness.z": 6e5}``.
+            Parameter values by name, e.g. ``{"isolators[0].stiffness.z": 6e5}`` (``isolators[*].damping`` too).
         p : ndarray, optional
             A whole parameter vector (overrides ``changes``).
         forces : ForceHistory, optional
@@ -393,3 +396,6 @@ def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, flo
     """Simulate a scenario's carriage transients from the initial static equilibrium (``model`` "exact" or
     "paper"; ``changes``: parameter values by name, :attr:`ParameterLayout.names`)."""
     return Simulator(scenario, model).run(changes)
+
+
+check_public(globals(), ("Simulator", "simulate"))
