@@ -17,6 +17,8 @@ numbers, and annotations the checker cannot read admit anything.
 from __future__ import annotations
 
 import collections.abc as abc
+import contextlib
+import contextvars
 import functools
 import inspect
 import numbers
@@ -31,7 +33,10 @@ import numpy as np
 
 from isolator.errors import IsolatorError, ParameterError
 
-__all__ = ["check_public", "checked", "matches", "register_conversion", "register_validator"]
+__all__ = ["check_public", "checked", "matches", "reading", "register_conversion", "register_validator"]
+
+#: True while a reader builds the dataclasses: it checks their values itself, naming the file's keys
+_READING: contextvars.ContextVar[bool] = contextvars.ContextVar("isolator_reading", default=False)
 
 _CONVERSIONS: dict[type, Callable[[Any], Any]] = {}
 _VALIDATORS: dict[type, Callable[[Any], None]] = {}
@@ -43,6 +48,16 @@ _READABLE = {float: "a number", int: "a whole number", bool: "True or False", st
 def register_conversion(cls: type, convert: Callable[[Any], Any]) -> None:
     """Let parameters annotated ``cls`` take a string or path too, converted by ``convert``."""
     _CONVERSIONS[cls] = convert
+
+
+@contextlib.contextmanager
+def reading() -> abc.Iterator[None]:
+    """While a reader builds a scenario: the validators wait (the reader checks every value, naming its key)."""
+    token = _READING.set(True)
+    try:
+        yield
+    finally:
+        _READING.reset(token)
 
 
 def register_validator(cls: type, validate: Callable[[Any], None]) -> None:
@@ -104,6 +119,15 @@ def _describe(hint: Any) -> str:
     return f"{'an' if name[:1].lower() in 'aeiou' else 'a'} {name}"
 
 
+def _shown(value: object) -> str:
+    """A wrong argument in an error message: a short number, string or None as written, else its type."""
+    if value is None or isinstance(value, bool | numbers.Number | str):
+        text = repr(value)
+        if len(text) <= 40:
+            return text
+    return type(value).__name__
+
+
 def _hints(func: Callable[..., Any]) -> dict[str, Any]:
     """The annotations of ``func`` resolved (those that cannot be resolved are left out)."""
     try:
@@ -149,9 +173,9 @@ def checked(func: Callable[..., Any]) -> Callable[..., Any]:
             if convert is not None and not isinstance(value, convert) and isinstance(value, str | os.PathLike):
                 given[name] = value = _CONVERSIONS[convert](value)
             if not matches(value, hint):
-                raise ParameterError(f"{name}: must be {_describe(hint)}, got {type(value).__name__}")
+                raise ParameterError(f"{name}: must be {_describe(hint)}, got {_shown(value)}")
         out = func(*bound.args, **bound.kwargs)
-        if args and type(args[0]) in _VALIDATORS and func.__name__ == "__init__":
+        if args and type(args[0]) in _VALIDATORS and func.__name__ == "__init__" and not _READING.get():
             _VALIDATORS[type(args[0])](args[0])
         return out
 

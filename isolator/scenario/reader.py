@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ScenarioError
-from isolator.scenario.arguments import check_public, register_conversion
+from isolator.scenario.arguments import check_public, reading, register_conversion
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -125,7 +125,11 @@ def scenario_from_dict(
     default_name : str
         Name used when the data has none.
     """
-    base_dir = Path(base_dir)
+    with reading():
+        return _scenario_from_dict(data, Path(base_dir), default_name)
+
+
+def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: str) -> Scenario:
     top = KeyReader(data, "")
     name = top.string("name", default_name)
     gravity = top.number("gravity", 9.81, nonnegative=True)
