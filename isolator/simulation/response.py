@@ -13,6 +13,7 @@ import numpy as np
 
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
+from isolator.scenario.readable import clean_time, without_dust
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
 from isolator.simulation.settling import Band, SettlingResult
@@ -232,7 +233,7 @@ class Response:
             "model": self.model,
             "move_start": num(self.move_start),
             "stop_time": num(self.stop_time),
-            "move_time": num(self.stop_time - self.move_start),
+            "move_time": num(clean_time(self.stop_time - self.move_start)),
             "signals": list(SIGNALS),
             "peak": {k: num(v) for k, v in self.peak.items()},
             "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
@@ -279,14 +280,16 @@ class Response:
             + (f"the carriages move from t = {self.move_start:.4g} s and never stop (a sine)"
                if math.isinf(self.stop_time) else
                f"the carriages move from t = {self.move_start:.4g} s to their stop at t = {self.stop_time:.4g} s "
-               f"(move time {self.stop_time - self.move_start:.4g} s)"),
+               f"(move time {clean_time(self.stop_time - self.move_start):.4g} s)"),
             f"{'signal':>6}  {'peak':>12}  {'final':>12}  {'settling [s]':>12}",
         ]
         for i, k in enumerate(SIGNALS):
             r = self.settling[k]
             scale = 1e6
             unit = _UNITS[k]
-            final = "-" if self.final is None else f"{self.final[i] * scale:.4g} {unit}"
+            # rounding dust (below 1e-12 of the signal's own size) reads as 0
+            final = "-" if self.final is None else \
+                f"{float(without_dust(self.final[i], max(r.peak, abs(self.final[i])))) * scale:.4g} {unit}"
             st = "-" if r.time is None else f"{r.time:.4g}"
             lines.append(f"{k:>6}  {r.peak * scale:>7.4g} {unit:<4}  {final:>12}  {st:>12}")
         tmax = self.settling_time_max

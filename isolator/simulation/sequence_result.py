@@ -18,6 +18,7 @@ from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile
+from isolator.scenario.readable import length_text
 from isolator.simulation.points import point_positions
 
 if TYPE_CHECKING:
@@ -271,7 +272,7 @@ class SequenceResult:
             return f"{v:10.4f}" if v is not None else f"{'-':>10}"
 
         lines = [f"{self.name} ({self.model} model): {self.step_count} steps, measure {self.measure:g} s, windows "
-                 + "; ".join(f"{w.point} ±{w.translation * 1e9:.4g} nm on {','.join(w.axes)}" for w in self.windows),
+                 + "; ".join(f"{w.point} ±{length_text(w.translation)} on {','.join(w.axes)}" for w in self.windows),
                  f"{'step':>4} " + " ".join(f"{k + ' [s]':>10}" for k in STEP_COLUMNS[1:])]
         for s in self.steps:
             lines.append(f"{s.index:>4} " + " ".join(f(v) for v in (s.start, s.stop, s.settled, s.end, s.move,
