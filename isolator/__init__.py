@@ -19,6 +19,7 @@ from isolator.analysis.pneumatic import EquivalentSpringDamper, equivalent_sprin
 from isolator.analysis.stability import StabilityReport, stability
 from isolator.analysis.transmissibility import FrequencyResponse, compliance, transmissibility
 from isolator.analysis.vibration import VC_CLASSES, VibrationCriteria, vibration_criteria
+from isolator.calibration import CalibrationResult, calibrate
 from isolator.errors import (
     IsolatorError,
     OptimisationError,
@@ -29,10 +30,11 @@ from isolator.errors import (
     UnstableTableError,
 )
 from isolator.model.cache import get_model
-from isolator.model.equilibrium import Equilibrium, RockingStiffness, static_equilibrium
+from isolator.model.equilibrium import Equilibrium, RockingStiffness
 from isolator.model.parameters import ParameterLayout
 from isolator.model.signals import table_signals
 from isolator.model.variants import EXACT, MODEL_KINDS, PAPER, Model, ModelVariant, build_model
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -72,6 +74,7 @@ __all__ = [
     "Air",
     "Band",
     "BatchResult",
+    "CalibrationResult",
     "Capillary",
     "Carriage",
     "Equilibrium",
@@ -116,6 +119,7 @@ __all__ = [
     "VibrationCriteria",
     "build_model",
     "bundled_scenarios",
+    "calibrate",
     "compliance",
     "equivalent_spring_damper",
     "get_model",
@@ -133,7 +137,6 @@ __all__ = [
     "shaped",
     "simulate",
     "stability",
-    "static_equilibrium",
     "table_signals",
     "transmissibility",
     "trapezoid",
@@ -141,3 +144,5 @@ __all__ = [
 ]
 
 __version__ = "0.1.0"
+
+check_public(globals(), foreign=True)  # what the modules defining them do not check (the sweep's result)

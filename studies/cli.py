@@ -10,6 +10,7 @@ from typing import Any
 
 from isolator.cli.helpers import check_run_memory, output_folder, use_agg
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import DEFAULT_SCENARIO, load_scenario
 
@@ -224,3 +225,6 @@ def _sequence_profiles(args: argparse.Namespace, scenario: Scenario) -> int:
         print(f"{name:>22}: {total}{rate}")
     print(f"report: {args.out / 'report.md'}")
     return 0
+
+
+check_public(globals())

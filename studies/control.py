@@ -41,6 +41,7 @@ from controllers.feedforward import (
 from isolator import SIGNALS, Band, OptimisationError, ParameterError, Response, Scenario, ScenarioError, Simulator
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
+from isolator.scenario.arguments import check_public
 
 from .figures import nan_if_none, save_figure
 from .reporting import (
@@ -334,3 +335,6 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
         lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
     lines += ["", "Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`."]
     write_report(study.folder, lines)
+
+
+check_public(globals())

@@ -11,6 +11,8 @@ from matplotlib.axis import Axis
 from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
+from isolator.scenario.arguments import check_public
+
 __all__ = ["log_mesh_edges", "nan_if_none", "plain_log_axis", "save_figure"]
 
 _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
@@ -39,3 +41,6 @@ def log_mesh_edges(values: np.ndarray) -> np.ndarray:
 def nan_if_none(value: float | None) -> float:
     """The value, or NaN for a missing one (a bar or point not drawn)."""
     return math.nan if value is None else value
+
+
+check_public(globals())

@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from isolator import SIGNALS, Response, Scenario, load_scenario, simulate
+from isolator.scenario.arguments import check_public
 from isolator.validation.multibody import MujocoTable, MultibodyRun, mujoco_available
 
 from .figures import save_figure
@@ -232,3 +233,6 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
     if check1 is None:
         lines += ["", "MuJoCo is not installed: the multibody check was skipped (`pip install 'isolator[check]'`)."]
     return write_report(out, lines)
+
+
+check_public(globals())

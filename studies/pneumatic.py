@@ -45,6 +45,7 @@ from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import default_frequencies, transmissibility
 from isolator.errors import ParameterError
 from isolator.model.parameters import ParameterLayout
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import SineProfile
@@ -369,3 +370,6 @@ def _run_designs(scenario: Scenario, duration: float, designs: list[tuple[Transi
 
 def _known(value: float) -> float | None:
     return None if math.isnan(value) else float(value)
+
+
+check_public(globals())

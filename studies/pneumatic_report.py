@@ -13,6 +13,7 @@ from matplotlib.patheffects import Normal, Stroke
 from matplotlib.ticker import LogLocator
 
 from isolator import Band
+from isolator.scenario.arguments import check_public
 
 from .figures import log_mesh_edges, plain_log_axis, save_figure
 from .pneumatic_results import MIN_WINDOW, PneumaticStudy, Transients
@@ -263,3 +264,5 @@ def _write_report(study: PneumaticStudy) -> None:
                         "transmissibility and the optimal orifices only.\n")
     write_report(study.folder, lines)
 
+
+check_public(globals())

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from isolator import Scenario
+from isolator.scenario.arguments import check_public
 
 from .tradeoff_results import pareto_front
 
@@ -257,3 +258,6 @@ class PneumaticStudy:
         i = np.flatnonzero(np.isclose(self.diameters, self.own_diameter, rtol=1e-9))
         j = np.flatnonzero(np.isclose(self.ratios, self.own_ratio, rtol=1e-9))
         return (int(i[0]), int(j[0])) if i.size and j.size else None
+
+
+check_public(globals())

@@ -45,6 +45,7 @@ from controllers.profiles import (
     write_scenario_profiles,
 )
 from isolator import SIGNALS, Band, Scenario
+from isolator.scenario.arguments import check_public
 
 from .figures import nan_if_none, save_figure
 from .reporting import (
@@ -326,3 +327,6 @@ def _write_report(study: ProfileStudy, scenario: Scenario, peaks: list[float],
               f"({', '.join(v.label for v in variants)}).",
               "", "Figures: `profiles.png`, `response.png`, `times.png`, `robustness.png`."]
     write_report(study.folder, lines)
+
+
+check_public(globals())

@@ -32,6 +32,7 @@ from matplotlib.ticker import MaxNLocator
 from controllers.profiles.sequence_baselines import shaped_moves, time_optimal_moves
 from controllers.profiles.sequence_design import SequenceOptimisation, optimise_sequence, write_sequence_scenario
 from isolator import Scenario, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.sequence import Move, Step
 from isolator.simulation.sequence import SequenceResult, run_sequence
 
@@ -229,3 +230,6 @@ def _write_report(study: SequenceProfileStudy) -> None:
     if "optimised" in study.files:
         lines.append(f"Optimised sequence: `{study.files['optimised']}` (`isolator sequence` runs it).")
     write_report(study.folder, lines)
+
+
+check_public(globals())

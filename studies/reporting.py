@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from isolator import SIGNALS, Band
+from isolator.scenario.arguments import check_public
 
 __all__ = [
     "band_cell",
@@ -128,3 +129,6 @@ def band_cell(rule: Band, half_widths: np.ndarray) -> str:
     """A design's band as ``isolator simulate --band`` takes it (``x=...,rz=...``, m and rad), or ""."""
     band = design_band(rule, half_widths)
     return "" if band is None else band.option()
+
+
+check_public(globals())

@@ -30,6 +30,7 @@ import numpy as np
 
 from controllers.profiles import ProfileSettings, command_time, evaluate_move, optimise_profiles, shaped_scenario
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator
+from isolator.scenario.arguments import check_public
 from isolator.sweep import sweep
 
 from .reporting import output_folder, progress_printer, write_json
@@ -142,3 +143,6 @@ def parse_tolerances(texts: Sequence[str] | None) -> list[Tolerance] | None:
     if len(set(texts)) != len(texts):
         raise ParameterError("--tolerance: a tolerance is given twice")
     return [parse_tolerance(t) for t in texts]
+
+
+check_public(globals())

@@ -9,6 +9,8 @@ from typing import Any
 import matplotlib.pyplot as plt
 import numpy as np
 
+from isolator.scenario.arguments import check_public
+
 from .figures import save_figure
 from .reporting import band_lines, fmt, table_header, table_row, write_report
 from .robustness_results import RobustnessStudy
@@ -162,3 +164,6 @@ def write_robustness_report(study: RobustnessStudy) -> Path:
                         "and method.")
     lines += ["", "Figures: `cdf.png`, `sensitivity.png`; every machine: `samples.csv`."]
     return write_report(study.folder, lines)
+
+
+check_public(globals())

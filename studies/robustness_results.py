@@ -12,6 +12,7 @@ import numpy as np
 from scipy.stats import rankdata, spearmanr
 
 from isolator import Band, Scenario
+from isolator.scenario.arguments import check_public
 
 from .tolerances import Varied
 
@@ -170,3 +171,6 @@ def _signed(value: float) -> float | str | None:
 
 def _none(value: float) -> float | None:
     return None if math.isnan(value) else value
+
+
+check_public(globals())

@@ -9,6 +9,7 @@ throughput (:class:`isolator.SequenceResult`).
 from __future__ import annotations
 
 from isolator import Response
+from isolator.scenario.arguments import check_public
 
 __all__ = ["window_cycle"]
 
@@ -19,3 +20,6 @@ def window_cycle(response: Response) -> tuple[float | None, float | None]:
     if response.windows is None:
         return None, None
     return response.window_settling_time_max, response.moves_per_hour
+
+
+check_public(globals())

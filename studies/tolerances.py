@@ -22,6 +22,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from isolator import ParameterError, ParameterLayout
+from isolator.scenario.arguments import check_public
 from isolator.sweep import resolve
 
 __all__ = ["DEFAULT_TOLERANCES", "Tolerance", "Varied", "draw_samples", "parse_tolerance", "sweep_columns",
@@ -209,3 +210,5 @@ def sweep_columns(varied: Sequence[Varied], values: np.ndarray) -> tuple[dict[st
         (relative if v.relative else absolute)[v.name] = values[:, j]
     return absolute, relative
 
+
+check_public(globals())

@@ -44,6 +44,7 @@ import numpy as np
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator, UnstableTableError
 from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import transmissibility
+from isolator.scenario.arguments import check_public
 from isolator.simulation.scaling import scale_columns
 from isolator.sweep import SweepResult, sweep
 
@@ -212,3 +213,6 @@ def _linear_figures(sim: Simulator, stiffness: float, damping: float, reference_
     worst = max(range(len(_AXES)), key=lambda n: peaks[n][0])
     decay = float(-np.max(lin.eigenvalues.real))
     return float(np.max(np.abs(np.diag(at)))), peaks[worst][0], peaks[worst][1], decay
+
+
+check_public(globals())

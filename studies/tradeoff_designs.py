@@ -3,14 +3,16 @@
 from __future__ import annotations
 
 import csv
-from typing import Any
+
+from isolator.scenario.arguments import check_public
 
 from .reporting import band_cell
+from .tradeoff_results import TradeoffStudy
 
 __all__ = ["write_designs_csv"]
 
 
-def write_designs_csv(study: Any) -> None:
+def write_designs_csv(study: TradeoffStudy) -> None:
     """``designs.csv`` of a :class:`studies.tradeoff.TradeoffStudy`: one row per design.
 
     Columns: the two scales [-], ``settling_time_max_s`` (with a ``[sequence]``: ``total_time_s``), ``band``
@@ -36,3 +38,6 @@ def write_designs_csv(study: Any) -> None:
                                  band_cell(study.band, study.half_widths[i, j]), *extra,
                                  f"{study.transmissibility[i, j]:.6g}", f"{study.peak[i, j]:.6g}",
                                  f"{study.peak_hz[i, j]:.6g}", study.status[i, j]])
+
+
+check_public(globals())

@@ -10,6 +10,7 @@ slowly leveling table (the sweep's ``dynamic_settling_time_max``,
 from __future__ import annotations
 
 from isolator import Scenario
+from isolator.scenario.arguments import check_public
 
 __all__ = ["pneumatic_note"]
 
@@ -19,3 +20,6 @@ def pneumatic_note(scenario: Scenario) -> list[str]:
     return [] if not scenario.is_pneumatic else ["", "Pneumatic isolators: the stiffness scale divides both "
             "chambers' volumes, the damping scale the orifice's conductance (the series dashpot); settling is "
             "that of the motion about the slowly leveling table (the valves' re-leveling left out)."]
+
+
+check_public(globals())

@@ -7,6 +7,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
 
+from isolator.scenario.arguments import check_public
+
 from .figures import log_mesh_edges, plain_log_axis, save_figure
 from .reporting import band_lines, fmt, table_header, write_report
 from .tradeoff_pneumatic import pneumatic_note
@@ -237,3 +239,6 @@ def write_tradeoff_report(study: TradeoffStudy) -> None:
                      ".scaled_parameters(k, c))`.")
     lines.append(f"- Full numbers: `designs.csv`; re-run: `isolator study tradeoff {sc.name} --out DIR`.")
     write_report(study.folder, lines)
+
+
+check_public(globals())

@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 
 from isolator import Band, Scenario
+from isolator.scenario.arguments import check_public
 
 from .reporting import design_band
 
@@ -142,3 +143,6 @@ class TradeoffStudy:
         i = np.flatnonzero(np.isclose(self.stiffness, 1.0, rtol=1e-9))
         j = np.flatnonzero(np.isclose(self.damping, 1.0, rtol=1e-9))
         return (int(i[0]), int(j[0])) if i.size and j.size else None
+
+
+check_public(globals())

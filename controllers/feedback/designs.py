@@ -26,6 +26,7 @@ from controllers.feedforward.wrench import allocation_matrix
 from isolator.analysis.linear import FORCE_INPUTS, STATE_NAMES, LinearModel
 from isolator.errors import OptimisationError, ParameterError, ScenarioError
 from isolator.model.rotations import pose_rotation
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.rules import check_value
 
@@ -341,3 +342,6 @@ def hinf(
                       f"H-infinity, gamma {float(gamma):.3g}: Bryson weights {max_displacement:.3g} m, "
                       f"{max_rotation:.3g} rad, {max_velocity:.3g} m/s, {max_rate:.3g} rad/s; "
                       f"disturbance {d:.3g} N, noise {eps:.3g}")
+
+
+check_public(globals())

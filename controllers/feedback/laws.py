@@ -8,6 +8,7 @@ import numpy as np
 
 from controllers.feedforward.path import QuasiStaticPath
 from isolator.analysis.linear import linearise
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 from .designs import Controller
@@ -90,3 +91,6 @@ def feedback_law(
         check_stability(lin_start, controller, "with the carriages at their start").raise_if_unstable()
         check_stability(lin_end, controller, "with the carriages at their final positions").raise_if_unstable()
     return DiscreteLaw(controller, reference, closed_loop(lin_end, controller, check=False))
+
+
+check_public(globals())

@@ -20,6 +20,7 @@ from scipy.linalg import expm
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel, is_stable, state_space_response
 from isolator.errors import ParameterError, UnstableClosedLoopError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 
 from .designs import MEASUREMENTS, Controller, actuator_labels
@@ -240,3 +241,6 @@ def _air_integrators(lin: LinearModel) -> int:
         return 0
     eig = lin.eigenvalues
     return int(np.sum(np.abs(eig) <= 1e-9 * max(1.0, float(np.abs(eig).max()))))
+
+
+check_public(globals())

@@ -19,6 +19,7 @@ from scipy.optimize import lsq_linear
 
 from isolator.analysis.linear import linearise
 from isolator.errors import ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.time_grid import grid_breakpoints
@@ -108,3 +109,6 @@ def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforwa
     residual = wrench - np.einsum("nij,nj->ni", b, forces)
     names = tuple(a.name for a in scenario.actuators)
     return Feedforward(ForceHistory(times, forces.T, names), wrench, residual, path)
+
+
+check_public(globals())

@@ -9,6 +9,7 @@ from typing import Any
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.simulation.leveling import quasi_static_signals
 from isolator.simulation.response import Response
@@ -145,3 +146,6 @@ def run_quasi_static(sim: Simulator, run: Response) -> np.ndarray:
     the carriages where they are (:func:`isolator.simulation.leveling.quasi_static_signals`), measured from
     the run's first state, its initial equilibrium."""
     return quasi_static_signals(sim.model, sim.parameters, run.t, run.states, run.q.T, run.states[0])
+
+
+check_public(globals())

@@ -38,6 +38,7 @@ from scipy import sparse
 
 from isolator.analysis.linear import linearise
 from isolator.errors import OptimisationError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.simulator import Simulator
@@ -311,3 +312,6 @@ def feedforward_optimal(
         error.feedforward = result  # type: ignore[attr-defined]
         raise error
     return result
+
+
+check_public(globals())

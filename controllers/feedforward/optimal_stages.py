@@ -17,6 +17,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.analysis.linear import LinearModel
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 from .path import QuasiStaticPath, path_demand
@@ -88,3 +89,6 @@ def interval_function(n_a: int, tau: np.ndarray, lagged: list[int], n_air: int =
     e_next = e + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
     f_next = applied(h)[lagged] if lagged else ca.SX.zeros(0, 1)
     return ca.Function("interval", [e, fl, u0, u1, h, data], [e_next, f_next])
+
+
+check_public(globals())

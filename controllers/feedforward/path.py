@@ -23,6 +23,7 @@ from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation
 from isolator.model.signals import table_signals
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.simulator import Simulator
 
@@ -247,3 +248,6 @@ def path_demand(
 def _stacked(mapped: np.ndarray, count: int) -> np.ndarray:
     """A mapped casadi output (rows, count * columns) as (count, rows, columns)."""
     return mapped.reshape(mapped.shape[0], count, -1).transpose(1, 0, 2)
+
+
+check_public(globals())

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 __all__ = ["allocation_matrix", "carriage_inertia_wrench", "reaction_wrench"]
@@ -58,3 +59,6 @@ def carriage_inertia_wrench(scenario: Scenario, q: np.ndarray, qdd: np.ndarray) 
     force = np.sum(m * acc, axis=0).T
     moment = np.sum(m * np.cross(pos, acc, axis=1), axis=0).T
     return np.hstack([force, moment])
+
+
+check_public(globals())

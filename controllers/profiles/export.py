@@ -6,6 +6,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.writing import absolute_files, scenario_data, write_toml
 
 from .move_design import MoveDesign
@@ -51,3 +52,6 @@ def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str 
             carriage["profile"] = profiles[carriage["name"]]
     data["name"] = name
     return write_toml(data, path)
+
+
+check_public(globals())

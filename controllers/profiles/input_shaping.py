@@ -20,6 +20,7 @@ import numpy as np
 from controllers.feedforward.wrench import carriage_inertia_wrench
 from isolator.analysis.linear import linearise
 from isolator.errors import ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import shaped
 from isolator.scenario.profiles import PiecewisePolynomialProfile
@@ -125,3 +126,4 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
     return with_moves(scenario, profiles)
 
 
+check_public(globals())

@@ -12,13 +12,16 @@ as every segment is at least zero long, which the optimiser imposes.
 from __future__ import annotations
 
 import math
+import numbers
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
 from typing import Any
 
+import casadi as ca
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Carriage, Scenario
 from isolator.scenario.profile_shapes import scurve, trapezoid
 from isolator.scenario.profiles import PiecewisePolynomialProfile
@@ -111,6 +114,12 @@ class Segment:
     duration: Any
     acceleration: Any
     jerk: Any
+
+    def __post_init__(self) -> None:
+        for name in ("duration", "acceleration", "jerk"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, numbers.Real | ca.SX | ca.MX | ca.DM):
+                raise ParameterError(f"{name}: must be a number or a casadi expression, got {type(value).__name__}")
 
 
 @dataclass(frozen=True)
@@ -306,3 +315,6 @@ def move_time(scenario: Scenario, command: float | None = None) -> float:
     """
     begin = command_time(scenario) if command is None else command
     return float(scenario.stop_time - begin)
+
+
+check_public(globals())

@@ -14,6 +14,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.simulation.band import Band
@@ -183,3 +184,6 @@ def over_variants(scenario: Scenario, label: str, command: float,
                   band: Band | None = None) -> list[MoveMetrics]:
     """The move measured on each model variant (labelled ``<label> (<variant>)``), in ``band``."""
     return [evaluate_move(scenario, f"{label} ({v.label})", command, v, band=band) for v in variants]
+
+
+check_public(globals())

@@ -25,6 +25,7 @@ import math
 import casadi as ca
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Settling
 
 from .transcription import PEAK_POWER, Nlp, Transcription, VariantData, advance
@@ -87,3 +88,6 @@ def residual(run: Transcription, vd: VariantData, factors: np.ndarray, nlp: Nlp 
     e = (zs[:6, :] - vd.reference(xs)) / ca.repmat(band, 1, n_window)
     over = ca.fmax(0, e**2 - band_margin**2)
     return ca.sum1(ca.sum2(e**2 + over**2)) / n_window
+
+
+check_public(globals())

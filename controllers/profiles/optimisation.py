@@ -34,6 +34,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import OptimisationError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 from .export import write_scenario
@@ -164,3 +165,6 @@ def optimise_profiles(
 
 def _fmt(value: float | None) -> str:
     return "unavailable" if value is None else f"{value:.3f} s"
+
+
+check_public(globals())

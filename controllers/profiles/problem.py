@@ -23,6 +23,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 from .move_design import SHAPES, MoveDesign
@@ -269,3 +270,6 @@ class Problem:
         #: what a solver point fits: the phases, their steps, the transcription and the objective
         self.structure = (tuple(self.phases), settings.transcription, settings.objective, len(data),
                           int(self.x0.size), int(self.lbg.size))
+
+
+check_public(globals())

@@ -7,6 +7,7 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 from .input_shaping import ExcitedMode, dominant_modes
@@ -95,3 +96,6 @@ def braking_candidates(design: MoveDesign, modes: Sequence[ExcitedMode], command
                 if jerk <= lim.jerk:
                     out.append(replace(design, deceleration=dec, deceleration_jerk=jerk))
     return [c for c in out if c.fits() and c.stop_time() - command <= max_move]
+
+
+check_public(globals())

@@ -18,6 +18,7 @@ from dataclasses import replace
 from functools import lru_cache
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import MotionLimits, Scenario
 from isolator.scenario.profile_shapes import scurve, shaped
 from isolator.scenario.profiles import Profile
@@ -98,3 +99,6 @@ def time_optimal_moves() -> MoveDesign:
 def _given(limits: MotionLimits) -> tuple[float, float, float]:
     """A step's limits (run_sequence passes all three: a sequence's carriages have full limits)."""
     return float(limits.velocity or 0.0), float(limits.acceleration or 0.0), float(limits.jerk or 0.0)
+
+
+check_public(globals())

@@ -34,6 +34,7 @@ import numpy as np
 from scipy.stats import qmc
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.sequence import Move, Step, sequence_table
 from isolator.scenario.shapers import shaper
@@ -368,3 +369,5 @@ def write_sequence_scenario(source: str | Path | None, scenario: Scenario, path:
     data["name"] = name or f"{data.get('name', origin.stem)}-optimised"
     return write_toml(data, path)
 
+
+check_public(globals())

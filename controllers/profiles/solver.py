@@ -10,6 +10,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 from .move_design import MoveDesign
@@ -181,3 +182,6 @@ def ipopt_options(settings: ProfileSettings, monitor: Monitor, warm: bool) -> di
                         "ipopt.warm_start_slack_bound_push": 1e-9, "ipopt.warm_start_slack_bound_frac": 1e-9,
                         "ipopt.warm_start_mult_bound_push": 1e-9})
     return options
+
+
+check_public(globals())

@@ -9,6 +9,7 @@ constant-jerk phases; they become an exact piecewise-cubic profile.
 from __future__ import annotations
 
 from isolator.errors import OptimisationError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import segments
 from isolator.scenario.profiles import PiecewisePolynomialProfile
@@ -55,3 +56,6 @@ def time_optimal_scenario(scenario: Scenario) -> Scenario:
         for d in move_designs(scenario)
     ]
     return with_moves(scenario, profiles)
+
+
+check_public(globals())

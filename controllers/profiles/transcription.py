@@ -27,6 +27,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.model.pneumatic_statics import air_function
 from isolator.model.variants import Model
 from isolator.numerics.native import NativeFunction
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profile_shapes import segment_starts
 from isolator.simulation.simulator import Simulator, get_model
@@ -308,3 +309,6 @@ def shooting_node(x: Any, start: np.ndarray, scale: ca.DM, nlp: Nlp) -> ca.MX:
     nlp.lbg += [0.0] * nx
     nlp.ubg += [0.0] * nx
     return state
+
+
+check_public(globals())

@@ -36,6 +36,7 @@ from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness,
 from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation, skew
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.rules import check_value, closest
@@ -370,3 +371,6 @@ def _state_space(
         inputs=inputs, outputs=[*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)], states=states,
         name=scenario.name,
     )
+
+
+check_public(globals(), ("LinearModel", "linearise"))

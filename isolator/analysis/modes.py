@@ -9,7 +9,9 @@ import numpy as np
 
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.model.equilibrium import DOF_NAMES
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.readable import without_dust
 
 __all__ = ["ModeTravel", "Modes", "modes", "modes_over_travel"]
 
@@ -154,7 +156,7 @@ def modes(lin: LinearModel) -> Modes:
     energy /= energy.sum(axis=1, keepdims=True)
     dominant = np.argmax(energy, axis=1)
     ref = shape_arr[np.arange(len(shape_arr)), dominant]
-    real = (shape_arr / ref[:, None]).real
+    real = without_dust((shape_arr / ref[:, None]).real, 1.0)  # each shape's largest entry is 1: dust reads 0
     return Modes(omega_arr / (2 * np.pi), zeta_arr, lam_arr, real, energy, relaxation, integrators)
 
 
@@ -236,3 +238,6 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
         freqs.append(np.array([m.frequencies_hz for m in rows]))
         zetas.append(np.array([m.damping_ratios for m in rows]))
     return ModeTravel(tuple(names), positions, freqs, zetas)
+
+
+check_public(globals(), ("Modes", "modes", "modes_over_travel"))

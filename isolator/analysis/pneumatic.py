@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import Air, PneumaticIsolator
 from isolator.scenario.validation import isolator_rest_pressures
@@ -151,3 +152,6 @@ def _equivalent(iso: PneumaticIsolator, gauge: float, air: Air, f: np.ndarray) -
         damping = np.where(omega > 0, k.imag / np.where(omega > 0, omega, 1.0), 0.0)
     k0 = scale / (iso.volume + (iso.damping_volume if tau > 0 else 0.0))
     return EquivalentSpringDamper(f, k.real, damping, k0, scale / iso.volume, tau, gauge)
+
+
+check_public(globals(), ("EquivalentSpringDamper", "equivalent_spring_damper"))

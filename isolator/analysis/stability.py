@@ -11,6 +11,7 @@ from isolator.model.cache import get_model
 from isolator.model.equilibrium import RockingStiffness
 from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
 __all__ = ["StabilityReport", "stability"]
@@ -83,3 +84,6 @@ def stability(scenario: Scenario) -> StabilityReport:
     layout = ParameterLayout.of(scenario)
     configs = travel_configurations(scenario)
     return StabilityReport(configs, rocking_over(get_model(layout, "exact"), layout.pack(scenario), configs))
+
+
+check_public(globals(), ("StabilityReport", "stability"))

@@ -2,20 +2,38 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Protocol, runtime_checkable
 
 import control
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
-from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
+from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS
 from isolator.model.equilibrium import DOF_NAMES
+from isolator.scenario.arguments import check_public
+from isolator.scenario.definitions import Scenario
 
-__all__ = ["FrequencyResponse", "compliance", "default_frequencies", "transmissibility"]
+__all__ = ["FrequencyResponse", "LinearSystem", "compliance", "default_frequencies", "transmissibility"]
 
 
-def default_frequencies(lin: LinearModel, count: int = 1000) -> np.ndarray:
+@runtime_checkable
+class LinearSystem(Protocol):
+    """What a frequency response needs: a :class:`~isolator.analysis.linear.LinearModel`, or a closed loop
+    around one (``controllers.feedback.ClosedLoop``)."""
+
+    @property
+    def scenario(self) -> Scenario: ...
+
+    @property
+    def eigenvalues(self) -> np.ndarray: ...
+
+    def frequency_response(self, frequency_hz: np.ndarray, inputs: Sequence[str] | None = None,
+                           outputs: Sequence[str] | None = None) -> np.ndarray: ...
+
+
+def default_frequencies(lin: LinearSystem, count: int = 1000) -> np.ndarray:
     """Log-spaced frequencies [Hz] from a decade below the slowest mode (at most 0.1 Hz)
     to a decade above the fastest (at least 100 Hz)."""
     f_modes = np.abs(lin.eigenvalues) / (2 * np.pi)
@@ -41,7 +59,7 @@ class FrequencyResponse:
         (compliance, [m/N], [rad/(N m)], ...).
     inputs : tuple of str
         Input names of the columns.
-    lin : LinearModel
+    lin : LinearModel or ClosedLoop
         The system the response is of (used to refine peaks exactly).
     """
 
@@ -49,7 +67,7 @@ class FrequencyResponse:
     frequency_hz: np.ndarray
     response: np.ndarray
     inputs: tuple[str, ...]
-    lin: LinearModel
+    lin: LinearSystem
 
     def _same_axis(self, axis: str) -> int:
         if axis not in DOF_NAMES:
@@ -174,24 +192,24 @@ class FrequencyResponse:
         return fig
 
 
-def transmissibility(lin: LinearModel, frequency_hz: np.ndarray | None = None) -> FrequencyResponse:
+def transmissibility(lin: LinearSystem, frequency_hz: np.ndarray | None = None) -> FrequencyResponse:
     """Floor motion to table motion at the mass centre, the full 6x6 matrix.
 
     Parameters
     ----------
-    lin : LinearModel
+    lin : LinearModel or ClosedLoop
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
     """
     return _response(lin, "transmissibility", GROUND_INPUTS, frequency_hz)
 
 
-def compliance(lin: LinearModel, frequency_hz: np.ndarray | None = None) -> FrequencyResponse:
+def compliance(lin: LinearSystem, frequency_hz: np.ndarray | None = None) -> FrequencyResponse:
     """Force and moment at the mass centre to table motion, the full 6x6 matrix.
 
     Parameters
     ----------
-    lin : LinearModel
+    lin : LinearModel or ClosedLoop
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
     """
@@ -199,7 +217,10 @@ def compliance(lin: LinearModel, frequency_hz: np.ndarray | None = None) -> Freq
 
 
 def _response(
-    lin: LinearModel, kind: str, inputs: tuple[str, ...], frequency_hz: np.ndarray | None
+    lin: LinearSystem, kind: str, inputs: tuple[str, ...], frequency_hz: np.ndarray | None
 ) -> FrequencyResponse:
     f = default_frequencies(lin) if frequency_hz is None else np.asarray(frequency_hz, dtype=float)
     return FrequencyResponse(kind, f, lin.frequency_response(f, inputs, DOF_NAMES), inputs, lin)
+
+
+check_public(globals(), ("FrequencyResponse", "compliance", "transmissibility"))

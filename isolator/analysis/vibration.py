@@ -18,6 +18,7 @@ import numpy as np
 
 from isolator.analysis.linear import LinearModel
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import FloorSpectrum
 
 __all__ = ["VC_CLASSES", "VibrationCriteria", "third_octave_bands", "vibration_criteria"]
@@ -201,3 +202,6 @@ def vibration_criteria(
     floor = {a: band_rms(floor_psd[:, j]) for j, a in enumerate("xyz") if a in spectrum.values}
     table = {a: band_rms(table_psd[:, j]) for j, a in enumerate("xyz")}
     return VibrationCriteria(label, centres, floor, table)
+
+
+check_public(globals(), ("VibrationCriteria", "vibration_criteria"))

@@ -16,6 +16,7 @@ from isolator.calibration.fit import fit_parameters
 from isolator.calibration.records import Record, read_record
 from isolator.calibration.result import CalibrationResult, Curves, ParameterEstimate
 from isolator.errors import ParameterError, ScenarioError, UnidentifiableError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import scenario_from_dict
 from isolator.scenario.writing import scenario_data, set_parameter
@@ -152,3 +153,6 @@ def _curves(e: FloorExperiment | MoveExperiment, p0: np.ndarray, p1: np.ndarray)
         return Curves("floor", e.f, e.H1, e.predict(p0)[0], e.predict(p1)[0], e.coherence, outputs,
                       tuple(s.name for s in e.floor), units)
     return Curves("move", e.t, e.y, e.predict(p0), e.predict(p1), None, outputs, (), units)
+
+
+check_public(globals())

@@ -12,6 +12,7 @@ from isolator.cli.calibrate_command import register as register_calibrate
 from isolator.cli.helpers import (
     check_memory,
     count,
+    default_output,
     figure_path,
     output_path,
     report,
@@ -224,19 +225,22 @@ def _simulate(args: argparse.Namespace) -> int:
 
         forces = load_forces(args.forces, scenario, key="--forces")
     if plot is None and not args.json:
-        plot = figure_path(Path(f"{scenario.name}.png"), "--plot")
+        plot = figure_path(default_output(scenario.name, ".png"), "--plot")
+    leveling = windows = None
+    if plot is not None:  # the figures beside it, checked before the run too
+        if scenario.is_pneumatic:
+            leveling = figure_path(plot.with_name(f"{plot.stem}-leveling{plot.suffix}"), "--plot")
+        if scenario.windows:
+            windows = figure_path(plot.with_name(f"{plot.stem}-windows{plot.suffix}"), "--plot")
     response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args))
     if out:
         response.to_csv(out)
-    leveling = windows = None
     if plot is not None:
         use_agg()
         save_figure(response.plot(), plot)
-        if response.pneumatic is not None:
-            leveling = plot.with_name(f"{plot.stem}-leveling{plot.suffix}")
+        if leveling is not None and response.pneumatic is not None:
             save_figure(response.plot_leveling(), leveling)
-        if response.windows is not None:
-            windows = plot.with_name(f"{plot.stem}-windows{plot.suffix}")
+        if windows is not None and response.windows is not None:
             save_figure(response.plot_windows(), windows)
     outputs = [("response table", out), ("figure", plot), ("pressures and heights", leveling),
                ("settling windows", windows)]

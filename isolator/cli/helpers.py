@@ -7,6 +7,8 @@ import argparse
 import json
 import math
 import os
+import re
+import unicodedata
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -24,6 +26,7 @@ __all__ = [
     "check_memory",
     "check_run_memory",
     "count",
+    "default_output",
     "figure_path",
     "output_folder",
     "output_path",
@@ -35,6 +38,25 @@ __all__ = [
 
 #: a subcommand's handler: the parsed arguments in, the exit status out
 Handler = Callable[[argparse.Namespace], int]
+#: the longest default file name (without its extension) made from a scenario's name
+NAME_LENGTH = 100
+#: how much of a path an error message quotes
+QUOTED = 60
+
+
+def default_output(name: str, suffix: str) -> Path:
+    """A default output file in the working directory named after ``name`` (a scenario's): a slug of it
+    (ASCII letters, digits, ``.``, ``_`` and ``-``; every other run of characters one ``-``; no leading dot),
+    at most :data:`NAME_LENGTH` characters, ``scenario`` when nothing is left; then ``suffix``."""
+    ascii_name = unicodedata.normalize("NFKD", str(name)).encode("ascii", "ignore").decode()
+    slug = re.sub(r"[^A-Za-z0-9._-]+", "-", ascii_name).strip(".-")[:NAME_LENGTH].strip(".-")
+    return Path((slug or "scenario") + suffix)
+
+
+def _quoted(path: Path) -> str:
+    """A path as an error message quotes it (long ones shortened)."""
+    text = str(path)
+    return text if len(text) <= QUOTED else f"{text[: QUOTED - 20]}...{text[-17:]}"
 
 
 def scenario_argument(parser: argparse.ArgumentParser, help_text: str | None = None) -> None:
@@ -79,7 +101,11 @@ def output_path(path: Path, option: str, suffixes: Sequence[str]) -> Path:
     missing, writable. Every problem is a :class:`ParameterError` naming ``option``."""
     if path.suffix.lower() not in suffixes:
         got = f"'{path.suffix}'" if path.suffix else "none"
-        raise ParameterError(f"{option}: '{path}' has extension {got}; supported: {', '.join(suffixes)}")
+        raise ParameterError(f"{option}: '{_quoted(path)}' has extension {got}; supported: {', '.join(suffixes)}")
+    longest = max((len(os.fsencode(part)) for part in path.parts), default=0)
+    if longest > 255:
+        raise ParameterError(f"{option}: '{_quoted(path)}' has a name of {longest} bytes; file systems take at most "
+                             "255")
     if path.is_dir():
         raise ParameterError(f"{option}: '{path}' is a folder, not a file")
     parent = path.parent

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import EXACT, Model, ModelVariant, model_variant
+from isolator.scenario.arguments import check_public
 
 __all__ = ["get_model"]
 
@@ -29,3 +30,6 @@ def get_model(layout: ParameterLayout, variant: str | ModelVariant = EXACT) -> M
     if key not in _MODELS:
         _MODELS[key] = chosen.build(layout)
     return _MODELS[key]
+
+
+check_public(globals(), ("get_model"))

@@ -13,6 +13,7 @@ from isolator.model.linearisation import build_linearisation
 from isolator.model.pneumatic_statics import air_contents, closed_static_function
 from isolator.model.variants import Model
 from isolator.numerics.native import MappedFunction
+from isolator.scenario.arguments import check_public
 
 __all__ = [
     "DOF_NAMES",
@@ -396,3 +397,6 @@ def _solver(model: Model) -> _Solver:
 def _dominant_dof(model: Model, vector: np.ndarray) -> str:
     motion = model.variant.motion(vector)
     return DOF_NAMES[int(np.argmax(motion))]
+
+
+check_public(globals(), ("Equilibrium", "RockingStiffness"))

@@ -9,6 +9,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.rules import check_parameters, check_scenario_values, check_value, closest
@@ -352,3 +353,6 @@ class ParameterLayout:
             if sizes.get(k, m) <= 1 and out[k].shape != (3, sizes.get(k, m)):
                 out[k] = ca.reshape(out[k], 3, sizes.get(k, m))
         return out
+
+
+check_public(globals(), ("ParameterLayout"))

@@ -14,8 +14,16 @@ import casadi as ca
 import numpy as np
 
 from isolator.model.rotations import quaternion_to_matrix
+from isolator.scenario.arguments import check_public
 
-__all__ = ["SensedMotion", "exact_sensed_motion", "relative_rotation_vector", "signal_function", "table_signals"]
+__all__ = [
+    "SensedMotion",
+    "exact_sensed_motion",
+    "relative_rotation_vector",
+    "signal_function",
+    "signal_jacobian",
+    "table_signals",
+]
 
 #: terms of the atan(t)/t series in :func:`exact_sensed_motion`
 ATAN_TERMS = 8
@@ -96,3 +104,14 @@ def signal_function(variant: SensedMotion, n_states: int) -> ca.Function:
     the variant's ``sensed_motion``), scalar code."""
     x, reference = ca.SX.sym("x", n_states), ca.SX.sym("x_ref", n_states)
     return ca.Function("table_signals", [x, reference], [variant.sensed_motion(x, reference)[:6]])
+
+
+@lru_cache(maxsize=8)
+def signal_jacobian(variant: SensedMotion, n_states: int) -> ca.Function:
+    """``(x, reference) -> (6, n_states)``: the six table signals' Jacobian with respect to the state
+    [m or rad per state unit]."""
+    x, reference = ca.SX.sym("x", n_states), ca.SX.sym("x_ref", n_states)
+    return ca.Function("signal_jacobian", [x, reference], [ca.jacobian(variant.sensed_motion(x, reference)[:6], x)])
+
+
+check_public(globals(), ("table_signals"))

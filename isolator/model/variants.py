@@ -44,6 +44,7 @@ from isolator.model.residual import newton_euler_residual, solve_blocks
 from isolator.model.rotations import cardan_matrix, cardan_to_quaternion, quaternion_rate, quaternion_to_matrix
 from isolator.model.signals import exact_sensed_motion, table_signals
 from isolator.model.staging import staged_functions
+from isolator.scenario.arguments import check_public
 
 __all__ = [
     "EXACT",
@@ -337,3 +338,6 @@ def build_model(layout: ParameterLayout, variant: str | ModelVariant = EXACT) ->
     Model
     """
     return model_variant(variant).build(layout)
+
+
+check_public(globals(), ("Model", "build_model"))

@@ -6,6 +6,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.profiles import Profile
 
 __all__ = ["SIGNALS", "FloorSpectrum", "Ground"]
@@ -64,3 +65,6 @@ class Ground:
     def breakpoints(self) -> tuple[float, ...]:
         """Times [s] where a floor acceleration may jump."""
         return tuple(sorted({b for p in self.motion.values() for b in p.breakpoints}))
+
+
+check_public(globals(), ("FloorSpectrum", "Ground"))

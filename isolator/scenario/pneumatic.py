@@ -14,6 +14,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
+
 __all__ = [
     "Air",
     "Capillary",
@@ -188,3 +190,6 @@ def group_statics_matrix(
             iso = isolators[k]
             out[:, j] += iso.area * np.array([1.0, iso.position[1], iso.position[0]])
     return out
+
+
+check_public(globals(), ("Air", "Capillary", "LevelingGroup", "PneumaticIsolator", "Valve"))

@@ -16,6 +16,7 @@ from scipy.interpolate import CubicSpline
 from scipy.optimize import brentq
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.profiles import PiecewisePolynomialProfile
 from isolator.scenario.rules import check_arguments
 
@@ -283,3 +284,6 @@ def samples(t: ArrayLike, q: ArrayLike) -> PiecewisePolynomialProfile:
     return PiecewisePolynomialProfile(
         tuple(float(x) for x in t), tuple(tuple(float(c) for c in row) for row in coef), kind="samples"
     )
+
+
+check_public(globals(), ("samples", "scurve", "segments", "shaped", "trapezoid"))

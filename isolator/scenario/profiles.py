@@ -18,6 +18,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from isolator.scenario.arguments import check_public
+
 FloatArray = NDArray[np.float64]
 
 __all__ = ["FloatArray", "PiecewisePolynomialProfile", "Profile", "SineProfile"]
@@ -184,3 +186,4 @@ class SineProfile(Profile):
         return float(q.min()), float(q.max())
 
 
+check_public(globals(), ("PiecewisePolynomialProfile", "SineProfile"))

@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ScenarioError
+from isolator.scenario.arguments import check_public, reading, register_conversion
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -29,6 +30,7 @@ from isolator.scenario.definitions import (
     SimulationSettings,
     Table,
 )
+from isolator.scenario.field_checks import register_field_checks
 from isolator.scenario.keys import KeyReader, load_toml, number, number_list, table_of_tables
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
@@ -124,7 +126,11 @@ def scenario_from_dict(
     default_name : str
         Name used when the data has none.
     """
-    base_dir = Path(base_dir)
+    with reading():
+        return _scenario_from_dict(data, Path(base_dir), default_name)
+
+
+def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: str) -> Scenario:
     top = KeyReader(data, "")
     name = top.string("name", default_name)
     gravity = top.number("gravity", 9.81, nonnegative=True)
@@ -382,3 +388,6 @@ def _read_settling(r: KeyReader) -> Settling:
     return Settling(fraction=fraction)
 
 
+register_conversion(Scenario, load_scenario)
+register_field_checks()
+check_public(globals(), ("bundled_scenarios", "load_scenario", "scenario_from_dict"))

@@ -373,3 +373,4 @@ def check_scenario_values(scenario: Scenario) -> None:
         problem = vector_problem(head, values)
         if problem is not None:
             raise ScenarioError(f"{head}: {problem}")
+

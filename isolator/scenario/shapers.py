@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 
 __all__ = ["EI_TOLERANCE", "SHAPERS", "Shaper", "convolved", "residual_vibration", "shaper"]
 
@@ -110,3 +111,6 @@ def convolved(trains: Sequence[Shaper]) -> tuple[list[float], list[float]]:
         amplitudes = np.outer(amplitudes, train.amplitudes).ravel()
         times = np.add.outer(times, train.times).ravel()
     return [float(a) for a in amplitudes], [float(t) for t in times]
+
+
+check_public(globals(), ("Shaper", "residual_vibration"))

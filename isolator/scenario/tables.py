@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from isolator.errors import ScenarioError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import FloorSpectrum
 from isolator.scenario.keys import KeyReader
 
@@ -217,3 +218,6 @@ def read_samples(r: KeyReader, base_dir: Path) -> tuple[np.ndarray, np.ndarray]:
     if t[0] < 0:
         raise ScenarioError(f"{key}: sample times must be >= 0, got {t[0]:g}")
     return t, q
+
+
+check_public(globals(), ("load_spectrum"))

@@ -26,6 +26,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Settling
 
 __all__ = ["BAND_KINDS", "MOTION_FLOOR", "Band", "as_band", "format_half_widths", "parse_half_widths"]
@@ -225,3 +226,6 @@ def parse_half_widths(text: str, key: str = "--band") -> Band:
 def as_band(rule: Band | Settling) -> Band:
     """A band from either a :class:`Band` or a scenario's ``[settling]`` rule."""
     return rule if isinstance(rule, Band) else Band.from_settling(rule)
+
+
+check_public(globals(), ("Band"))

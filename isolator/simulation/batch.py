@@ -24,11 +24,13 @@ from isolator.errors import ParameterError, ScenarioError, SimulationError, Unst
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
+from isolator.numerics.dop853 import DenseStepper
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.resources import check_memory
 from isolator.simulation.response import Response
-from isolator.simulation.settling import Band, signal_bands, still_signals
+from isolator.simulation.settling import Band, SettlingResult, settling_results, signal_bands, still_signals
 from isolator.simulation.stepping import (
     MAX_TURN,
     Method,
@@ -38,6 +40,7 @@ from isolator.simulation.stepping import (
     rk4_stepper,
     staged_parameters,
 )
+from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid
 
 __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_batch", "scale_label"]
@@ -78,6 +81,8 @@ class BatchResult:
         that diverged).
     status : ndarray (runs,) of str
         One of :data:`STATUSES` per run (``reason`` gives the words of the others).
+    unsettled : mapping of int to str
+        Why a run measured ("ok") shows no settling time, by run index (its first signal without one).
     """
 
     settling_time: np.ndarray
@@ -87,6 +92,7 @@ class BatchResult:
     band: Band = field(default_factory=Band)
     half_widths: np.ndarray = field(default_factory=lambda: np.zeros((0, 6)))
     status: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=object))
+    unsettled: Mapping[int, str] = field(default_factory=dict)
 
     def run_band(self, i: int) -> Band:
         """The band of run ``i``, resolved (its six half-widths)."""
@@ -94,8 +100,8 @@ class BatchResult:
                     tuple(float(v) for v in self.half_widths[i]))
 
     def reason(self, i: int) -> str:
-        """Why run ``i`` has no metrics ('' for a run that is "ok")."""
-        return self.failures.get(i, "")
+        """Why run ``i`` has no metrics, or no settling time ('' for a run that settled)."""
+        return self.failures.get(i, self.unsettled.get(i, ""))
 
 
 class BatchSimulator(Protocol):
@@ -219,6 +225,13 @@ def run_batch(
         finals[good] = sim.signals(np.array([ends[i].state for i in good]),  # type: ignore[union-attr]
                                    np.array([starts[i].state for i in good])).T  # type: ignore[union-attr]
     holds = np.array([hold_time(e) for e in ends])
+    unsettled: dict[int, str] = {}
+
+    def record(i: int, metrics: Mapping[str, SettlingResult]) -> None:
+        """Keep why run ``i`` shows no settling time (its first signal without one)."""
+        why = next((r.reason for r in metrics.values() if r.time is None), "")
+        if why:
+            unsettled[i] = why
     lock = threading.Lock()
     done = [0]
 
@@ -233,8 +246,13 @@ def run_batch(
         )
         assert polys is not None
         dense = DenseRuns(plan, raw, step_peaks, deviations, polys, x0, sim.model.variant.signals)
+        ends_at = np.array([plan.end])
+        tails = [run_tail(sim.scenario, sim.model, params[i], starts[i], ends[i],  # type: ignore[arg-type]
+                          DenseStepper.states_at(plan, polys[..., lane], ends_at)[0], plan.end)
+                 for lane, i in enumerate(lanes)]
+        waits = np.array([0.0 if tail else holds[i] for (tail, _), i in zip(tails, lanes, strict=True)])
         tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time,
-                                       lambda top: signal_bands(rule, top), holds[lanes])
+                                       lambda top: signal_bands(rule, top), waits)
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]
             try:
@@ -247,6 +265,11 @@ def run_batch(
                 failed(i, exc, "tipped" if np.nanmax(peak[i][3:], initial=0.0) > MAX_TURN else "diverged")
                 continue
             settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
+            tail, note = tails[lane]
+            if tail is not None:
+                metrics = settling_results(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
+                settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
+                record(i, metrics)
 
     def task(runs: list[int]) -> None:
         """A thread's share, runs of one method: RK4 runs one by one, DOP853 runs in packs."""
@@ -261,6 +284,7 @@ def run_batch(
                     continue
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
+                record(i, metrics)
         else:
             with _STAGING:
                 inputs = sim.plan_inputs(method, params[runs[0]])
@@ -278,7 +302,8 @@ def run_batch(
             list(pool.map(task, _tasks(sim, params, methods)))
     with np.errstate(all="ignore"):
         worst = np.where(np.all(np.isfinite(settling), axis=1), np.max(settling, axis=1), np.nan)
-    return BatchResult(settling, worst, peak, dict(sorted(failures.items())), rule, rule.resolve(peak), status)
+    return BatchResult(settling, worst, peak, dict(sorted(failures.items())), rule, rule.resolve(peak), status,
+                       dict(sorted(unsettled.items())))
 
 
 def _tasks(sim: BatchSimulator, params: np.ndarray, methods: Mapping[int, Method]) -> list[list[int]]:
@@ -339,3 +364,6 @@ def scale_label(stiffness: Sequence[float] | float, damping: Sequence[float] | f
     """How a batch of scaled designs names run ``i``: ``run i (stiffness x1.2, damping x0.5)``."""
     k, c = np.asarray(stiffness, dtype=float).reshape(-1), np.asarray(damping, dtype=float).reshape(-1)
     return lambda i: f"run {i} (stiffness x{k[i]:g}, damping x{c[i]:g})"
+
+
+check_public(globals(), ("BatchResult"))

@@ -30,6 +30,7 @@ import numpy as np
 
 from isolator.numerics.step_plan import StepPlan
 from isolator.scenario.definitions import Settling
+from isolator.simulation.free_tail import FreeTail
 from isolator.simulation.settling import Band, SettlingResult, settling_results, signal_bands, unavailable_reason
 from isolator.simulation.stepping import check_turn
 
@@ -244,13 +245,17 @@ def run_metrics(
     hold: float,
     samples: np.ndarray,
     signals: np.ndarray,
+    tail: FreeTail | None = None,
+    rest_note: str = "",
 ) -> dict[str, SettlingResult]:
     """Settling of the six signals of one DOP853 run (``R`` = 1), by name; ``final`` (6,) or None;
-    ``signals`` (6, samples) at the output ``samples`` [s] only name the sample where a run turned too far."""
+    ``signals`` (6, samples) at the output ``samples`` [s] only name the sample where a run turned too far;
+    ``tail``, ``rest_note`` as for :func:`~isolator.simulation.settling.settling_results` (``hold`` is then
+    not waited)."""
     peaks, times, short = dense_metrics(
         runs, None if final is None else final[None, :], stop_time, lambda top: signal_bands(rule, top),
-        np.array([hold]),
+        np.array([0.0 if tail else hold]),
     )
     check_turn(peaks[0], samples, signals)
     why = unavailable_reason(runs.plan.end, stop_time)
-    return settling_results(times[0], short[0], peaks[0], final is not None, rule, why)
+    return settling_results(times[0], short[0], peaks[0], final is not None, rule, why, tail, rest_note)

@@ -28,6 +28,7 @@ from scipy.interpolate import CubicSpline
 
 from isolator.model.equilibrium import Equilibrium, air_in_groups, closed_rest_states
 from isolator.model.variants import Model
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.simulation.band import Band
@@ -43,6 +44,7 @@ __all__ = [
     "pneumatic_result",
     "quasi_static_signals",
     "sensor_heights",
+    "valve_note",
 ]
 
 #: a group is level once |h| stays within this many dead bands
@@ -194,14 +196,37 @@ def leveling_summary(result: PneumaticResult) -> list[str]:
     return lines
 
 
-def sensor_heights(scenario: Scenario, states: np.ndarray) -> np.ndarray:
+def sensor_heights(scenario: Scenario, states: np.ndarray, points: np.ndarray | None = None) -> np.ndarray:
     """Each group's sensor height (groups, N) [m]: world z displacement of the table point ``(x, y, 0)``
-    from the reference pose, which is the initial equilibrium of a pneumatic table."""
+    from the reference pose, which is the initial equilibrium of a pneumatic table (``points`` (groups, 3)
+    [m]: the sensors, default the scenario's)."""
     q = states[:, 3:7] / np.linalg.norm(states[:, 3:7], axis=1, keepdims=True)
     w, x, y, z = q.T
     row_z = np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=1)  # R[2, :]
-    points = np.array([[g.sensor[0], g.sensor[1], 0.0] for g in scenario.leveling])
+    if points is None:
+        points = np.array([[g.sensor[0], g.sensor[1], 0.0] for g in scenario.leveling])
     return np.asarray((states[:, 2:3] + row_z @ points.T - points[:, 2]).T)
+
+
+def valve_note(scenario: Scenario, names: tuple[str, ...], p: np.ndarray, rest: np.ndarray,
+               last: np.ndarray) -> tuple[bool, str]:
+    """Whether a valve still moves air at a run's end (state ``last``: a sensor beyond ``LEVEL_BAND`` dead
+    bands), and where the groups' sensors come to rest (``rest``, the state the free motion with every valve
+    shut comes to) against their dead bands, in one phrase ("" for a table without valves); the sensors and
+    dead bands of the parameter vector ``p`` (entries ``names``)."""
+    value = dict(zip(names, np.asarray(p, dtype=float), strict=True))
+    with_valve = [(j, g.name) for j, g in enumerate(scenario.leveling) if g.valve is not None]
+    if not with_valve:
+        return False, ""
+    points = np.array([[value[f"leveling[{j}].sensor.x"], value[f"leveling[{j}].sensor.y"], 0.0]
+                       for j in range(len(scenario.leveling))])
+    heights = sensor_heights(scenario, np.vstack([last, rest]), points)
+    band = {j: value[f"leveling[{j}].valve.deadband"] for j, _ in with_valve}
+    active = any(abs(heights[j, 0]) > LEVEL_BAND * band[j] for j, _ in with_valve)
+    groups = ", ".join(f"{name} {heights[j, 1] * 1e6:.3g} µm (dead band ±{band[j] * 1e6:.3g} µm)"
+                       for j, name in with_valve)
+    return active, (f"the leveling valves stop inside their dead band with the table off the level pose "
+                    f"(sensors from level: {groups})")
 
 
 def leveling_time(t: np.ndarray, height: np.ndarray, stop_time: float, deadband: float) -> float | None:
@@ -316,3 +341,6 @@ def pneumatic_result(
         dynamic=dynamic,
         supply_exhausted=exhausted,
     )
+
+
+check_public(globals(), ("PneumaticResult"))

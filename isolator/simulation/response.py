@@ -10,11 +10,13 @@ from typing import Any
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
+from isolator.scenario.readable import clean_time, without_dust
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
-from isolator.simulation.response_csv import write_response_csv
+from isolator.simulation.response_csv import response_dict, write_response_csv
 from isolator.simulation.settling import Band, SettlingResult
 from isolator.simulation.window_settling import WindowResult, moves_per_hour, plot_windows
 
@@ -85,8 +87,8 @@ class Response:
     pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
     deadbands: dict[str, float] = field(default_factory=dict, repr=False)
     move_start: float = 0.0
-    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(
-        default=None, repr=False, compare=False)
+    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(default=None, repr=False,
+                                                                                          compare=False)
     point_set: PointSet | None = field(default=None, repr=False)
     window_result: WindowResult | Callable[[], WindowResult] | None = field(default=None, repr=False, compare=False)
     point_history: np.ndarray | None = field(default=None, repr=False, compare=False)
@@ -125,14 +127,11 @@ class Response:
     @property
     def sensor_signals(self) -> np.ndarray:
         """Every sensor's noise-free signal (sensors, N) in its SI quantity (the columns ``s:<sensor>``)."""
-        value = self._evaluated("sensor_history")
-        return np.zeros((0, self.t.size)) if value is None else value
+        return np.zeros((0, self.t.size)) if self.sensor_history is None else self._evaluated("sensor_history")
 
     def sensor(self, name: str) -> np.ndarray:
-        """The sensor ``name``'s signal (N,) [m, m/s or m/s^2]; a KeyError naming the known sensors."""
-        if name not in self.sensor_names:
-            raise KeyError(f"sensor: unknown '{name}' (sensors: {', '.join(self.sensor_names) or 'none'})")
-        return self.sensor_signals[self.sensor_names.index(name)]
+        """The sensor ``name``'s signal (N,) [m, m/s or m/s^2] (a KeyError names the known ones)."""
+        return self.sensor_signals[_index_of(name, self.sensor_names, "sensor")]
 
     def point(self, name: str) -> np.ndarray:
         """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]."""
@@ -244,28 +243,7 @@ class Response:
 
     def to_dict(self) -> dict[str, Any]:
         """Summary as plain JSON-ready types (the ``isolator simulate --json`` object)."""
-
-        def num(v: float | None) -> float | None:  # full precision: JSON is read back (--band-json)
-            return None if v is None or not math.isfinite(v) else float(v)
-
-        return {
-            "name": self.name,
-            "model": self.model,
-            "move_start": num(self.move_start),
-            "stop_time": num(self.stop_time),
-            "move_time": num(self.stop_time - self.move_start),
-            "signals": list(SIGNALS),
-            "peak": {k: num(v) for k, v in self.peak.items()},
-            "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
-            "settling_time": {k: num(v) for k, v in self.settling_time.items()},
-            "settling_time_max": num(self.settling_time_max),
-            "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
-            "band": self.band.to_dict(),
-            "point_peak": {n: {a: num(float(np.max(np.abs(self.point_signals[i, j])))) for j, a in enumerate("xyz")}
-                           for i, n in enumerate(self.point_names)},
-            **({} if self.windows is None else self.windows.to_dict()),
-            **({} if self.pneumatic is None else self.pneumatic.to_dict()),
-        }
+        return response_dict(self)
 
     def to_csv(self, path: str | Path) -> Path:
         """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``<point>:x,<point>:y,<point>:z``
@@ -281,14 +259,16 @@ class Response:
             + (f"the carriages move from t = {self.move_start:.4g} s and never stop (a sine)"
                if math.isinf(self.stop_time) else
                f"the carriages move from t = {self.move_start:.4g} s to their stop at t = {self.stop_time:.4g} s "
-               f"(move time {self.stop_time - self.move_start:.4g} s)"),
+               f"(move time {clean_time(self.stop_time - self.move_start):.4g} s)"),
             f"{'signal':>6}  {'peak':>12}  {'final':>12}  {'settling [s]':>12}",
         ]
         for i, k in enumerate(SIGNALS):
             r = self.settling[k]
             scale = 1e6
             unit = _UNITS[k]
-            final = "-" if self.final is None else f"{self.final[i] * scale:.4g} {unit}"
+            # rounding dust (below 1e-12 of the signal's own size) reads as 0
+            final = "-" if self.final is None else \
+                f"{float(without_dust(self.final[i], max(r.peak, abs(self.final[i])))) * scale:.4g} {unit}"
             st = "-" if r.time is None else f"{r.time:.4g}"
             lines.append(f"{k:>6}  {r.peak * scale:>7.4g} {unit:<4}  {final:>12}  {st:>12}")
         tmax = self.settling_time_max
@@ -397,3 +377,12 @@ class Response:
         ax.set_title("residual vibration after the stop, in units of each signal's settling band (settled below 1)")
         ax.grid(True, which="both", alpha=0.3)
         ax.legend(loc="upper right", fontsize=8, ncol=7)
+
+
+check_public(globals(), ("Response"))
+
+
+def _index_of(name: str, names: tuple[str, ...], what: str) -> int:
+    if name not in names:
+        raise KeyError(f"{what}: unknown '{name}' ({what}s: {', '.join(names) or 'none'})")
+    return names.index(name)

@@ -1,16 +1,19 @@
-"""A run's samples as CSV (:meth:`isolator.Response.to_csv`)."""
+"""A run's samples as CSV (:meth:`isolator.Response.to_csv`) and its summary as JSON-ready types
+(:meth:`isolator.Response.to_dict`)."""
 
 from __future__ import annotations
 
 import csv
+import math
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
+from isolator.scenario.readable import clean_time
 
-__all__ = ["write_response_csv"]
+__all__ = ["response_dict", "write_response_csv"]
 
 
 def write_response_csv(response: Any, path: str | Path) -> Path:
@@ -42,3 +45,30 @@ def write_response_csv(response: Any, path: str | Path) -> Path:
         for row in data:
             writer.writerow([f"{v:.10g}" for v in row])
     return path
+
+
+def response_dict(self: Any) -> dict[str, Any]:
+    """A :class:`~isolator.simulation.response.Response`'s summary as plain JSON-ready types (the ``isolator
+    simulate --json`` object)."""
+
+    def num(v: float | None) -> float | None:  # full precision: JSON is read back (--band-json)
+        return None if v is None or not math.isfinite(v) else float(v)
+
+    return {
+        "name": self.name,
+        "model": self.model,
+        "move_start": num(self.move_start),
+        "stop_time": num(self.stop_time),
+        "move_time": num(clean_time(self.stop_time - self.move_start)),
+        "signals": list(SIGNALS),
+        "peak": {k: num(v) for k, v in self.peak.items()},
+        "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
+        "settling_time": {k: num(v) for k, v in self.settling_time.items()},
+        "settling_time_max": num(self.settling_time_max),
+        "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
+        "band": self.band.to_dict(),
+        "point_peak": {n: {a: num(float(np.max(np.abs(self.point_signals[i, j])))) for j, a in enumerate("xyz")}
+                       for i, n in enumerate(self.point_names)},
+        **({} if self.windows is None else self.windows.to_dict()),
+        **({} if self.pneumatic is None else self.pneumatic.to_dict()),
+    }

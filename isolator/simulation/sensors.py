@@ -17,6 +17,7 @@ a still floor reads zero). Signals are noise-free.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from functools import lru_cache
 
 import casadi as ca
@@ -27,7 +28,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.points import point_positions, rotation_matrices
 
-__all__ = ["floor_motion", "sensor_columns", "sensor_signals", "table_motion"]
+__all__ = ["floor_motion", "sensor_columns", "sensor_history", "sensor_signals", "table_motion"]
 
 
 @lru_cache(maxsize=16)
@@ -122,6 +123,15 @@ def sensor_signals(scenario: Scenario, model: Model, t: np.ndarray, states: np.n
         for i in floor:
             out[i] = np.asarray(sensors[i].direction, dtype=float) @ ground[sensors[i].order]
     return out
+
+
+def sensor_history(scenario: Scenario, model: Model, t: np.ndarray, states: Callable[[], np.ndarray],
+                   inputs: np.ndarray, p: np.ndarray, start: np.ndarray) -> Callable[[], np.ndarray] | None:
+    """A run's sensor signals computed on first use (:func:`sensor_signals` of ``states()``); None without
+    sensors."""
+    if not scenario.sensors:
+        return None
+    return lambda: sensor_signals(scenario, model, t, states(), inputs, p, start)
 
 
 def sensor_columns(sensors: tuple[Sensor, ...]) -> tuple[str, ...]:

@@ -21,6 +21,7 @@ from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equili
 from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.profiles import Profile
 from isolator.scenario.sequence import held
@@ -346,3 +347,6 @@ def chain_scenario(scenario: Scenario, result: SequenceResult, after: float = 0.
     end = scenario.simulation.duration if last is None else last
     simulation = replace(scenario.simulation, duration=float(end + after))
     return replace(scenario, carriages=carriages, sequence=None, simulation=simulation)
+
+
+check_public(globals(), ("run_sequence"))

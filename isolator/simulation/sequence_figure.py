@@ -7,6 +7,8 @@ from typing import Any
 
 import numpy as np
 
+from isolator.scenario.readable import length_text
+
 __all__ = ["PHASE_COLOURS", "plot_sequence"]
 
 #: the spans' colours: move, settle, measure
@@ -60,7 +62,7 @@ def plot_sequence(result: Any, point: str | None = None, title: str | None = Non
     ax.set_ylabel(f"{name} deviation from the\nstep's settled position [nm]")
     ax.grid(True, which="major", alpha=0.3, zorder=0)
     handles, _ = ax.get_legend_handles_labels()
-    handles += [Patch(color="tab:green", alpha=0.3, label=f"window ±{width:.4g} nm")] if width > 0 else []
+    handles += [Patch(color="tab:green", alpha=0.3, label=f"window ±{length_text(width * 1e-9)}")] if width > 0 else []
     handles += [Patch(color=c, label=k) for k, c in PHASE_COLOURS.items()]
     ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), fontsize=8, ncol=len(handles),
               frameon=False)

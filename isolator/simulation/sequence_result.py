@@ -15,8 +15,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile
+from isolator.scenario.readable import length_text
 from isolator.simulation.points import point_positions
 
 if TYPE_CHECKING:
@@ -270,7 +272,7 @@ class SequenceResult:
             return f"{v:10.4f}" if v is not None else f"{'-':>10}"
 
         lines = [f"{self.name} ({self.model} model): {self.step_count} steps, measure {self.measure:g} s, windows "
-                 + "; ".join(f"{w.point} ±{w.translation * 1e9:.4g} nm on {','.join(w.axes)}" for w in self.windows),
+                 + "; ".join(f"{w.point} ±{length_text(w.translation)} on {','.join(w.axes)}" for w in self.windows),
                  f"{'step':>4} " + " ".join(f"{k + ' [s]':>10}" for k in STEP_COLUMNS[1:])]
         for s in self.steps:
             lines.append(f"{s.index:>4} " + " ".join(f(v) for v in (s.start, s.stop, s.settled, s.end, s.move,
@@ -323,3 +325,6 @@ def chain_profiles(result: SequenceResult) -> tuple[PiecewisePolynomialProfile, 
         padded = tuple(tuple(c) + (0.0,) * (width - len(c)) for c in coefficients)
         out.append(PiecewisePolynomialProfile(tuple(knots), padded, kind="chain"))
     return tuple(out)
+
+
+check_public(globals(), ("SequenceResult", "StepResult"))

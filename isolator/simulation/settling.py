@@ -7,8 +7,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Settling
 from isolator.simulation.band import MOTION_FLOOR, Band, as_band
+from isolator.simulation.free_tail import FreeTail
 
 __all__ = [
     "MOTION_FLOOR",
@@ -273,32 +275,65 @@ def settling_metrics(
     hold: float = 0.0,
     peaks: np.ndarray | None = None,
     interpolate: bool = False,
+    tail: FreeTail | None = None,
+    rest_note: str = "",
 ) -> dict[str, SettlingResult]:
     """Settling of each of the six table signals, keyed by name (``SIGNALS``).
 
     ``peaks`` (max |signal| per row), when the caller has them already; ``interpolate`` as for
-    :func:`last_outside`.
+    :func:`last_outside`; ``tail`` and ``rest_note`` as for :func:`settling_results` (with a tail, ``hold``
+    is not waited: the tail decides).
     """
     if peaks is None:
         peaks = signal_peaks(signals)
-    times, short = signal_settling(t, signals, final, stop_time, settling, hold, peaks, interpolate)
-    return settling_results(times, short, peaks, final is not None, settling, _unavailable(t, stop_time))
+    times, short = signal_settling(t, signals, final, stop_time, settling, 0.0 if tail else hold, peaks, interpolate)
+    return settling_results(times, short, peaks, final is not None, settling, _unavailable(t, stop_time), tail,
+                            rest_note)
 
 
 def settling_results(
-    times: np.ndarray, short: np.ndarray, peaks: np.ndarray, stops: bool, settling: Band | Settling, why: str = ""
+    times: np.ndarray,
+    short: np.ndarray,
+    peaks: np.ndarray,
+    stops: bool,
+    settling: Band | Settling,
+    why: str = "",
+    tail: FreeTail | None = None,
+    rest_note: str = "",
 ) -> dict[str, SettlingResult]:
-    """Per signal name: the numbers of :func:`signal_settling` (one run) as :class:`SettlingResult`
-    (``stops``: the carriages stop; ``why``: the run shows no settling at all, and why)."""
+    """Per signal name: the numbers of :func:`signal_settling` (one run) as :class:`SettlingResult`.
+
+    Parameters
+    ----------
+    times, short, peaks : ndarray (6,)
+        As :func:`signal_settling` gives them [s, s, m or rad].
+    stops : bool
+        The carriages stop.
+    settling : Band or Settling
+    why : str
+        Why the run shows no settling at all ("" when it can).
+    tail : FreeTail, optional
+        The free motion after the run's end: a time stands only if the signal stays inside its band
+        after the end; a signal outside at the end is told when it would enter for good (without a tail:
+        ``times`` as given, NaN where the signal was not seen inside long enough).
+    rest_note : str
+        What keeps the table off its final rest (said of a signal that comes to rest outside its band).
+    """
     still = still_signals(settling, peaks) if stops else np.zeros(len(SIGNALS), dtype=bool)
     bands = signal_bands(settling, peaks)
+    verdict = None if tail is None or why else tail.judge(np.maximum(bands, 1e-300))
     out: dict[str, SettlingResult] = {}
     for i, name in enumerate(SIGNALS):
         if still[i]:
             time, reason = 0.0, "does not move"
+        elif verdict is not None and (verdict.leaves[i] or math.isnan(times[i])):
+            time, reason = None, verdict.reason(i, bool(math.isnan(times[i])), rest_note)
         elif math.isnan(times[i]):
             time, reason = None, why or _outside(short[i])
         else:
             time, reason = float(times[i]), ""
         out[name] = SettlingResult(time, float(peaks[i]), float(bands[i]), reason)
     return out
+
+
+check_public(globals(), ("SettlingResult", "settling_time"))

@@ -1,4 +1,7 @@
-"""Transient simulation of a scenario: from the initial equilibrium through the moves."""
+"""Transient simulation of a scenario: from the initial equilibrium through the moves. Plain carriage transients
+are integrated with DOP853 steps between the breakpoints and read at the samples from its dense output
+(:mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step RK4 on the sample grid, the
+controller ticking between intervals."""
 
 from __future__ import annotations
 
@@ -12,10 +15,12 @@ import numpy as np
 from isolator.errors import SimulationError, UnstableTableError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equilibria
+from isolator.model.names import expand_changes
 from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
 from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.numerics.step_plan import PROBES
+from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
@@ -27,7 +32,7 @@ from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
-from isolator.simulation.sensors import sensor_signals
+from isolator.simulation.sensors import sensor_history
 from isolator.simulation.settling import Band, SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
@@ -43,6 +48,7 @@ from isolator.simulation.stepping import (
     staged_parameters,
     with_start,
 )
+from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
 from isolator.simulation.window_settling import run_points
 
@@ -94,8 +100,9 @@ class Simulator:
 
     # -- parameters ------------------------------------------------------------
     def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
-        """The parameter vector with named entries changed (names: ``layout.names``), each checked by the
-        rules the file reader checks by (:mod:`isolator.scenario.rules`).
+        """The parameter vector with named entries changed (names: ``layout.names``, or as ``isolator.sweep``
+        takes them: ``isolators[*].damping.z``, ``isolators[0].stiffness``), each checked by the rules the file
+        reader checks by (:mod:`isolator.scenario.rules`).
 
         Raises
         ------
@@ -103,7 +110,7 @@ class Simulator:
             Naming the entry, ``changes['isolators[0].damping.z']: must be >= 0, got -5``; an unknown
             name with the closest valid one.
         """
-        return self.layout.with_changes(self.parameters, changes)
+        return self.layout.with_changes(self.parameters, expand_changes(self.layout, changes))  # type: ignore[arg-type]
 
     def scaled_parameters(self, stiffness: float = 1.0, damping: float = 1.0) -> np.ndarray:
         """Parameter vector with all isolator stiffness and damping scaled (:func:`scaled_parameter_sets`)."""
@@ -215,7 +222,7 @@ class Simulator:
         Parameters
         ----------
         changes : mapping, optional
-            Parameter values by name, e.g. ``{"isolators[0].stiffness.z": 6e5}``.
+            Parameter values by name, e.g. ``{"isolators[0].stiffness.z": 6e5}`` (``isolators[*].damping`` too).
         p : ndarray, optional
             A whole parameter vector (overrides ``changes``).
         forces : ForceHistory, optional
@@ -238,13 +245,6 @@ class Simulator:
             The table has no stable equilibrium.
         SimulationError
             The run diverged.
-
-        Notes
-        -----
-        Plain carriage transients are integrated with DOP853 steps between the
-        breakpoints and read at the samples from its dense output (see
-        :mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step
-        RK4 on the sample grid, the controller ticking between intervals.
         """
         p = self.parameter_vector(changes) if p is None else self.layout.checked(p, "p")
         self.check_tipping(p)
@@ -281,10 +281,12 @@ class Simulator:
             signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
                               polynomials[..., None], start.state[None, :], self.model.variant.signals)
-            def measure(rule: Band) -> dict[str, SettlingResult]:
-                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals)
-
             x0, dense = start.state, polynomials
+            tail, note = run_tail(self.scenario, self.model, p, start, end,
+                                  DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)
+
+            def measure(rule: Band) -> dict[str, SettlingResult]:
+                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals, tail, note)
 
             @cache  # the states at the samples, once for the response, leveling and windows
             def history() -> np.ndarray:
@@ -318,9 +320,15 @@ class Simulator:
             fine = cache(lambda: (grid.nodes, every))  # the internal grid, >= 1 kHz (typed as in the other branch)
             on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
             signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
+            # forces or feedback act to the end: no free motion after it, the run must show the signal settled
+            free = (None, "") if forces is not None or feedback is not None else run_tail(
+                self.scenario, self.model, p, start, end, every[-1], float(grid.nodes[-1]))
+
+            peaks = signal_peaks(on_grid)  # the metrics on every node, the entry into a band interpolated
+            check_turn(peaks, grid.nodes, on_grid)
 
             def measure(rule: Band) -> dict[str, SettlingResult]:
-                return self._metrics(on_grid, final, hold, rule)
+                return settling_metrics(grid.nodes, on_grid, final, self.stop_time, rule, hold, peaks, True, *free)
 
         t = grid.samples
         run_states = history if states is None else (lambda: states)
@@ -357,20 +365,10 @@ class Simulator:
             point_set=points,
             window_result=windows,
             sensor_set=self.scenario.sensors,
-            sensor_history=(lambda: sensor_signals(self.scenario, self.model, t, run_states(), at_samples, p,
-                                                   start.state)) if self.scenario.sensors else None,
+            sensor_history=sensor_history(self.scenario, self.model, t, run_states, at_samples, p, start.state),
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
             move_start=min((b for c in self.scenario.carriages for b in c.profile.breakpoints[:1]), default=0.0),
         )
-
-    def _metrics(self, signals: np.ndarray, final: np.ndarray | None, hold: float,
-                 rule: Band) -> dict[str, SettlingResult]:
-        """Settling of the six signals (6, nodes) of an RK4 run without NaN, on every node of the internal
-        grid (the instant a signal enters its band interpolated between two nodes)."""
-        t = self.grid.nodes
-        peaks = signal_peaks(signals)
-        check_turn(peaks, t, signals)
-        return settling_metrics(t, signals, final, self.stop_time, rule, hold, peaks, True)
 
     def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray:
         """The six table signals (6, N) of model states (N, n_states), relative to ``start``
@@ -397,3 +395,6 @@ def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, flo
     """Simulate a scenario's carriage transients from the initial static equilibrium (``model`` "exact" or
     "paper"; ``changes``: parameter values by name, :attr:`ParameterLayout.names`)."""
     return Simulator(scenario, model).run(changes)
+
+
+check_public(globals(), ("Simulator", "simulate"))

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.readable import length_text
 from isolator.scenario.windows import Window
 from isolator.simulation.points import PointSet
 
@@ -110,7 +111,7 @@ class WindowResult:
         lines = []
         for i, (w, st, why) in enumerate(zip(self.windows, self.settling_time, self.reasons, strict=True)):
             value = f"{st:.4g} s after the stop" if st is not None else f"not available ({why})"
-            lines.append(f"window {i} ({w.point}, ±{w.translation * 1e9:.4g} nm on {','.join(w.axes)}): {value}")
+            lines.append(f"window {i} ({w.point}, ±{length_text(w.translation)} on {','.join(w.axes)}): {value}")
         return lines
 
 
@@ -151,7 +152,7 @@ def plot_windows(result: WindowResult, stop_time: float, title: str) -> Any:
         for axis, row in zip(w.axes, dev, strict=True):
             ax.plot(result.t, row * 1e9, lw=1.0, label=f"{w.point}:{axis}")
         h = w.translation * 1e9
-        ax.axhspan(-h, h, color="tab:green", alpha=0.15, lw=0, label=f"window ±{h:.4g} nm")
+        ax.axhspan(-h, h, color="tab:green", alpha=0.15, lw=0, label=f"window ±{length_text(w.translation)}")
         if math.isfinite(stop_time):
             ax.axvline(stop_time, color="0.5", ls=":", lw=1, label="carriages stop")
             if st is not None:

@@ -90,10 +90,17 @@ def _break_dataclass(scenario, path: str, value):
 @given(broken_scenarios())
 def test_a_scenario_built_from_dataclasses_is_refused_as_the_file_is(case):
     data, path, value, original = case
-    broken = _break_dataclass(make(original), path, value)
+    expected = _reader_error(data)
+    refused, broken = "", None
+    try:
+        broken = _break_dataclass(make(original), path, value)
+    except ParameterError as exc:  # a bad number: the dataclass refuses it when built, in the reader's words
+        refused = str(exc)
+    if refused:
+        assert refused.split(": ", 1)[1] == expected.split(": ", 1)[1]
+        return
     if broken is None:
         return  # a profile's keys: its builders refuse them (tests/scenario), there is no dataclass field
-    expected = _reader_error(data)
     with pytest.raises(ScenarioError) as caught:
         Simulator(broken)
     assert str(caught.value) == expected

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -113,7 +114,7 @@ def _study(samples: np.ndarray, times: dict[str, np.ndarray]) -> RobustnessStudy
     varied = varied_parameters([parse_tolerance("isolators[0].damping=+-20%"),
                                 parse_tolerance("table.mass=+-5%")], sim.layout, sim.parameters)
     methods = {k: MethodSpread(k, None, v) for k, v in times.items()}
-    return RobustnessStudy(sim.scenario, varied, samples, methods, Band(), None)  # type: ignore[arg-type]
+    return RobustnessStudy(sim.scenario, varied, samples, methods, Band(), Path("not-written"))
 
 
 def test_percentiles_benefit_and_ranking_by_hand():

@@ -1,0 +1,212 @@
+"""What the table does after a run ends: the free motion about the final rest, from the linear model.
+
+A settling time read from a finite run stands only if no signal leaves its band after the run's end.
+That is decided from the physics, not by waiting: from the run's last state ``x(T)`` the carriages are
+parked and nothing forces the table, so to first order the state moves as
+
+``x(t) - x* = exp(A (t - T)) (x(T) - x*)``
+
+about the final rest ``x*``, ``A`` the model's Jacobian there, and each signal's deviation from its final
+value is ``C (x(t) - x*)`` with ``C`` the signals' Jacobian at ``x*``. With ``A = V diag(lambda) V^-1``
+(the exact eigen-decomposition) signal ``i`` deviates by
+
+``o_i + Re sum_k w_ik exp(lambda_k (t - T))``:
+
+``o`` from the modes at ``lambda = 0`` is what the motion keeps for good (a pneumatic group's air, its
+valve shut inside its dead band; the quaternion's norm, which no signal sees), and
+``sum_k |w_ik| exp(Re lambda_k (t - T))`` bounds the rest. A signal whose ``|o_i|`` plus that bound is
+inside its band at ``T`` stays inside; otherwise its deviation is evaluated every
+:data:`STEP_ANGLE` radians of its fastest mode that matters, up to the time from which the bound keeps it
+inside (the modes that cannot move it by :data:`NEGLIGIBLE` of its band are left to the bound).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from isolator.model.signals import signal_jacobian
+from isolator.model.variants import Model
+from isolator.scenario.definitions import SIGNALS
+
+__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeTail", "TailVerdict", "free_tail", "micro"]
+
+#: points per radian of the fastest mode that matters: the deviation is read every 0.2 rad of it
+STEP_ANGLE = 0.2
+#: a mode moving a signal by less than this fraction of its band is left to the bound
+NEGLIGIBLE = 1e-4
+#: most points a signal's free motion is read at (longer horizons are read more coarsely)
+MAX_POINTS = 200_000
+#: points the largest excursion is read at between its neighbours on the coarse grid
+REFINE = 41
+#: eigenvalues below this fraction of the largest are conserved quantities (lambda = 0)
+ZERO = 1e-9
+
+
+def micro(name: str, value: float) -> str:
+    """A signal's value [m or rad] in µm or µrad, 3 significant digits."""
+    return f"{value * 1e6:.3g} {'µm' if name in ('x', 'y', 'z') else 'µrad'}"
+
+
+@dataclass(frozen=True)
+class TailVerdict:
+    """Per signal (``SIGNALS`` order), what the free motion after the run's end does in its band.
+
+    Attributes
+    ----------
+    end : float
+        The run's end [s].
+    leaves : ndarray of bool (6,)
+        Outside the band at some time after the end.
+    excess : ndarray (6,)
+        The largest ``|deviation| - band`` after the end [m or rad] (<= 0: inside throughout).
+    when : ndarray (6,)
+        When that largest excess happens [s].
+    enters : ndarray (6,)
+        From when the signal stays inside its band [s] (the end when it never leaves; inf when it comes to
+        rest outside).
+    offset : ndarray (6,)
+        Where the free motion comes to rest, from the final value [m or rad].
+    band : ndarray (6,)
+        The half-widths judged against [m or rad].
+    """
+
+    end: float
+    leaves: np.ndarray
+    excess: np.ndarray
+    when: np.ndarray
+    enters: np.ndarray
+    offset: np.ndarray
+    band: np.ndarray
+
+    def reason(self, i: int, outside_at_end: bool, rest_note: str = "") -> str:
+        """Why signal ``i`` shows no settling time, in one true sentence (``rest_note``: what keeps the
+        table off its final rest, said when the signal comes to rest outside its band)."""
+        name = SIGNALS[i]
+        over = f"{micro(name, float(self.excess[i]))} ({100 * self.excess[i] / self.band[i]:.3g} % of its band)"
+        if not math.isfinite(self.enters[i]):
+            why = f": {rest_note}" if rest_note else ""
+            return (f"{name} comes to rest {micro(name, abs(float(self.offset[i])))} from its final value, outside its "
+                    f"band ±{micro(name, float(self.band[i]))}{why}; a longer run cannot help")
+        needed = math.ceil(10 * float(self.enters[i]) * (1 + 1e-12)) / 10
+        if needed <= self.enters[i]:
+            needed += 0.1
+        if outside_at_end:
+            return (f"{name} is still outside its band when the run ends at {self.end:.4g} s, by up to {over} "
+                    f"after it (at {self.when[i]:.4g} s), and stays inside from {self.enters[i]:.4g} s by the linear "
+                    f"model about the final rest; lengthen simulation.duration to {needed:g} s or more")
+        return (f"{name} leaves its band again after the run ends at {self.end:.4g} s, by {over} at "
+                f"{self.when[i]:.4g} s, and stays inside from {self.enters[i]:.4g} s by the linear model about the "
+                f"final rest; lengthen simulation.duration to {needed:g} s or more")
+
+
+@dataclass(frozen=True)
+class FreeTail:
+    """The six signals' free motion after a run's end (see the module's description).
+
+    Attributes
+    ----------
+    end : float
+        The run's end ``T`` [s].
+    rates : ndarray (m,) complex
+        The eigenvalues ``lambda`` of the modes that move [1/s].
+    weights : ndarray (6, m) complex
+        Each mode's ``w_ik`` [m or rad].
+    offset : ndarray (6,)
+        ``o``: where the free motion comes to rest, from the final values [m or rad].
+    rest : ndarray (n_states,)
+        The state the free motion comes to rest in (``x*`` moved by the conserved modes).
+    """
+
+    end: float
+    rates: np.ndarray
+    weights: np.ndarray
+    offset: np.ndarray
+    rest: np.ndarray
+
+    def deviation(self, i: int, t: np.ndarray, modes: np.ndarray | None = None) -> np.ndarray:
+        """Signal ``i``'s deviation from its final value at times ``t`` [s] (>= ``end``), by ``modes``
+        (indices; all by default) [m or rad]."""
+        k = np.arange(self.rates.size) if modes is None else modes
+        phase = np.exp(np.outer(np.asarray(t, dtype=float) - self.end, self.rates[k]))
+        return self.offset[i] + (phase @ self.weights[i, k]).real
+
+    def judge(self, band: np.ndarray) -> TailVerdict:
+        """What the free motion does in the band of half-widths ``band`` (6,) [m or rad]."""
+        band = np.asarray(band, dtype=float)
+        leaves, excess = np.zeros(6, dtype=bool), np.zeros(6)
+        when, enters = np.full(6, self.end), np.full(6, self.end)
+        for i in range(6):
+            leaves[i], excess[i], when[i], enters[i] = self._signal(i, float(band[i]))
+        return TailVerdict(self.end, leaves, excess, when, enters, self.offset.copy(), band)
+
+    def _signal(self, i: int, band: float) -> tuple[bool, float, float, float]:
+        """(leaves, largest excess, its time, from when inside) of signal ``i`` in ``band``."""
+        size = np.abs(self.weights[i])
+        offset = abs(float(self.offset[i]))
+        start = offset + float(size.sum())
+        if start <= band:
+            return False, start - band, self.end, self.end
+        if offset >= band:  # at rest outside: from when the motion stays on the far side is beside the point
+            return True, offset - band, math.inf, math.inf
+        keep = size > NEGLIGIBLE * band
+        slack = float(size[~keep].sum())
+        rates, sizes = self.rates[keep], size[keep]
+        room = band - offset - slack
+        decay = float(np.max(rates.real))
+        if room <= 0.0 or decay >= 0.0:  # no time from which the bound keeps it inside: read a long way
+            horizon = 50.0 / max(-decay, 1e-3)
+        else:
+            horizon = max(0.0, math.log(max(float(sizes.sum()) / room, 1.0)) / -decay)
+        fastest = float(np.max(np.abs(rates)))
+        count = int(min(MAX_POINTS, max(2, math.ceil(horizon * fastest / STEP_ANGLE) + 1)))
+        t = self.end + np.linspace(0.0, horizon, count)
+        modes = np.flatnonzero(keep)
+        gap = np.abs(self.deviation(i, t, modes)) - band
+        top = int(np.argmax(gap))
+        fine = np.linspace(t[max(top - 1, 0)], t[min(top + 1, count - 1)], REFINE)  # the largest, closely
+        fine_gap = np.abs(self.deviation(i, fine, modes)) - band
+        best = int(np.argmax(fine_gap))
+        outside = np.flatnonzero(gap > 0.0)
+        if not outside.size:
+            return False, float(fine_gap[best]), float(fine[best]), self.end
+        last = int(outside[-1])
+        enters = float(t[min(last + 1, count - 1)])
+        return True, float(fine_gap[best]), float(fine[best]), enters
+
+
+def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
+              reference: np.ndarray, last: np.ndarray, end: float) -> FreeTail:
+    """The free motion after a run's end.
+
+    Parameters
+    ----------
+    model : Model
+    p : ndarray
+        Parameter vector.
+    final_state : ndarray (n_states,)
+        The final rest ``x*`` (the final equilibrium's state).
+    positions : ndarray
+        The carriages' final coordinates [m].
+    reference : ndarray (n_states,)
+        The state the signals are measured from (the initial equilibrium's).
+    last : ndarray (n_states,)
+        The run's state at its end.
+    end : float
+        The run's end [s].
+    """
+    x_star = np.asarray(final_state, dtype=float)
+    a = np.asarray(model.state_jacobian(x_star, model.layout.rest_inputs(positions), p), dtype=float)
+    c = np.asarray(signal_jacobian(model.variant, model.n_states)(x_star, reference), dtype=float)
+    rates, vectors = np.linalg.eig(a)
+    try:
+        amplitude = np.linalg.solve(vectors, np.asarray(last, dtype=float) - x_star)
+    except np.linalg.LinAlgError:
+        amplitude = np.linalg.lstsq(vectors, np.asarray(last, dtype=float) - x_star, rcond=None)[0]
+    zero = np.abs(rates) <= ZERO * max(float(np.max(np.abs(rates), initial=0.0)), 1.0)
+    weights = (c @ vectors) * amplitude[None, :]
+    offset = weights[:, zero].sum(axis=1).real
+    rest = x_star + (vectors[:, zero] @ amplitude[zero]).real
+    return FreeTail(float(end), rates[~zero], weights[:, ~zero], offset, rest)
