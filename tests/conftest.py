@@ -198,7 +198,7 @@ def mujoco_records():
 
     true = scenario_from_dict(true_data())
     move = move_record(true, 9.0, 500.0)
-    floor = floor_record(true, FloorMotion(low=0.5, high=25.0, count=120), 60.0, 200.0)
+    floor = floor_record(true, FloorMotion(low=0.5, high=25.0), 60.0, 200.0)
     return move, floor
 
 

@@ -7,11 +7,11 @@ from pathlib import Path
 from typing import Any
 
 from isolator.scenario.arguments import check_public
-from isolator.scenario.writing import absolute_files, scenario_data, write_toml
+from isolator.scenario.writing import scenario_data, write_toml
 
 from .move_design import MoveDesign
 
-__all__ = ["absolute_files", "write_scenario", "write_scenario_profiles"]
+__all__ = ["write_scenario", "write_scenario_profiles"]
 
 
 def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], path: str | Path) -> Path:

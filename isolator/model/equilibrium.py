@@ -15,17 +15,8 @@ from isolator.model.variants import Model
 from isolator.numerics.native import MappedFunction
 from isolator.scenario.arguments import check_public
 
-__all__ = [
-    "DOF_NAMES",
-    "Equilibrium",
-    "RockingStiffness",
-    "air_in_groups",
-    "closed_rest_states",
-    "quasi_static_sensitivity",
-    "rocking_stiffness",
-    "static_equilibria",
-    "static_equilibrium",
-]
+__all__ = ["DOF_NAMES", "Equilibrium", "RockingStiffness", "air_in_groups", "closed_rest_states",
+           "quasi_static_sensitivity", "rocking_stiffness", "static_equilibria", "static_equilibrium"]
 
 DOF_NAMES = ("x", "y", "z", "rx", "ry", "rz")
 

@@ -15,9 +15,11 @@ each channel's RMS is added (seeded).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
+from scipy.interpolate import CubicSpline
 
 from isolator.scenario.definitions import Scenario, SimulationSettings
 from isolator.scenario.sensors import Sensor
@@ -65,33 +67,43 @@ def add_noise(channels: dict[str, np.ndarray], fraction: float, seed: int) -> di
 
 @dataclass(frozen=True)
 class FloorMotion:
-    """A random-phase multisine floor translation along x, y, z [m]: ``sum A cos(w t + phi)`` per axis with
-    a flat acceleration amplitude between ``low`` and ``high`` [Hz] (``count`` components per axis, RMS
-    acceleration ``rms`` [m/s^2] per axis)."""
+    """A random floor translation along x, y, z [m]: on every frequency ``k / period`` between ``low`` and
+    ``high`` [Hz] a line of the same acceleration amplitude and a random phase per axis (a periodic,
+    band-limited random signal; RMS acceleration ``rms`` [m/s^2] per moving axis), sampled at 16 ``high`` and
+    interpolated by a cubic spline whose derivatives are the velocity and acceleration (one consistent
+    motion for MuJoCo's anchors and the floor sensors)."""
 
     low: float = 0.5
     high: float = 40.0
-    count: int = 400
     rms: float = 0.01
     seed: int = 0
     axes: str = "xyz"
+    period: float = 64.0
 
-    def components(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    @cached_property
+    def _spline(self) -> CubicSpline:
         rng = np.random.default_rng(self.seed)
-        w = 2 * np.pi * rng.uniform(self.low, self.high, size=(3, self.count))
-        phase = rng.uniform(0, 2 * np.pi, size=(3, self.count))
-        amp = self.rms * np.sqrt(2.0 / self.count) / w**2  # acceleration amplitude rms*sqrt(2/count) per line
-        amp[[k for k, a in enumerate("xyz") if a not in self.axes]] = 0.0
-        return w, phase, amp
+        rate = 16.0 * self.high
+        n = round(self.period * rate)
+        f = np.fft.rfftfreq(n, 1.0 / rate)
+        lines = (f >= self.low) & (f <= self.high)
+        spectrum = np.zeros((3, f.size), dtype=complex)
+        for k, axis in enumerate("xyz"):
+            if axis in self.axes:
+                phases = rng.uniform(size=int(lines.sum()))
+                spectrum[k, lines] = np.exp(2j * np.pi * phases) / (2 * np.pi * f[lines]) ** 2
+        disp = np.fft.irfft(spectrum, n, axis=1)
+        acc = np.fft.irfft(spectrum * -(2 * np.pi * f) ** 2, n, axis=1)
+        scale = np.array([self.rms / np.sqrt(np.mean(a**2)) if np.any(a) else 0.0 for a in acc])
+        t = np.arange(n + 1) / rate
+        values = np.concatenate([disp, disp[:, :1]], axis=1) * scale[:, None]
+        return CubicSpline(t, values, axis=1, bc_type="periodic")
 
     def at(self, t: np.ndarray | float) -> np.ndarray:
         """Translation, velocity and acceleration (3, 3, N) at times ``t`` [s]."""
-        w, phase, amp = self.components()
-        t = np.atleast_1d(np.asarray(t, dtype=float))
-        arg = w[:, :, None] * t[None, None, :] + phase[:, :, None]
-        c, s = np.cos(arg), np.sin(arg)
-        return np.array([np.sum(amp[:, :, None] * c, axis=1), -np.sum((amp * w)[:, :, None] * s, axis=1),
-                         -np.sum((amp * w**2)[:, :, None] * c, axis=1)])
+        t = np.mod(np.atleast_1d(np.asarray(t, dtype=float)), self.period)
+        spline = self._spline
+        return np.array([spline(t), spline(t, 1), spline(t, 2)])
 
 
 def _read(table: MujocoTable, sensors: tuple[Sensor, ...], t: np.ndarray, states: np.ndarray, accelerations: np.ndarray,
