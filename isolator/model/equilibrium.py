@@ -108,7 +108,7 @@ class RockingStiffness:
         return (
             f"rocking stiffness about {self.weakest_axis} = {self.margin:.4g} N m/rad "
             f"({100 * self.relative_margin:.3g} % of the isolators' {self.elastic[0]:.4g}; "
-            f"the weight above their attachment points takes {taken:.4g})"
+            f"the weight above their attachment points takes {taken:.4g} N m/rad)"
         )
 
 
