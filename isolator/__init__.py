@@ -19,6 +19,7 @@ from isolator.analysis.pneumatic import EquivalentSpringDamper, equivalent_sprin
 from isolator.analysis.stability import StabilityReport, stability
 from isolator.analysis.transmissibility import FrequencyResponse, compliance, transmissibility
 from isolator.analysis.vibration import VC_CLASSES, VibrationCriteria, vibration_criteria
+from isolator.calibration import CalibrationResult, calibrate
 from isolator.errors import (
     IsolatorError,
     OptimisationError,
@@ -73,6 +74,7 @@ __all__ = [
     "Air",
     "Band",
     "BatchResult",
+    "CalibrationResult",
     "Capillary",
     "Carriage",
     "Equilibrium",
@@ -117,6 +119,7 @@ __all__ = [
     "VibrationCriteria",
     "build_model",
     "bundled_scenarios",
+    "calibrate",
     "compliance",
     "equivalent_spring_damper",
     "get_model",

@@ -17,6 +17,7 @@ __all__ = [
     "ParameterError",
     "ScenarioError",
     "SimulationError",
+    "UnidentifiableError",
     "UnstableClosedLoopError",
     "UnstableTableError",
 ]
@@ -48,3 +49,17 @@ class UnstableClosedLoopError(IsolatorError):
 
 class OptimisationError(IsolatorError):
     """An optimiser stopped without a usable answer; the message says why and what is kept."""
+
+
+class UnidentifiableError(IsolatorError):
+    """The records of a calibration cannot tell some fitted parameters apart; the message names them.
+
+    Attributes
+    ----------
+    groups : list of list of str
+        The parameters of each direction the records cannot resolve.
+    """
+
+    def __init__(self, message: str, groups: list[list[str]] | None = None) -> None:
+        super().__init__(message)
+        self.groups = groups or []

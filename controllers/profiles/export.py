@@ -7,7 +7,7 @@ from pathlib import Path
 from typing import Any
 
 from isolator.scenario.arguments import check_public
-from isolator.scenario.reader import resolve_scenario_path
+from isolator.scenario.writing import absolute_files, scenario_data, write_toml
 
 from .move_design import MoveDesign
 
@@ -27,24 +27,13 @@ def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], pat
         The file to write; it loads with :func:`isolator.load_scenario`.
         Relative ``file`` keys of the source are made absolute.
     """
-    import tomllib
-
-    import tomli_w
-
-    origin = resolve_scenario_path(source)
-    with open(origin, "rb") as handle:
-        data = tomllib.load(handle)
-    absolute_files(data, origin.parent)
+    origin, data = scenario_data(source)
     by_name = {d.name: d for d in designs}
     for carriage in data.get("carriages", []):
         if carriage.get("name") in by_name:
             carriage["profile"] = by_name[carriage["name"]].profile().settings
     data["name"] = f"{data.get('name', origin.stem)}-optimised"
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with open(target, "wb") as handle:
-        tomli_w.dump(data, handle)
-    return target
+    return write_toml(data, path)
 
 
 def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str | Path, name: str) -> Path | None:
@@ -57,36 +46,12 @@ def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str 
             profiles[carriage.name] = carriage.profile.settings
         except (AttributeError, ValueError):
             return None
-    import tomllib
-
-    import tomli_w
-
-    origin = resolve_scenario_path(source)
-    with open(origin, "rb") as handle:
-        data = tomllib.load(handle)
-    absolute_files(data, origin.parent)
+    _, data = scenario_data(source)
     for carriage in data.get("carriages", []):
         if carriage.get("name") in profiles:
             carriage["profile"] = profiles[carriage["name"]]
     data["name"] = name
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with open(target, "wb") as handle:
-        tomli_w.dump(data, handle)
-    return target
-
-
-def absolute_files(data: Any, base: Path) -> None:
-    """Make every relative ``file`` key under ``data`` absolute (relative to ``base``)."""
-    if isinstance(data, dict):
-        for key, value in data.items():
-            if key == "file" and isinstance(value, str) and not Path(value).is_absolute():
-                data[key] = str((base / value).resolve())
-            else:
-                absolute_files(value, base)
-    elif isinstance(data, list):
-        for item in data:
-            absolute_files(item, base)
+    return write_toml(data, path)
 
 
 check_public(globals())

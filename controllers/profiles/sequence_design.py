@@ -36,12 +36,11 @@ from scipy.stats import qmc
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
-from isolator.scenario.reader import resolve_scenario_path
 from isolator.scenario.sequence import Move, Step, sequence_table
 from isolator.scenario.shapers import shaper
+from isolator.scenario.writing import scenario_data, write_toml
 from isolator.simulation.sequence import SequenceResult, run_sequence
 
-from .export import absolute_files
 from .input_shaping import ExcitedMode
 from .sequence_baselines import dominant_modes_at
 
@@ -363,23 +362,12 @@ def write_sequence_scenario(source: str | Path | None, scenario: Scenario, path:
     ScenarioError
         ``scenario`` has no sequence.
     """
-    import tomllib
-
-    import tomli_w
-
     if scenario.sequence is None:
         raise ScenarioError("sequence: nothing to write, the scenario has no [sequence]")
-    origin = resolve_scenario_path(source)
-    with open(origin, "rb") as handle:
-        data = tomllib.load(handle)
-    absolute_files(data, origin.parent)
+    origin, data = scenario_data(source)
     data["sequence"] = sequence_table(scenario.sequence)
     data["name"] = name or f"{data.get('name', origin.stem)}-optimised"
-    target = Path(path)
-    target.parent.mkdir(parents=True, exist_ok=True)
-    with open(target, "wb") as handle:
-        tomli_w.dump(data, handle)
-    return target
+    return write_toml(data, path)
 
 
 check_public(globals())

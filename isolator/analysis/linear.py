@@ -29,6 +29,7 @@ import control
 import numpy as np
 
 from isolator.analysis.frequency_response import state_space_response
+from isolator.analysis.sensor_outputs import sensor_response, sensor_rows
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
@@ -147,7 +148,8 @@ class LinearModel:
         States ``x, y, z, rx, ry, rz, vx, vy, vz, wx, wy, wz``; inputs
         ``ground:x .. ground:rz`` [m, rad], ``force:x .. torque:z`` [N, N m] and
         ``actuator:<name>`` [N]; outputs the six table signals ``x .. rz`` [m, rad]
-        and ``<point>:x, :y, :z`` [m] per point of interest. With a moving floor
+        and ``<point>:x, :y, :z`` [m] per point of interest, then ``s:<sensor>`` per ``[[sensors]]`` entry
+        (:mod:`isolator.analysis.sensor_outputs`). With a moving floor
         the velocity states are the table's velocity minus ``-M^-1 G1 g``, the
         part that the floor's velocity adds at once through the isolators' dampers.
     parameters : ndarray
@@ -202,6 +204,14 @@ class LinearModel:
             In output units per input unit.
         """
         return state_space_response(self.system, frequency_hz, inputs, outputs)
+
+    def sensor_response(self, frequency_hz: np.ndarray, inputs: Sequence[str] | None = None) -> np.ndarray:
+        """Each ``[[sensors]]`` entry's exact frequency response (nf, sensors, inputs), in its quantity
+        [m, m/s or m/s^2] per input unit: the displacement response times ``(j 2 pi f)^k``
+        (:func:`isolator.analysis.sensor_outputs.sensor_response`; from floor inputs an acceleration output
+        of :attr:`system` lacks the instantaneous floor-velocity term)."""
+        return sensor_response(self.system, self.scenario.sensors, pose_rotation(self.equilibrium.pose[3:6]),
+                               self.feedthrough, frequency_hz, inputs)
 
     @property
     def feedthrough(self) -> np.ndarray:
@@ -355,9 +365,11 @@ def _state_space(
     c = np.hstack([np.vstack(rows), np.zeros((sum(r.shape[0] for r in rows), n_air))])
     inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators)]
     states = [*STATE_NAMES, *(air.names if air is not None else ())]
+    c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1)
     return control.ss(
-        a, a @ b1 + b0, c, c @ b1,
-        inputs=inputs, outputs=out_names, states=states, name=scenario.name,
+        a, a @ b1 + b0, np.vstack([c, c_sensors]), np.vstack([c @ b1, d_sensors]),
+        inputs=inputs, outputs=[*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)], states=states,
+        name=scenario.name,
     )
 
 

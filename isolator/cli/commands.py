@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from isolator.analysis.linear import LinearModel, linearise
+from isolator.cli.calibrate_command import register as register_calibrate
 from isolator.cli.helpers import (
     check_memory,
     count,
@@ -102,6 +103,7 @@ def register(sub: Any) -> None:
     crit.set_defaults(handler=_criteria)
     sub.add_parser("scenarios", help="list the bundled scenarios").set_defaults(handler=_scenarios)
     register_sequence(sub)
+    register_calibrate(sub)
 
 
 def _scenarios(args: argparse.Namespace) -> int:

@@ -13,7 +13,6 @@ from isolator.model.linearisation import build_linearisation
 from isolator.model.pneumatic_statics import air_contents, closed_static_function
 from isolator.model.variants import Model
 from isolator.numerics.native import MappedFunction
-from isolator.scenario.arguments import check_public
 
 __all__ = [
     "DOF_NAMES",
@@ -383,7 +382,6 @@ class _Solver:
         return self._closed[all_closed]
 
 
-
 _SOLVERS: dict[tuple, _Solver] = {}
 
 
@@ -397,6 +395,3 @@ def _solver(model: Model) -> _Solver:
 def _dominant_dof(model: Model, vector: np.ndarray) -> str:
     motion = model.variant.motion(vector)
     return DOF_NAMES[int(np.argmax(motion))]
-
-
-check_public(globals(), ("Equilibrium", "RockingStiffness"))

@@ -183,11 +183,14 @@ def checked(func: Callable[..., Any]) -> Callable[..., Any]:
     return wrapper
 
 
-def check_public(namespace: dict[str, Any], names: abc.Iterable[str] | None = None, foreign: bool = False) -> None:
+def check_public(namespace: dict[str, Any], names: abc.Iterable[str] | None = None, foreign: bool | None = None
+                 ) -> None:
     """Check the arguments of every function and class constructor a module exports (``names``, default its
-    ``__all__``) and defines (call at the end of the module: ``check_public(globals())``); ``foreign``: those
-    it imports from elsewhere too (a package's ``__init__``: its functions there, the classes everywhere)."""
+    ``__all__``) and defines (call at the end of the module: ``check_public(globals())``); ``foreign`` (default:
+    when ``names`` is not given): those it re-exports from elsewhere too (functions wrapped in this module,
+    classes everywhere)."""
     module = namespace["__name__"]
+    foreign = names is None if foreign is None else foreign
     for name in namespace.get("__all__", ()) if names is None else names:
         obj = namespace.get(name)
         if not foreign and getattr(obj, "__module__", None) != module:

@@ -14,6 +14,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
+from isolator.scenario.sensors import Sensor
 from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import Window
 
@@ -234,6 +235,7 @@ class Scenario:
     leveling: tuple[LevelingGroup, ...] = ()
     windows: tuple[Window, ...] = ()
     sequence: StepSequence | None = None
+    sensors: tuple[Sensor, ...] = ()
 
     # -- derived quantities -------------------------------------------------
     @property

@@ -23,7 +23,8 @@ _UNIT_TOL = 1e-6
 
 #: the keys of a scenario's top level
 TOP_LEVEL_KEYS = ("name", "gravity", "table", "isolators", "air", "leveling", "simulation", "carriages",
-                  "actuators", "settling", "ground", "points", "windows", "sequence")
+                  "actuators", "settling", "ground", "points", "windows", "sequence",
+                  "sensors")
 
 
 def load_toml(path: Path) -> dict[str, Any]:
@@ -61,7 +62,7 @@ def _known_keys() -> frozenset[str]:
     """Every key name the scenario's readers know: a key in a file that is one of them is no typo."""
     folder = Path(__file__).parent
     text = "".join((folder / name).read_text() for name in ("reader.py", "pneumatic_reader.py", "windows_reader.py",
-                                                                 "sequence.py", "tables.py"))
+                                                                 "sequence.py", "tables.py", "sensors.py"))
     return frozenset(re.findall(r'"([a-z][a-z0-9_]*)"', text))
 
 

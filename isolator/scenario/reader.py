@@ -37,6 +37,7 @@ from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pne
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
 from isolator.scenario.rules import check_scenario_values
+from isolator.scenario.sensors import read_sensors
 from isolator.scenario.sequence import StepSequence, held, read_sequence
 from isolator.scenario.tables import (
     SPECTRUM_KINDS,
@@ -171,6 +172,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
     top.used.add("points")
     check_unique_names([pt.name for pt in points], "points")
     windows = read_windows(top, data, [pt.name for pt in points])
+    sensors = read_sensors(top, data)
     top.finish()
     scenario = Scenario(
         name=name,
@@ -187,6 +189,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
         leveling=leveling,
         windows=windows,
         sequence=sequence,
+        sensors=sensors,
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
     check_sequence(scenario)

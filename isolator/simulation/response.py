@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
@@ -14,8 +13,10 @@ import numpy as np
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
 from isolator.scenario.readable import clean_time, without_dust
+from isolator.scenario.sensors import Sensor
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
+from isolator.simulation.response_csv import response_dict, write_response_csv
 from isolator.simulation.settling import Band, SettlingResult
 from isolator.simulation.window_settling import WindowResult, moves_per_hour, plot_windows
 
@@ -66,6 +67,8 @@ class Response:
         The scenario's ``[[points]]`` (read their motion with :meth:`point`).
     window_result : WindowResult or callable or None
         With ``[[windows]]``: the window settling (read :attr:`windows`).
+    sensor_set : tuple of Sensor
+        The scenario's ``[[sensors]]`` (read their signals with :meth:`sensor`, :attr:`sensor_signals`).
     """
 
     name: str
@@ -84,11 +87,13 @@ class Response:
     pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
     deadbands: dict[str, float] = field(default_factory=dict, repr=False)
     move_start: float = 0.0
-    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(
-        default=None, repr=False, compare=False)
+    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(default=None, repr=False,
+                                                                                          compare=False)
     point_set: PointSet | None = field(default=None, repr=False)
     window_result: WindowResult | Callable[[], WindowResult] | None = field(default=None, repr=False, compare=False)
     point_history: np.ndarray | None = field(default=None, repr=False, compare=False)
+    sensor_set: tuple[Sensor, ...] = field(default=(), repr=False)
+    sensor_history: np.ndarray | Callable[[], np.ndarray] | None = field(default=None, repr=False, compare=False)
 
     def _evaluated(self, name: str) -> Any:
         """The field ``name``, computed on first use: a callable there is called once and replaced by its value."""
@@ -113,6 +118,20 @@ class Response:
             object.__setattr__(self, "point_history", moved)
         assert self.point_history is not None
         return self.point_history
+
+    @property
+    def sensor_names(self) -> tuple[str, ...]:
+        """The scenario's ``[[sensors]]`` names."""
+        return tuple(s.name for s in self.sensor_set)
+
+    @property
+    def sensor_signals(self) -> np.ndarray:
+        """Every sensor's noise-free signal (sensors, N) in its SI quantity (the columns ``s:<sensor>``)."""
+        return np.zeros((0, self.t.size)) if self.sensor_history is None else self._evaluated("sensor_history")
+
+    def sensor(self, name: str) -> np.ndarray:
+        """The sensor ``name``'s signal (N,) [m, m/s or m/s^2] (a KeyError names the known ones)."""
+        return self.sensor_signals[_index_of(name, self.sensor_names, "sensor")]
 
     def point(self, name: str) -> np.ndarray:
         """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]."""
@@ -224,54 +243,14 @@ class Response:
 
     def to_dict(self) -> dict[str, Any]:
         """Summary as plain JSON-ready types (the ``isolator simulate --json`` object)."""
-
-        def num(v: float | None) -> float | None:  # full precision: JSON is read back (--band-json)
-            return None if v is None or not math.isfinite(v) else float(v)
-
-        return {
-            "name": self.name,
-            "model": self.model,
-            "move_start": num(clean_time(self.move_start)),  # as the inputs give them (not 7.8999999999999995)
-            "stop_time": num(clean_time(self.stop_time)),
-            "move_time": num(clean_time(self.stop_time - self.move_start)),
-            "signals": list(SIGNALS),
-            "peak": {k: num(v) for k, v in self.peak.items()},
-            "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
-            "settling_time": {k: num(v) for k, v in self.settling_time.items()},
-            "settling_time_max": num(self.settling_time_max),
-            "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
-            "band": self.band.to_dict(),
-            "point_peak": {n: {a: num(float(np.max(np.abs(self.point_signals[i, j])))) for j, a in enumerate("xyz")}
-                           for i, n in enumerate(self.point_names)},
-            **({} if self.windows is None else self.windows.to_dict()),
-            **({} if self.pneumatic is None else self.pneumatic.to_dict()),
-        }
+        return response_dict(self)
 
     def to_csv(self, path: str | Path) -> Path:
         """Write ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], then ``<point>:x,<point>:y,<point>:z``
-        per ``[[points]]`` entry [m], ``f:<actuator>...`` [N] when actuators applied forces, then for
-        pneumatic runs ``p:<isolator>...`` [Pa] and
-        ``h:<group>...`` [m], to ``path``."""
-        path = Path(path)
-        header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names]]
-        columns = [self.t, self.signals.T, self.q.T]
-        if self.point_names:
-            header += [f"{n}:{a}" for n in self.point_names for a in "xyz"]
-            columns.append(self.point_signals.reshape(-1, self.t.size).T)
-        if self.actuator_forces.size and np.any(self.actuator_forces):
-            header += [f"f:{n}" for n in self.actuator_names]
-            columns.append(self.actuator_forces.T)
-        if self.pneumatic is not None:
-            extra = self.pneumatic.columns
-            header += list(extra)
-            columns.append(np.array(list(extra.values())).T)
-        data = np.column_stack(columns)
-        with open(path, "w", newline="") as handle:
-            writer = csv.writer(handle)
-            writer.writerow(header)
-            for row in data:
-                writer.writerow([f"{v:.10g}" for v in row])
-        return path
+        per ``[[points]]`` entry [m], ``s:<sensor>`` per ``[[sensors]]`` entry (its SI quantity, noise-free),
+        ``f:<actuator>...`` [N] when actuators applied forces, then for pneumatic runs ``p:<isolator>...``
+        [Pa] and ``h:<group>...`` [m], to ``path``."""
+        return write_response_csv(self, path)
 
     def summary(self) -> str:
         """A text table of peaks, final values and settling times per signal."""
@@ -401,3 +380,9 @@ class Response:
 
 
 check_public(globals(), ("Response"))
+
+
+def _index_of(name: str, names: tuple[str, ...], what: str) -> int:
+    if name not in names:
+        raise KeyError(f"{what}: unknown '{name}' ({what}s: {', '.join(names) or 'none'})")
+    return names.index(name)

@@ -1,4 +1,7 @@
-"""Transient simulation of a scenario: from the initial equilibrium through the moves."""
+"""Transient simulation of a scenario: from the initial equilibrium through the moves. Plain carriage transients
+are integrated with DOP853 steps between the breakpoints and read at the samples from its dense output
+(:mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step RK4 on the sample grid, the
+controller ticking between intervals."""
 
 from __future__ import annotations
 
@@ -29,6 +32,7 @@ from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
+from isolator.simulation.sensors import sensor_history
 from isolator.simulation.settling import Band, SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
     DENSE_STEP_ANGLE,
@@ -241,13 +245,6 @@ class Simulator:
             The table has no stable equilibrium.
         SimulationError
             The run diverged.
-
-        Notes
-        -----
-        Plain carriage transients are integrated with DOP853 steps between the
-        breakpoints and read at the samples from its dense output (see
-        :mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step
-        RK4 on the sample grid, the controller ticking between intervals.
         """
         p = self.parameter_vector(changes) if p is None else self.layout.checked(p, "p")
         self.check_tipping(p)
@@ -367,6 +364,8 @@ class Simulator:
             pneumatic_result=pneumatic,
             point_set=points,
             window_result=windows,
+            sensor_set=self.scenario.sensors,
+            sensor_history=sensor_history(self.scenario, self.model, t, run_states, at_samples, p, start.state),
             deadbands={g.name: g.valve.deadband for g in self.scenario.leveling if g.valve is not None},
             move_start=min((b for c in self.scenario.carriages for b in c.profile.breakpoints[:1]), default=0.0),
         )

@@ -1,0 +1,158 @@
+"""``isolator.calibrate``: read a calibration, its records, fit, and gather the result."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from isolator.analysis.linear import linearise
+from isolator.analysis.modes import modes
+from isolator.calibration.definition import Calibration, load_calibration
+from isolator.calibration.experiments import FloorExperiment, MoveExperiment, prepare
+from isolator.calibration.fit import fit_parameters
+from isolator.calibration.records import Record, read_record
+from isolator.calibration.result import CalibrationResult, Curves, ParameterEstimate
+from isolator.errors import ParameterError, ScenarioError, UnidentifiableError
+from isolator.scenario.arguments import check_public
+from isolator.scenario.definitions import Scenario
+from isolator.scenario.reader import scenario_from_dict
+from isolator.scenario.writing import scenario_data, set_parameter
+
+__all__ = ["calibrate", "read_records"]
+
+
+def read_records(calibration: Calibration) -> dict[str, Record]:
+    """Each experiment's record, by experiment name (every problem one line naming the file)."""
+    names = [s.name for s in calibration.scenario.sensors]
+    uff = {s.name: s.uff for s in calibration.scenario.sensors if s.uff is not None}
+    out = {}
+    for e in calibration.experiments:
+        try:
+            out[e.name] = read_record(e.file, names, uff)
+        except ParameterError as exc:
+            raise ScenarioError(f"{e.key}: {exc}") from None
+    return out
+
+
+def calibrate(
+    calibration: str | Path | Calibration,
+    fit: Sequence[str] | None = None,
+    allow_unidentifiable: bool = False,
+    progress: Callable[[str], None] | None = None,
+) -> CalibrationResult:
+    """Fit a scenario's parameters to measured records.
+
+    Parameters
+    ----------
+    calibration : str or Path or Calibration
+        A calibration file (``docs/scenario-format.md``, "Calibration from measured records") or one read
+        with :func:`isolator.calibration.load_calibration`.
+    fit : sequence of str, optional
+        Fit only these of the file's ``fit`` names (the others keep the scenario's values).
+    allow_unidentifiable : bool
+        Give the fit even when the records cannot tell some parameters apart (``identifiable`` False).
+    progress : callable, optional
+        Called with a line per model evaluation.
+
+    Returns
+    -------
+    CalibrationResult
+
+    Raises
+    ------
+    ScenarioError
+        A bad calibration file or record (one line naming the file, key, line or column).
+    ParameterError
+        ``calibration`` of a wrong type, or a ``fit`` name the file does not fit.
+    UnidentifiableError
+        The records cannot tell some fitted parameters apart (they are named), unless ``allow_unidentifiable``.
+
+    Examples
+    --------
+    >>> from isolator import calibrate
+    >>> result = calibrate("calibration.toml")          # doctest: +SKIP
+    >>> result.parameters["isolators[*].stiffness.z"]  # doctest: +SKIP
+    """
+    if isinstance(calibration, str | Path):
+        calibration = load_calibration(calibration)
+    elif not isinstance(calibration, Calibration):
+        raise ParameterError(f"calibration: must be a calibration file's path or a Calibration, got "
+                             f"{type(calibration).__name__}")
+    if fit is not None:
+        calibration = _restricted(calibration, fit)
+    experiments = prepare(calibration, read_records(calibration))
+    outcome = fit_parameters(calibration, experiments, progress)
+    if outcome.unidentifiable and not allow_unidentifiable:
+        groups = "; ".join(" with ".join(g) for g in outcome.unidentifiable)
+        raise UnidentifiableError(f"calibrate: the records cannot tell apart {groups} (fit fewer parameters, add "
+                                  "experiments that separate them, or --allow-unidentifiable)", outcome.unidentifiable)
+    data, scenario = _fitted(calibration, outcome.values)
+    p0, p1 = calibration.vector(), calibration.vector(outcome.values)
+    parameters = {f.name: ParameterEstimate(f.initial, float(v), float(s), (float(lo), float(hi)), f.bounds)
+                  for f, v, s, (lo, hi) in zip(calibration.parameters, outcome.values, outcome.std, outcome.ci95,
+                                               strict=True)}
+    return CalibrationResult(
+        calibration=calibration,
+        parameters=parameters,
+        scenario=scenario,
+        identifiable=not outcome.unidentifiable,
+        unidentifiable=outcome.unidentifiable,
+        correlation=outcome.correlation,
+        experiments={e.name: {"kind": e.kind, "residual_before": outcome.residuals_before[e.name],
+                              "residual_after": outcome.residuals_after[e.name],
+                              "points": int(_points(e))} for e in experiments},
+        modes={"nominal": _modes(calibration.scenario), "fitted": _modes(replace(scenario, sensors=
+                                                                                  calibration.scenario.sensors))},
+        fit=outcome,
+        curves={e.name: _curves(e, p0, p1) for e in experiments},
+        fitted_data=data,
+    )
+
+
+def _restricted(calibration: Calibration, fit: Sequence[str]) -> Calibration:
+    if isinstance(fit, str) or not all(isinstance(n, str) for n in fit) or not fit:
+        raise ParameterError("fit: must be a non-empty list of the calibration's fitted names")
+    for name in fit:
+        if name not in calibration.names:
+            raise ParameterError(f"fit: '{name}' is not fitted by this calibration "
+                                 f"(fit: {', '.join(calibration.names)})")
+    return replace(calibration, parameters=tuple(f for f in calibration.parameters if f.name in fit))
+
+
+def _points(e: FloorExperiment | MoveExperiment) -> int:
+    if isinstance(e, FloorExperiment):
+        return 2 * e.H1.size
+    return int(e.y.size)
+
+
+def _fitted(calibration: Calibration, values: np.ndarray) -> tuple[dict, Scenario]:
+    """The scenario file's keys with the fitted values, and the scenario they make."""
+    _, data = scenario_data(calibration.scenario_file)
+    layout = calibration.layout
+    current = dict(zip(layout.names, calibration.vector(values).tolist(), strict=True))
+    for f, v in zip(calibration.parameters, values, strict=True):
+        for e in f.entries:
+            set_parameter(data, layout.names[e], float(v), current)
+    return data, scenario_from_dict(data, base_dir=calibration.scenario_file.parent,
+                                    default_name=calibration.scenario_file.stem)
+
+
+def _modes(scenario: Scenario) -> dict[str, list[float]]:
+    m = modes(linearise(scenario))
+    return {"frequencies_hz": [float(v) for v in m.frequencies_hz],
+            "damping_ratios": [float(v) for v in m.damping_ratios]}
+
+
+def _curves(e: FloorExperiment | MoveExperiment, p0: np.ndarray, p1: np.ndarray) -> Curves:
+    outputs = tuple(s.name for s in e.table)
+    units = tuple(s.unit for s in e.table)
+    if isinstance(e, FloorExperiment):
+        return Curves("floor", e.f, e.H1, e.predict(p0)[0], e.predict(p1)[0], e.coherence, outputs,
+                      tuple(s.name for s in e.floor), units)
+    return Curves("move", e.t, e.y, e.predict(p0), e.predict(p1), None, outputs, (), units)
+
+
+check_public(globals())

@@ -1,0 +1,178 @@
+"""The least-squares fit of every experiment together, its uncertainty and identifiability.
+
+The unknowns are the logarithms of the fitted parameters, inside the logarithms of their bounds
+(``scipy.optimize.least_squares``, trust-region reflective). Each experiment's residuals are already divided
+by its own noise estimate; the covariance of the log-parameters is ``s^2 (J^T J)^-1`` with ``J`` the
+weighted Jacobian at the solution and ``s^2 = sum r^2 / (m - n)`` the residual variance (a record whose
+noise was misjudged is rescaled by it). A parameter's 95 % interval is ``exp(log value +- t sd)`` with
+Student's ``t`` for ``m - n`` degrees of freedom (positive, as a stiffness must be); its standard deviation
+``value * sd`` (first order).
+
+Identifiability (the contract): the information matrix ``J^T J`` scaled to unit diagonal is singular to
+``1e-8`` of its largest eigenvalue, or a correlation exceeds ``0.999``. The parameters of each unresolved
+direction (an eigenvector's entries of at least 0.1 of its largest, or a group of correlated parameters)
+are reported together.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+from scipy.optimize import least_squares
+
+from isolator.calibration.definition import Calibration
+from isolator.calibration.experiments import FloorExperiment, MoveExperiment, Residuals
+from isolator.errors import OptimisationError, SimulationError, UnstableTableError
+
+__all__ = ["CORRELATION_LIMIT", "EIGEN_LIMIT", "Fit", "fit_parameters", "unidentifiable_groups"]
+
+#: an information matrix singular to this fraction of its largest eigenvalue cannot tell parameters apart
+EIGEN_LIMIT = 1e-8
+#: nor can a correlation above this
+CORRELATION_LIMIT = 0.999
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The fitted values and their uncertainty.
+
+    Attributes
+    ----------
+    values : ndarray (n,)
+        [SI]
+    std : ndarray (n,)
+        [SI]
+    ci95 : ndarray (n, 2)
+        [SI]
+    correlation : ndarray (n, n)
+    unidentifiable : list of list of str
+        The parameters of each direction the records cannot resolve (empty: identifiable).
+    residual_variance : float
+        ``s^2``, dimensionless (about 1 when the noise estimates are right).
+    evaluations : int
+        Model evaluations the fit took.
+    residuals_before, residuals_after : dict of str to float
+        RMS of each experiment's weighted residuals at the start and at the fit.
+    """
+
+    values: np.ndarray
+    std: np.ndarray
+    ci95: np.ndarray
+    correlation: np.ndarray
+    unidentifiable: list[list[str]]
+    residual_variance: float
+    evaluations: int
+    residuals_before: dict[str, float]
+    residuals_after: dict[str, float]
+
+
+def _tangents(calibration: Calibration, values: np.ndarray) -> np.ndarray:
+    """d p / d log(value_j), rows (params, parameter vector size)."""
+    out = np.zeros((len(calibration.parameters), calibration.layout.size))
+    for j, (f, v) in enumerate(zip(calibration.parameters, values, strict=True)):
+        out[j, list(f.entries)] = v
+    return out
+
+
+def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperiment | MoveExperiment],
+                   progress: Callable[[str], None] | None = None) -> Fit:
+    """Fit the calibration's parameters to every experiment together.
+
+    Raises
+    ------
+    OptimisationError
+        The model cannot be evaluated near the start (no stable rest, a diverging run).
+    """
+    names = calibration.names
+    lo = np.log([f.bounds[0] for f in calibration.parameters])
+    hi = np.log([f.bounds[1] for f in calibration.parameters])
+    cache: dict[bytes, list[Residuals]] = {}
+    count = [0]
+
+    def evaluate(x: np.ndarray) -> list[Residuals]:
+        key = np.asarray(x, dtype=float).tobytes()
+        if key not in cache:
+            values = np.exp(x)
+            p = calibration.vector(values)
+            tangents = _tangents(calibration, values)
+            try:
+                cache.clear()
+                cache[key] = [e.residuals(p, tangents) for e in experiments]
+            except (UnstableTableError, SimulationError) as exc:
+                where = ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, values, strict=True))
+                raise OptimisationError(f"calibrate: the model cannot be evaluated at {where}: {exc}") from None
+            count[0] += 1
+            if progress is not None:
+                cost = sum(float(r.r @ r.r) for r in cache[key])
+                progress(f"evaluation {count[0]}: weighted cost {cost:.6g}")
+        return cache[key]
+
+    def fun(x: np.ndarray) -> np.ndarray:
+        return np.concatenate([r.r for r in evaluate(x)])
+
+    def jac(x: np.ndarray) -> np.ndarray:
+        return np.vstack([r.J for r in evaluate(x) if r.J is not None])
+
+    x0 = np.log(calibration.initial)
+    before = {e.name: _rms(r.r) for e, r in zip(experiments, evaluate(x0), strict=True)}
+    solution = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale=1.0, xtol=1e-10,
+                             ftol=1e-12, gtol=1e-12, max_nfev=200)
+    x = solution.x
+    final = evaluate(x)
+    after = {e.name: _rms(r.r) for e, r in zip(experiments, final, strict=True)}
+    r = np.concatenate([f.r for f in final])
+    J = np.vstack([f.J for f in final if f.J is not None])
+    m, n = r.size, x.size
+    dof = max(m - n, 1)
+    s2 = float(r @ r) / dof
+    info = J.T @ J
+    cov = s2 * np.linalg.pinv(info, rcond=1e-15)
+    sd = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    scale = np.where(sd > 0, sd, 1.0)
+    correlation = np.clip(cov / np.outer(scale, scale), -1.0, 1.0)
+    np.fill_diagonal(correlation, 1.0)
+    quantile = float(stats.t.ppf(0.975, dof))
+    values = np.exp(x)
+    ci = np.column_stack([np.exp(x - quantile * sd), np.exp(x + quantile * sd)])
+    return Fit(values, values * sd, ci, correlation, unidentifiable_groups(info, names), s2, count[0], before,
+               after)
+
+
+def _rms(r: np.ndarray) -> float:
+    return float(np.sqrt(np.mean(r**2))) if r.size else 0.0
+
+
+def unidentifiable_groups(info: np.ndarray, names: Sequence[str]) -> list[list[str]]:
+    """The parameters of each direction the information matrix ``info`` (n, n) cannot resolve: eigenvalues
+    below :data:`EIGEN_LIMIT` of the largest (of the unit-diagonal scaled matrix), correlations above
+    :data:`CORRELATION_LIMIT`."""
+    d = np.sqrt(np.clip(np.diag(info), 1e-300, None))
+    scaled = info / np.outer(d, d)
+    vals, vecs = np.linalg.eigh(scaled)
+    groups: list[set[int]] = []
+    top = max(float(vals[-1]), 1e-300)
+    for k in range(vals.size):
+        if vals[k] < EIGEN_LIMIT * top:
+            v = np.abs(vecs[:, k])
+            groups.append({int(i) for i in np.flatnonzero(v >= 0.1 * v.max())})
+    try:
+        cov = np.linalg.inv(scaled)
+        sd = np.sqrt(np.abs(np.diag(cov)))
+        corr = cov / np.outer(sd, sd)
+    except np.linalg.LinAlgError:
+        corr = np.eye(len(names))
+    for i in range(len(names)):
+        for j in range(i + 1, len(names)):
+            if abs(corr[i, j]) > CORRELATION_LIMIT:
+                groups.append({i, j})
+    merged: list[set[int]] = []
+    for g in groups:  # join groups that share a parameter
+        joined = [m for m in merged if m & g]
+        for m in joined:
+            merged.remove(m)
+            g = g | m
+        merged.append(g)
+    return [[names[i] for i in sorted(g)] for g in sorted(merged, key=min)]

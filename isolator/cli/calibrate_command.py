@@ -1,0 +1,56 @@
+"""``isolator calibrate``: fit a scenario's parameters to measured records, write the fitted scenario."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from isolator.cli.helpers import figure_path, output_folder, output_path, report, save_figure, use_agg
+
+__all__ = ["register"]
+
+
+def register(sub: Any) -> None:
+    """Add ``isolator calibrate`` to the ``isolator`` command's subparsers."""
+    cal = sub.add_parser(
+        "calibrate", help="fit isolator parameters to measured records (floor or move experiments)",
+        description="Fit the calibration file's parameters (stiffness, damping, ...) to its records: floor "
+        "experiments by their multi-input H1 against the linearised model, move experiments sample by sample "
+        "against the time-varying model, all together, each weighted by its own noise. Prints each parameter "
+        "with its 95 % interval and writes the fitted scenario. Refuses (exit 2, nothing written) when the "
+        "records cannot tell some fitted parameters apart, naming them.",
+    )
+    cal.add_argument("calibration", type=Path, metavar="CALIBRATION.toml", help="the calibration file")
+    cal.add_argument("--out", type=Path, required=True, metavar="FITTED.toml",
+                     help="write the fitted scenario (the scenario file with the fitted values)")
+    cal.add_argument("--json", action="store_true", help="print JSON (parameters, identifiable, correlation, ...)")
+    cal.add_argument("--plot", type=Path, metavar="FIT.png", help="write the figure (H1 or traces, parameters)")
+    cal.add_argument("--report", type=Path, metavar="DIR", help="write DIR/report.md with the figure")
+    cal.add_argument("--fit", nargs="+", metavar="NAME", help="fit only these of the file's fitted names")
+    cal.add_argument("--allow-unidentifiable", action="store_true",
+                     help="write the fit even when some parameters cannot be told apart (identifiable: false)")
+    cal.set_defaults(handler=_calibrate)
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from isolator.calibration import calibrate
+    from isolator.calibration.report import write_report
+
+    out = output_path(args.out, "--out", (".toml",))
+    plot = figure_path(args.plot, "--plot")
+    folder = output_folder(args.report, "--report") if args.report else None
+    progress = None if args.json else (lambda line: print(f"  {line}", file=sys.stderr, flush=True))
+    result = calibrate(args.calibration, fit=args.fit, allow_unidentifiable=args.allow_unidentifiable,
+                       progress=progress)
+    result.write_scenario(out)
+    if plot is not None or folder is not None:
+        use_agg()
+    if plot is not None:
+        save_figure(result.plot(), plot)
+    if folder is not None:
+        write_report(result, folder)
+    written = None if folder is None else folder / "report.md"
+    return report(args.json, result.to_dict(), result.summary(),
+                  [("fitted scenario", out), ("figure", plot), ("report", written)])

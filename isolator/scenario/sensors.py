@@ -1,0 +1,158 @@
+"""Sensors (``[[sensors]]``): what a real table measures, in scenario files and calibration files.
+
+A table sensor measures the motion of a point fixed to the table along a fixed world direction (its
+displacement from the initial equilibrium [m], its velocity [m/s] or its acceleration [m/s^2]; no gravity or
+tilt term); a floor sensor measures the floor's translation along its direction (``position`` is recorded
+only). The contract is in ``docs/scenario-format.md`` ("Calibration from measured records", "Sensors in the
+scenario").
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from isolator.errors import ScenarioError
+from isolator.scenario.keys import KeyReader, number, table_of_tables
+
+__all__ = ["QUANTITIES", "SENSOR_SITES", "UFF_DIRECTIONS", "Sensor", "read_sensors", "sensor_from_dict"]
+
+#: what a sensor measures, with its SI unit
+QUANTITIES = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
+#: where a sensor sits
+SENSOR_SITES = ("table", "floor")
+#: a UFF channel's direction as a sensor names it
+UFF_DIRECTIONS = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
+#: the longest sensor name
+MAX_NAME = 100
+#: names a record's columns already use
+_RESERVED = ("t",)
+
+
+@dataclass(frozen=True)
+class Sensor:
+    """One sensor of the table or the floor.
+
+    Attributes
+    ----------
+    name : str
+        Unique; the column ``s:<name>`` of simulation results and the column of a record.
+    on : {"table", "floor"}
+    position : tuple of float
+        [m]; table frame at rest (a table sensor), world frame (a floor sensor: recorded only).
+    direction : tuple of float
+        World frame, unit vector.
+    quantity : {"displacement", "velocity", "acceleration"}
+        Signal [m], [m/s] or [m/s^2].
+    noise : float
+        RMS of the white noise added to each sample [SI units of the quantity] (default 0).
+    uff : tuple of (int, str) or None
+        The UFF58 channel (node, direction "+X" ... "-Z") that holds this sensor in a UFF record.
+    """
+
+    name: str
+    on: str
+    position: tuple[float, float, float]
+    direction: tuple[float, float, float]
+    quantity: str
+    noise: float = 0.0
+    uff: tuple[int, str] | None = None
+
+    def __post_init__(self) -> None:
+        check_sensor(self, "sensor")
+
+    @property
+    def unit(self) -> str:
+        """The SI unit of the quantity."""
+        return QUANTITIES[self.quantity]
+
+    @property
+    def order(self) -> int:
+        """Time derivatives of displacement the quantity is: 0, 1 or 2."""
+        return tuple(QUANTITIES).index(self.quantity)
+
+
+def check_sensor(sensor: Sensor, key: str) -> None:
+    """Refuse a sensor built with wrong values (:class:`ScenarioError` naming ``key`` and the field)."""
+    if not isinstance(sensor.name, str) or not sensor.name.strip() or sensor.name != sensor.name.strip():
+        raise ScenarioError(f"{key}.name: must be a non-empty name without leading or trailing spaces, "
+                            f"got {sensor.name!r}")
+    if len(sensor.name) > MAX_NAME or not sensor.name.isprintable():
+        raise ScenarioError(f"{key}.name: must be at most {MAX_NAME} printable characters, got {sensor.name[:40]!r}")
+    if sensor.name in _RESERVED:
+        raise ScenarioError(f"{key}.name: '{sensor.name}' is the records' time column; choose another name")
+    if sensor.on not in SENSOR_SITES:
+        raise ScenarioError(f"{key}.on: must be \"table\" or \"floor\", got {sensor.on!r}")
+    if sensor.quantity not in QUANTITIES:
+        raise ScenarioError(f"{key}.quantity: must be one of {', '.join(QUANTITIES)}, got {sensor.quantity!r}")
+    for field, vec in (("position", sensor.position), ("direction", sensor.direction)):
+        if not isinstance(vec, tuple) or len(vec) != 3:
+            raise ScenarioError(f"{key}.{field}: must be three numbers")
+        for i, v in enumerate(vec):
+            number(v, f"{key}.{field}[{i}]")
+    norm = sum(v * v for v in sensor.direction) ** 0.5
+    if abs(norm - 1.0) > 1e-6:
+        raise ScenarioError(f"{key}.direction: must be a unit vector, got length {norm:.6g}")
+    number(sensor.noise, f"{key}.noise", nonnegative=True)
+    if sensor.uff is not None:
+        node, direction = sensor.uff
+        if isinstance(node, bool) or not isinstance(node, int) or node < 0:
+            raise ScenarioError(f"{key}.uff.node: must be a whole number >= 0, got {node!r}")
+        if direction not in UFF_DIRECTIONS:
+            raise ScenarioError(f"{key}.uff.direction: must be one of {', '.join(UFF_DIRECTIONS)}, got {direction!r}")
+
+
+def sensor_from_dict(item: Any, key: str) -> Sensor:
+    """One ``[[sensors]]`` block read key by key (every problem a :class:`ScenarioError` naming the key)."""
+    r = KeyReader(item, key)
+    name = r.string("name")
+    on = r.string("on")
+    if on not in SENSOR_SITES:
+        raise ScenarioError(f"{r.key('on')}: must be \"table\" or \"floor\", got {on!r}")
+    quantity = r.string("quantity")
+    if quantity not in QUANTITIES:
+        raise ScenarioError(f"{r.key('quantity')}: must be one of {', '.join(QUANTITIES)}, got {quantity!r}")
+    position = r.vector("position")
+    direction = r.unit_vector("direction")
+    noise = r.number("noise", 0.0, nonnegative=True)
+    uff = _read_uff(r.raw("uff", None), r.key("uff"))
+    r.finish()
+    return _build(name, on, position, direction, quantity, noise, uff, key)
+
+
+def _build(name: str, on: str, position: tuple[float, float, float], direction: tuple[float, float, float],
+           quantity: str, noise: float, uff: tuple[int, str] | None, key: str) -> Sensor:
+    try:
+        return Sensor(name, on, position, direction, quantity, noise, uff)
+    except ScenarioError as exc:
+        raise ScenarioError(str(exc).replace("sensor.", f"{key}.", 1)) from None
+
+
+def _read_uff(value: Any, key: str) -> tuple[int, str] | None:
+    if value is None:
+        return None
+    r = KeyReader(value, key)
+    node = r.raw("node")
+    if isinstance(node, bool) or not isinstance(node, int) or node < 0:
+        raise ScenarioError(f"{r.key('node')}: must be a whole number >= 0, got {node!r}")
+    direction = r.string("direction")
+    spelled = direction if direction.startswith(("+", "-")) else f"+{direction}"
+    if spelled.upper() not in UFF_DIRECTIONS:
+        raise ScenarioError(f"{r.key('direction')}: must be one of {', '.join(UFF_DIRECTIONS)}, got {direction!r}")
+    r.finish()
+    return node, spelled.upper()
+
+
+def read_sensors(top: KeyReader, data: Mapping[str, Any], section: str = "sensors",
+                 others: Sequence[Sensor] = ()) -> tuple[Sensor, ...]:
+    """The ``[[sensors]]`` blocks of a file, their names unique (also against ``others``, the sensors a
+    calibration file adds to its scenario's)."""
+    top.used.add(section)
+    sensors = tuple(sensor_from_dict(item, f"{section}[{i}]") for i, item in enumerate(table_of_tables(data, section)))
+    taken = {s.name for s in others}
+    for i, s in enumerate(sensors):
+        if s.name in taken or s.name in {o.name for o in sensors[:i]}:
+            where = "the scenario's [[sensors]]" if s.name in taken else f"{section} above"
+            raise ScenarioError(f"{section}[{i}].name: '{s.name}' is used twice (also in {where})")
+    return sensors
