@@ -24,14 +24,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
+import casadi as ca
 import numpy as np
 
 from isolator.model.signals import signal_jacobian
 from isolator.model.variants import Model
 from isolator.scenario.definitions import SIGNALS
 
-__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeTail", "TailVerdict", "free_tail", "micro"]
+__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeTail", "TailVerdict", "free_tail", "free_tails", "micro"]
 
 #: points per radian of the fastest mode that matters: the deviation is read every 0.2 rad of it
 STEP_ANGLE = 0.2
@@ -177,6 +179,13 @@ class FreeTail:
         return True, float(fine_gap[best]), float(fine[best]), enters
 
 
+@lru_cache(maxsize=16)
+def _jacobians(model: Model, count: int) -> tuple[ca.Function, ca.Function]:
+    """The model's state Jacobian and the signals' Jacobian, each mapped over ``count`` runs at once."""
+    signals = signal_jacobian(model.variant, model.n_states)
+    return model.state_jacobian.map(count), signals.map(count)
+
+
 def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
               reference: np.ndarray, last: np.ndarray, end: float) -> FreeTail:
     """The free motion after a run's end.
@@ -197,16 +206,30 @@ def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: n
     end : float
         The run's end [s].
     """
-    x_star = np.asarray(final_state, dtype=float)
-    a = np.asarray(model.state_jacobian(x_star, model.layout.rest_inputs(positions), p), dtype=float)
-    c = np.asarray(signal_jacobian(model.variant, model.n_states)(x_star, reference), dtype=float)
+    p, final_state, positions, reference, last = (np.asarray(a, dtype=float)[None] for a in (
+        p, final_state, positions, reference, last))
+    return free_tails(model, p, final_state, positions, reference, last, end)[0]
+
+
+def free_tails(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
+               reference: np.ndarray, last: np.ndarray, end: float) -> list[FreeTail]:
+    """:func:`free_tail` of several runs at once, each argument but ``end`` stacked (runs, ...)."""
+    count, n = final_state.shape
+    state_map, signal_map = _jacobians(model, count)
+    inputs = np.array([model.layout.rest_inputs(q) for q in positions])
+    a = np.asarray(state_map(final_state.T, inputs.T, np.asarray(p, dtype=float).T), dtype=float)
+    c = np.asarray(signal_map(final_state.T, np.asarray(reference, dtype=float).T), dtype=float)
+    a, c = a.reshape(n, count, n).transpose(1, 0, 2), c.reshape(6, count, n).transpose(1, 0, 2)
     rates, vectors = np.linalg.eig(a)
-    try:
-        amplitude = np.linalg.solve(vectors, np.asarray(last, dtype=float) - x_star)
-    except np.linalg.LinAlgError:
-        amplitude = np.linalg.lstsq(vectors, np.asarray(last, dtype=float) - x_star, rcond=None)[0]
-    zero = np.abs(rates) <= ZERO * max(float(np.max(np.abs(rates), initial=0.0)), 1.0)
-    weights = (c @ vectors) * amplitude[None, :]
-    offset = weights[:, zero].sum(axis=1).real
-    rest = x_star + (vectors[:, zero] @ amplitude[zero]).real
-    return FreeTail(float(end), rates[~zero], weights[:, ~zero], offset, rest)
+    deviation = np.asarray(last, dtype=float) - final_state
+    out = []
+    for k in range(count):
+        try:
+            amplitude = np.linalg.solve(vectors[k], deviation[k])
+        except np.linalg.LinAlgError:
+            amplitude = np.linalg.lstsq(vectors[k], deviation[k], rcond=None)[0]
+        zero = np.abs(rates[k]) <= ZERO * max(float(np.max(np.abs(rates[k]), initial=0.0)), 1.0)
+        weights = (c[k] @ vectors[k]) * amplitude[None, :]
+        rest = final_state[k] + (vectors[k][:, zero] @ amplitude[zero]).real
+        out.append(FreeTail(float(end), rates[k][~zero], weights[:, ~zero], weights[:, zero].sum(axis=1).real, rest))
+    return out
