@@ -31,7 +31,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.resources import check_memory
 from isolator.simulation.response import Response
-from isolator.simulation.settling import Band, SettlingResult, settling_results, signal_bands, still_signals
+from isolator.simulation.settling import Band, judged_times, signal_bands, still_signals
 from isolator.simulation.stepping import (
     MAX_TURN,
     Method,
@@ -233,9 +233,9 @@ def run_batch(
     holds = np.array([hold_time(e) for e in ends])
     unsettled: dict[int, str] = {}
 
-    def record(i: int, metrics: Mapping[str, SettlingResult]) -> None:
+    def record(i: int, reasons: Sequence[str], times: np.ndarray) -> None:
         """Keep why run ``i`` shows no settling time (its first signal without one)."""
-        why = next((r.reason for r in metrics.values() if r.time is None), "")
+        why = next((r for r, t in zip(reasons, times, strict=True) if np.isnan(t)), "")
         if why:
             unsettled[i] = why
     lock = threading.Lock()
@@ -287,9 +287,8 @@ def run_batch(
             settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
             tail, note = tails[lane]
             if tail is not None:
-                metrics = settling_results(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
-                settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
-                record(i, metrics)
+                settling[i], reasons = judged_times(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
+                record(i, reasons, settling[i])
 
     def task(runs: list[int]) -> None:
         """A thread's share, runs of one method: RK4 runs one by one, DOP853 runs in packs."""
@@ -304,7 +303,7 @@ def run_batch(
                     continue
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
-                record(i, metrics)
+                record(i, [r.reason for r in metrics.values()], settling[i])
         else:
             for lo in range(0, len(runs), LANES):
                 pack(runs[lo : lo + LANES])
