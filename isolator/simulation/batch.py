@@ -2,12 +2,16 @@
 
 The runs' static equilibria are solved side by side; each run gets its own
 DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
-with single runs). Runs that share a plan and the staged inputs (the parameters
-the inputs' staged form depends on: masses, inertia, carriage axes) are stepped
-``LANES`` at a time, one per SIMD lane of the compiled loop
-(:mod:`isolator.numerics.dop853_driver`), in worker threads; each pack's metrics
-come from its dense output as a single run's do
-(:mod:`isolator.simulation.dense_metrics`), four runs at once.
+with single runs). Runs that share a plan are stepped ``LANES`` at a time, one
+per SIMD lane of the compiled loop (:mod:`isolator.numerics.dop853_driver`), in
+worker threads: a pack whose runs share the staged inputs (the parameters the
+inputs' staged form depends on: masses, inertia, carriage axes and origins)
+steps the staged right-hand side on them; a pack whose runs differ there steps
+the whole right-hand side on the inputs every run shares (the carriages'
+motion), as fast. Each pack's metrics come from its dense output as a single
+run's do (:mod:`isolator.simulation.dense_metrics`), four runs at once, and
+whether a signal leaves its band after the run's end from the free motion
+(:mod:`isolator.simulation.free_tail`).
 """
 
 from __future__ import annotations
