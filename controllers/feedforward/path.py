@@ -109,7 +109,7 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
     cuts = sorted({0.0, *[b for b in scenario.breakpoints if 0 < b < min(stop, t_end)], min(stop, t_end)})
     segments, pressures = [], []
     for a, b in itertools.pairwise(cuts):
-        if b <= a:
+        if b - a <= 1e-9 * max(1.0, abs(b)):  # a stop time given as the input reads (7.9) next to its breakpoint
             continue
         count = max(4, math.ceil((b - a) / spacing) + 1)
         knots = np.linspace(a, b, count)
