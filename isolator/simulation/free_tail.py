@@ -83,6 +83,11 @@ class TailVerdict:
     offset: np.ndarray
     band: np.ndarray
 
+    def needed(self, i: int) -> float:
+        """A duration [s] (tenths, rounded up) whose run shows row ``i`` settled."""
+        needed = math.ceil(10 * float(self.enters[i]) * (1 + 1e-12)) / 10
+        return needed + 0.1 if needed <= self.enters[i] else needed
+
     def reason(self, i: int, outside_at_end: bool, rest_note: str = "") -> str:
         """Why signal ``i`` shows no settling time, in one true sentence (``rest_note``: what keeps the
         table off its final rest, said when the signal comes to rest outside its band)."""
@@ -92,9 +97,7 @@ class TailVerdict:
             why = f": {rest_note}" if rest_note else ""
             return (f"{name} comes to rest {micro(name, abs(float(self.offset[i])))} from its final value, outside its "
                     f"band ±{micro(name, float(self.band[i]))}{why}; a longer run cannot help")
-        needed = math.ceil(10 * float(self.enters[i]) * (1 + 1e-12)) / 10
-        if needed <= self.enters[i]:
-            needed += 0.1
+        needed = self.needed(i)
         if outside_at_end:
             return (f"{name} is still outside its band when the run ends at {self.end:.4g} s, by up to {over} "
                     f"after it (at {self.when[i]:.4g} s), and stays inside from {self.enters[i]:.4g} s by the linear "
@@ -120,6 +123,11 @@ class FreeTail:
         ``o``: where the free motion comes to rest, from the final values [m or rad].
     rest : ndarray (n_states,)
         The state the free motion comes to rest in (``x*`` moved by the conserved modes).
+    modes : ndarray (n_states, m) complex
+        Each moving mode's part of the state's deviation from ``x*`` at the end (its eigenvector times its
+        amplitude).
+    shift : ndarray (n_states,)
+        ``rest - x*``.
     """
 
     end: float
@@ -127,6 +135,15 @@ class FreeTail:
     weights: np.ndarray
     offset: np.ndarray
     rest: np.ndarray
+    modes: np.ndarray
+    shift: np.ndarray
+
+    def outputs(self, matrix: np.ndarray) -> FreeTail:
+        """The free motion of other outputs linear in the state, ``matrix`` (k, n_states) their Jacobian at
+        the final rest (a point's displacement on some axes, for its window)."""
+        matrix = np.asarray(matrix, dtype=float)
+        return FreeTail(self.end, self.rates, matrix @ self.modes, matrix @ self.shift, self.rest, self.modes,
+                        self.shift)
 
     def deviation(self, i: int, t: np.ndarray, modes: np.ndarray | None = None) -> np.ndarray:
         """Signal ``i``'s deviation from its final value at times ``t`` [s] (>= ``end``), by ``modes``
@@ -136,11 +153,12 @@ class FreeTail:
         return self.offset[i] + (phase @ self.weights[i, k]).real
 
     def judge(self, band: np.ndarray) -> TailVerdict:
-        """What the free motion does in the band of half-widths ``band`` (6,) [m or rad]."""
+        """What the free motion does in the band of half-widths ``band`` (one per output row) [m or rad]."""
         band = np.asarray(band, dtype=float)
-        leaves, excess = np.zeros(6, dtype=bool), np.zeros(6)
-        when, enters = np.full(6, self.end), np.full(6, self.end)
-        for i in range(6):
+        rows = self.weights.shape[0]
+        leaves, excess = np.zeros(rows, dtype=bool), np.zeros(rows)
+        when, enters = np.full(rows, self.end), np.full(rows, self.end)
+        for i in range(rows):
             leaves[i], excess[i], when[i], enters[i] = self._signal(i, float(band[i]))
         return TailVerdict(self.end, leaves, excess, when, enters, self.offset.copy(), band)
 
@@ -155,6 +173,9 @@ class FreeTail:
             return True, offset - band, math.inf, math.inf
         keep = size > NEGLIGIBLE * band
         slack = float(size[~keep].sum())
+        if not keep.any():  # only modes too small to read, about an offset at the band's edge: the bound decides
+            return (True, start - band, math.inf, math.inf) if start > band else (False, start - band, self.end,
+                                                                                  self.end)
         rates, sizes = self.rates[keep], size[keep]
         room = band - offset - slack
         decay = float(np.max(rates.real))
@@ -229,7 +250,8 @@ def free_tails(model: Model, p: np.ndarray, final_state: np.ndarray, positions: 
         except np.linalg.LinAlgError:
             amplitude = np.linalg.lstsq(vectors[k], deviation[k], rcond=None)[0]
         zero = np.abs(rates[k]) <= ZERO * max(float(np.max(np.abs(rates[k]), initial=0.0)), 1.0)
-        weights = (c[k] @ vectors[k]) * amplitude[None, :]
-        rest = final_state[k] + (vectors[k][:, zero] @ amplitude[zero]).real
-        out.append(FreeTail(float(end), rates[k][~zero], weights[:, ~zero], weights[:, zero].sum(axis=1).real, rest))
+        modes = vectors[k] * amplitude[None, :]
+        weights, shift = c[k] @ modes, modes[:, zero].sum(axis=1).real
+        out.append(FreeTail(float(end), rates[k][~zero], weights[:, ~zero], weights[:, zero].sum(axis=1).real,
+                            final_state[k] + shift, modes[:, ~zero], shift))
     return out
