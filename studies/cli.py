@@ -131,7 +131,8 @@ def _control(args: argparse.Namespace) -> int:
         window = "" if rate is None and settle is None else (
             f", window settling {'n/a' if settle is None else f'{settle:.3g} s'}"
             f"{'' if rate is None else f', {rate:.0f} moves per hour'}")
-        print(f"{run:>12}: settling {'n/a' if value is None else f'{value:.3g} s'}{window}")
+        why = control.unsettled_reason(run)
+        print(f"{run:>12}: settling {f'n/a ({why})' if value is None else f'{value:.3g} s'}{window}")
     print(f"report: {args.out / 'report.md'}")
     return 0
 

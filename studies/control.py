@@ -105,6 +105,8 @@ class ControlStudy:
     folder : Path
     band : Band
         5 % of the passive run's peaks (kind ``baseline``): every run is judged in it.
+    max_force : tuple of float
+        Each actuator's saturation [N], as the runs' actuator forces are ordered.
     """
 
     runs: dict[str, Response]
@@ -115,9 +117,32 @@ class ControlStudy:
     feedforward: Feedforward
     folder: Path
     band: Band
+    max_force: tuple[float, ...] = ()
 
     def settling_time_max(self, run: str) -> float | None:
         return largest(self.settling[run].values())
+
+    def saturation(self, run: str) -> str:
+        """When the run's actuators sit at their ``max_force``, in words ("" when they never do)."""
+        r = self.runs[run]
+        if len(self.max_force) != r.actuator_forces.shape[0] or not r.actuator_forces.size:
+            return ""
+        limit = np.asarray(self.max_force, dtype=float)
+        at = np.any(np.abs(r.actuator_forces) >= limit[:, None] * (1 - 1e-6), axis=0)
+        if not at.any():
+            return ""
+        size = f"{limit[0]:g} N" if np.all(limit == limit[0]) else \
+            f"their max_force ({limit.min():g}-{limit.max():g} N)"
+        last = "the run's end" if at[-1] else f"t = {r.t[at.size - 1 - int(np.argmax(at[::-1]))]:.3g} s"
+        return f"its actuators saturate at {size} from t = {r.t[int(np.argmax(at))]:.3g} s to {last}"
+
+    def unsettled_reason(self, run: str) -> str:
+        """Why the run shows no settling time ("" when it does): its actuators' saturation, else the first
+        signal's reason."""
+        if self.settling_time_max(run) is not None:
+            return ""
+        reasons = [r.reason for r in self.runs[run].with_band(self.band).settling.values() if r.time is None]
+        return self.saturation(run) or next(iter(reasons), "")
 
     def window_cycle(self, run: str) -> tuple[float | None, float | None]:
         """With ``[[windows]]``: the run's largest window settling time [s] and the moves per hour it allows
@@ -182,7 +207,8 @@ def run_control_study(
     qs = ff.path(runs["passive"].t).T  # pneumatic tables: each run's own leveling path (as compare_feedforward)
     deviation = {name: path_deviation(r, run_quasi_static(sim, r) if scenario.is_pneumatic else qs)
                  for name, r in runs.items()}
-    study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band)
+    study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band,
+                         tuple(a.max_force for a in scenario.actuators))
     write_json(folder, study.to_dict())
     ff.forces.to_csv(folder / "feedforward.csv")
     say("figures and report")
@@ -316,6 +342,8 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
         force = float(np.abs(study.runs[run].actuator_forces).max(initial=0.0))
         lines.append(table_row([run, fmt(study.settling_time_max(run), suffix=" s"),
                                 *(fmt(study.settling[run][k], suffix=" s") for k in SIGNALS), f"{force:.0f} N"]))
+    lines += ["", *(f"- {run}: no settling time: {study.unsettled_reason(run)}." for run in RUNS
+                    if study.settling_time_max(run) is None)]
     if study.runs["passive"].windows is not None:
         lines += ["", "## At the windows: settling and moves per hour", "",
                   "The largest window settling time (absolute windows at the `[[points]]`, about each run's "

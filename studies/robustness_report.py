@@ -72,7 +72,7 @@ def plot_cdf(study: RobustnessStudy) -> Path:
         note = "; ".join(t for t in only if t)
         _curve(bx, b, _colour(name), name + (f" ({note}: off the axis)" if note else ""))
     bx.axvline(0.0, color="k", lw=0.8)
-    bx.set_xlabel("cycle time (move + settling) saved against the paper profile on the same machine [s]")
+    bx.set_xlabel("cycle time (move + settling) saved against the paper profile\non the same machine [s]")
     bx.set_ylabel("share of machines [-]")
     bx.set_ylim(0, 1.02)
     bx.set_title("Benefit of each profile, machine by machine, its longer move counted\n(right of 0: a shorter "

@@ -306,7 +306,8 @@ def hinf(
     try:
         import slycot
     except ImportError:
-        raise ParameterError("controller: hinf needs slycot (pip install slycot)") from None
+        raise ParameterError('controller: hinf needs slycot: pip install ".[hinf]" (the extra "hinf"; or pip '
+                             "install slycot)") from None
     _measured_state(lin, "hinf")
     a, b2 = actuated(lin)
     labels = list(lin.system.input_labels)

@@ -13,7 +13,6 @@ from isolator.model.linearisation import build_linearisation
 from isolator.model.pneumatic_statics import air_contents, closed_static_function
 from isolator.model.variants import Model
 from isolator.numerics.native import MappedFunction
-from isolator.scenario.arguments import check_public
 
 __all__ = ["DOF_NAMES", "Equilibrium", "RockingStiffness", "air_in_groups", "closed_rest_states",
            "quasi_static_sensitivity", "rocking_stiffness", "static_equilibria", "static_equilibrium"]
@@ -99,7 +98,7 @@ class RockingStiffness:
         return (
             f"rocking stiffness about {self.weakest_axis} = {self.margin:.4g} N m/rad "
             f"({100 * self.relative_margin:.3g} % of the isolators' {self.elastic[0]:.4g}; "
-            f"the weight above their attachment points takes {taken:.4g})"
+            f"the weight above their attachment points takes {taken:.4g} N m/rad)"
         )
 
 
@@ -374,7 +373,6 @@ class _Solver:
         return self._closed[all_closed]
 
 
-
 _SOLVERS: dict[tuple, _Solver] = {}
 
 
@@ -388,6 +386,3 @@ def _solver(model: Model) -> _Solver:
 def _dominant_dof(model: Model, vector: np.ndarray) -> str:
     motion = model.variant.motion(vector)
     return DOF_NAMES[int(np.argmax(motion))]
-
-
-check_public(globals(), ("Equilibrium", "RockingStiffness"))

@@ -67,40 +67,52 @@ def register_validator(cls: type, validate: Callable[[Any], None]) -> None:
 
 def matches(value: object, hint: Any) -> bool:
     """Whether ``value`` is of the type ``hint`` admits (outer type only; unknown hints admit anything)."""
-    if hint is Any or hint is object or isinstance(hint, (str, typing.TypeVar)):
-        return True
+    test = _predicate(hint)
+    return test is None or test(value)
+
+
+def _predicate(hint: Any) -> Callable[[object], bool] | None:
+    """A test of the values ``hint`` admits, built once per parameter (None: it admits anything)."""
+    if hint is Any or hint is object or isinstance(hint, str | typing.TypeVar):
+        return None
     if hint is None or hint is type(None):
-        return value is None
+        return lambda value: value is None
     origin = typing.get_origin(hint)
     if origin is typing.Union or origin is types.UnionType:
-        return any(matches(value, h) for h in typing.get_args(hint))
+        tests = [_predicate(h) for h in typing.get_args(hint)]
+        if any(t is None for t in tests):
+            return None
+        return lambda value: any(t(value) for t in tests)  # type: ignore[misc]
     if origin is typing.Literal:
-        return value in typing.get_args(hint)
-    if origin is not None:
-        return _matches_class(value, origin)
-    return _matches_class(value, hint) if isinstance(hint, type) else True
+        allowed = typing.get_args(hint)
+        return lambda value: value in allowed
+    cls = origin if origin is not None else hint
+    return _class_predicate(cls) if isinstance(cls, type) else None
 
 
-def _matches_class(value: object, cls: type) -> bool:
+def _class_predicate(cls: type) -> Callable[[object], bool] | None:
+    """A test of the instances of ``cls`` as the module's description reads them."""
     if cls is float:
-        return isinstance(value, numbers.Real) and not isinstance(value, bool)
+        return lambda v: isinstance(v, numbers.Real) and not isinstance(v, bool)
     if cls is int:
-        return isinstance(value, numbers.Integral) and not isinstance(value, bool)
+        return lambda v: isinstance(v, numbers.Integral) and not isinstance(v, bool)
     if cls is bool:
-        return isinstance(value, bool | np.bool_)
+        return lambda v: isinstance(v, bool | np.bool_)
     if cls is np.ndarray:
-        return isinstance(value, _ARRAY_LIKE) and not isinstance(value, bool)
+        return lambda v: isinstance(v, _ARRAY_LIKE) and not isinstance(v, bool)
     if cls in (Path, os.PathLike):
-        return isinstance(value, str | os.PathLike)
-    if cls in (tuple, list, abc.Sequence, abc.Iterable, abc.Collection):
-        return isinstance(value, list | tuple | np.ndarray | range) or (
-            cls is not tuple and cls is not list and isinstance(value, cls))
-    if cls is type:
-        return isinstance(value, type)
+        return lambda v: isinstance(v, str | os.PathLike)
+    if cls in (tuple, list):
+        return lambda v: isinstance(v, list | tuple | np.ndarray | range)
+    if cls in (abc.Sequence, abc.Iterable, abc.Collection):
+        return lambda v: isinstance(v, list | tuple | np.ndarray | range | cls)
+    if getattr(cls, "_is_protocol", False) and not getattr(cls, "_is_runtime_protocol", False):
+        return None  # a protocol isinstance cannot check
     try:
-        return isinstance(value, cls)
-    except TypeError:  # a protocol or generic alias that isinstance cannot check
-        return True
+        isinstance(None, cls)
+    except TypeError:
+        return None
+    return lambda v: isinstance(v, cls)
 
 
 def _describe(hint: Any) -> str:
@@ -145,49 +157,66 @@ def _hints(func: Callable[..., Any]) -> dict[str, Any]:
 def checked(func: Callable[..., Any]) -> Callable[..., Any]:
     """``func`` with its arguments checked against its annotations (see the module's description)."""
     signature = inspect.signature(func)
-    plan: list[tuple[str, Any, type | None]] | None = None
+    parameters = list(signature.parameters.values())
+    positional = [p.name for p in parameters if p.kind in (p.POSITIONAL_ONLY, p.POSITIONAL_OR_KEYWORD)]
+    spread = any(p.kind is p.VAR_POSITIONAL for p in parameters)
+    required = [p.name for p in parameters if p.default is p.empty and p.kind not in (p.VAR_POSITIONAL, p.VAR_KEYWORD)]
+    plan: dict[str, tuple[Any, Callable[[object], bool] | None, type | None]] | None = None
+    validates = func.__name__ == "__init__"
+
+    def check(name: str, value: object) -> object:
+        """``value`` of the parameter ``name``, converted when it may be, or a ParameterError."""
+        assert plan is not None
+        hint, test, convert = plan[name]
+        if convert is not None and not isinstance(value, convert) and isinstance(value, str | os.PathLike):
+            value = _CONVERSIONS[convert](value)
+        if test is not None and not test(value):
+            raise ParameterError(f"{name}: must be {_describe(hint)}, got {_shown(value)}")
+        return value
 
     @functools.wraps(func)
     def wrapper(*args: Any, **kwargs: Any) -> Any:
         nonlocal plan
         if plan is None:
             hints = _hints(func)
-            plan = []
-            for name, parameter in signature.parameters.items():
-                if name in ("self", "cls") or name not in hints or parameter.kind in (
-                        parameter.VAR_POSITIONAL, parameter.VAR_KEYWORD):
+            plan = {}
+            for p in parameters:
+                if p.name in ("self", "cls") or p.name not in hints or p.kind in (p.VAR_POSITIONAL, p.VAR_KEYWORD):
                     continue
-                hint = hints[name]
+                hint = hints[p.name]
                 options = typing.get_args(hint) if typing.get_origin(hint) in (typing.Union, types.UnionType) else ()
                 convert = next((c for c in (hint, *options) if isinstance(c, type) and c in _CONVERSIONS), None)
-                plan.append((name, hint, convert))
-        try:
-            bound = signature.bind(*args, **kwargs)
-        except TypeError as exc:
-            raise ParameterError(f"{getattr(func, '__qualname__', 'arguments')}: {exc}") from None
-        given = bound.arguments
-        for name, hint, convert in plan:
-            if name not in given:
-                continue
-            value = given[name]
-            if convert is not None and not isinstance(value, convert) and isinstance(value, str | os.PathLike):
-                given[name] = value = _CONVERSIONS[convert](value)
-            if not matches(value, hint):
-                raise ParameterError(f"{name}: must be {_describe(hint)}, got {_shown(value)}")
-        out = func(*bound.args, **bound.kwargs)
-        if args and type(args[0]) in _VALIDATORS and func.__name__ == "__init__" and not _READING.get():
-            _VALIDATORS[type(args[0])](args[0])
+                plan[p.name] = (hint, _predicate(hint), convert)
+        if len(args) > len(positional) and not spread:
+            raise ParameterError(f"{func.__qualname__}: takes {len(positional)} positional arguments, "
+                                 f"got {len(args)}")
+        given = list(args)
+        for k, name in enumerate(positional[: len(given)]):
+            if name in plan:
+                given[k] = check(name, given[k])
+        for name in kwargs:
+            if name in plan:
+                kwargs[name] = check(name, kwargs[name])
+        missing = [n for n in required if n not in kwargs and n not in positional[: len(given)]]
+        if missing:
+            raise ParameterError(f"{missing[0]}: missing (a required argument of {func.__qualname__})")
+        out = func(*given, **kwargs)
+        if validates and given and type(given[0]) in _VALIDATORS and not _READING.get():
+            _VALIDATORS[type(given[0])](given[0])
         return out
 
     wrapper.__checked__ = True  # type: ignore[attr-defined]
     return wrapper
 
 
-def check_public(namespace: dict[str, Any], names: abc.Iterable[str] | None = None, foreign: bool = False) -> None:
+def check_public(namespace: dict[str, Any], names: abc.Iterable[str] | None = None, foreign: bool | None = None
+                 ) -> None:
     """Check the arguments of every function and class constructor a module exports (``names``, default its
-    ``__all__``) and defines (call at the end of the module: ``check_public(globals())``); ``foreign``: those
-    it imports from elsewhere too (a package's ``__init__``: its functions there, the classes everywhere)."""
+    ``__all__``) and defines (call at the end of the module: ``check_public(globals())``); ``foreign`` (default:
+    when ``names`` is not given): those it re-exports from elsewhere too (functions wrapped in this module,
+    classes everywhere)."""
     module = namespace["__name__"]
+    foreign = names is None if foreign is None else foreign
     for name in namespace.get("__all__", ()) if names is None else names:
         obj = namespace.get(name)
         if not foreign and getattr(obj, "__module__", None) != module:

@@ -14,7 +14,6 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
-from isolator.scenario.readable import clean_time
 from isolator.scenario.sensors import Sensor
 from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import Window
@@ -251,9 +250,8 @@ class Scenario:
 
     @property
     def stop_time(self) -> float:
-        """Latest time any carriage stops [s], as the inputs give it (:func:`clean_time`); inf when one never
-        stops; 0 with none."""
-        return clean_time(max((c.profile.stop_time for c in self.carriages), default=0.0))
+        """Latest time any carriage stops [s]; inf when one never stops; 0 with none."""
+        return max((c.profile.stop_time for c in self.carriages), default=0.0)
 
     @property
     def breakpoints(self) -> tuple[float, ...]:

@@ -2,17 +2,22 @@
 
 The runs' static equilibria are solved side by side; each run gets its own
 DOP853 step plan (from its fastest mode, on a ladder of step lengths shared
-with single runs). Runs that share a plan and the staged inputs (the parameters
-the inputs' staged form depends on: masses, inertia, carriage axes) are stepped
-``LANES`` at a time, one per SIMD lane of the compiled loop
-(:mod:`isolator.numerics.dop853_driver`), in worker threads; each pack's metrics
-come from its dense output as a single run's do
-(:mod:`isolator.simulation.dense_metrics`), four runs at once.
+with single runs). Runs that share a plan are stepped ``LANES`` at a time, one
+per SIMD lane of the compiled loop (:mod:`isolator.numerics.dop853_driver`), in
+worker threads: a pack whose runs share the staged inputs (the parameters the
+inputs' staged form depends on: masses, inertia, carriage axes and origins)
+steps the staged right-hand side on them; a pack whose runs differ there steps
+the whole right-hand side on the inputs every run shares (the carriages'
+motion), as fast. Each pack's metrics come from its dense output as a single
+run's do (:mod:`isolator.simulation.dense_metrics`), four runs at once, and
+whether a signal leaves its band after the run's end from the free motion
+(:mod:`isolator.simulation.free_tail`).
 """
 
 from __future__ import annotations
 
 import threading
+import weakref
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
@@ -30,7 +35,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
 from isolator.simulation.resources import check_memory
 from isolator.simulation.response import Response
-from isolator.simulation.settling import Band, SettlingResult, settling_results, signal_bands, still_signals
+from isolator.simulation.settling import Band, judged_times, signal_bands, still_signals
 from isolator.simulation.stepping import (
     MAX_TURN,
     Method,
@@ -40,8 +45,8 @@ from isolator.simulation.stepping import (
     rk4_stepper,
     staged_parameters,
 )
-from isolator.simulation.tail_check import run_tail
-from isolator.simulation.time_grid import TimeGrid
+from isolator.simulation.tail_check import run_tails
+from isolator.simulation.time_grid import TimeGrid, inputs_at
 
 __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_batch", "scale_label"]
 
@@ -58,6 +63,8 @@ MEMORY_SHARE = 4
 
 #: a simulator's cache of staged inputs is not shared between threads (batches may run side by side)
 _STAGING = threading.Lock()
+#: per simulator, the model's inputs at each step plan's stage times (packs of differing time-only parts)
+_RAW: weakref.WeakKeyDictionary[BatchSimulator, dict[int, np.ndarray]] = weakref.WeakKeyDictionary()
 
 
 @dataclass(frozen=True)
@@ -218,6 +225,9 @@ def run_batch(
             sim.grid_inputs(method.substeps)
             rk4_stepper(sim.model, method.substeps)
     stepper = dense_stepper(sim.model, LANES)
+    uses = staged_parameters(sim.model)
+    if len({params[i, uses].tobytes() for i in methods}) > 1:  # packs of differing time-only parts: compiled now
+        dense_stepper(sim.model, LANES, staged=False)
     t = sim.grid.samples
     finals = np.zeros((n, 6))
     stops = any(e is not None for e in ends)
@@ -227,29 +237,43 @@ def run_batch(
     holds = np.array([hold_time(e) for e in ends])
     unsettled: dict[int, str] = {}
 
-    def record(i: int, metrics: Mapping[str, SettlingResult]) -> None:
+    def record(i: int, reasons: Sequence[str], times: np.ndarray) -> None:
         """Keep why run ``i`` shows no settling time (its first signal without one)."""
-        why = next((r.reason for r in metrics.values() if r.time is None), "")
+        why = next((r for r, t in zip(reasons, times, strict=True) if np.isnan(t)), "")
         if why:
             unsettled[i] = why
     lock = threading.Lock()
     done = [0]
 
-    def pack(runs: list[int], inputs: np.ndarray) -> None:
-        """Step ``runs`` (one plan and staged inputs, at most LANES) side by side; their metrics."""
-        plan = methods[runs[0]].plan
+    def pack(runs: list[int]) -> None:
+        """Step ``runs`` (one plan, at most LANES) side by side; their metrics. Runs with one time-only part
+        share its staged inputs; others step the whole right-hand side on the inputs every run shares."""
+        method = methods[runs[0]]
+        plan = method.plan
         assert plan is not None
+        if len({params[i, uses].tobytes() for i in runs}) == 1:
+            with _STAGING:
+                inputs, steps = sim.plan_inputs(method, params[runs[0]]), stepper
+        else:
+            with _STAGING:
+                raw = _RAW.setdefault(sim, {})  # the inputs at the plan's stage times, kept with the simulator
+                if method.plan_key not in raw:
+                    while len(raw) >= 16:  # the oldest plan's first
+                        raw.pop(next(iter(raw)))
+                    raw[method.plan_key] = np.ascontiguousarray(inputs_at(sim.scenario, *plan.stage_times()))
+                inputs, steps = raw[method.plan_key], dense_stepper(sim.model, LANES, staged=False)
         lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
         x0 = np.array([starts[i].state for i in lanes])  # type: ignore[union-attr]
-        raw, step_peaks, deviations, polys = stepper.run_slots(
+        slots, step_peaks, deviations, polys = steps.run_slots(
             x0, plan, inputs, params[lanes], x0, with_states=True, final=finals[lanes]
         )
         assert polys is not None
-        dense = DenseRuns(plan, raw, step_peaks, deviations, polys, x0, sim.model.variant.signals)
+        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals)
         ends_at = np.array([plan.end])
-        tails = [run_tail(sim.scenario, sim.model, params[i], starts[i], ends[i],  # type: ignore[arg-type]
-                          DenseStepper.states_at(plan, polys[..., lane], ends_at)[0], plan.end)
-                 for lane, i in enumerate(lanes)]
+        last = np.array([DenseStepper.states_at(plan, polys[..., lane], ends_at)[0] for lane in range(len(runs))])
+        tails = run_tails(sim.scenario, sim.model, params[runs], [starts[i] for i in runs],  # type: ignore[misc]
+                          [ends[i] for i in runs], last, plan.end)
+        tails += tails[-1:] * (LANES - len(runs))
         waits = np.array([0.0 if tail else holds[i] for (tail, _), i in zip(tails, lanes, strict=True)])
         tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time,
                                        lambda top: signal_bands(rule, top), waits)
@@ -257,7 +281,7 @@ def run_batch(
             peak[i] = tops[lane]
             try:
                 if not np.all(np.isfinite(peak[i])):
-                    sig = raw[plan.sample_slots, :, lane]
+                    sig = slots[plan.sample_slots, :, lane]
                     bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
                 check_turn(peak[i])
@@ -267,9 +291,8 @@ def run_batch(
             settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
             tail, note = tails[lane]
             if tail is not None:
-                metrics = settling_results(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
-                settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
-                record(i, metrics)
+                settling[i], reasons = judged_times(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
+                record(i, reasons, settling[i])
 
     def task(runs: list[int]) -> None:
         """A thread's share, runs of one method: RK4 runs one by one, DOP853 runs in packs."""
@@ -284,12 +307,10 @@ def run_batch(
                     continue
                 settling[i] = [np.nan if r.time is None else r.time for r in metrics.values()]
                 peak[i] = [r.peak for r in metrics.values()]
-                record(i, metrics)
+                record(i, [r.reason for r in metrics.values()], settling[i])
         else:
-            with _STAGING:
-                inputs = sim.plan_inputs(method, params[runs[0]])
             for lo in range(0, len(runs), LANES):
-                pack(runs[lo : lo + LANES], inputs)
+                pack(runs[lo : lo + LANES])
         with lock:
             done[0] += len(runs)
             if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
@@ -307,14 +328,20 @@ def run_batch(
 
 
 def _tasks(sim: BatchSimulator, params: np.ndarray, methods: Mapping[int, Method]) -> list[list[int]]:
-    """Runs of one plan and one staged input next to each other, so that packs share them; tasks of
-    ``BLOCK`` runs (a whole number of packs per group)."""
+    """Runs of one plan next to each other, whole packs of one time-only part (one staged input) first and
+    the rest after them, mixed (their packs step the whole right-hand side); tasks of ``BLOCK`` runs."""
     uses = staged_parameters(sim.model)
-    groups: dict[tuple[int, bytes], list[int]] = {}
+    groups: dict[tuple[int, int], dict[bytes, list[int]]] = {}
     for i, method in methods.items():
         staged = params[i, uses].tobytes() if method.plan is not None else b""
-        groups.setdefault((method.plan_key, staged), []).append(i)
-    return [same[lo : lo + BLOCK] for _, same in sorted(groups.items()) for lo in range(0, len(same), BLOCK)]
+        kind = (method.plan_key, -1 if method.plan is not None else method.substeps)  # RK4: by its substeps
+        groups.setdefault(kind, {}).setdefault(staged, []).append(i)
+    tasks = []
+    for _, same in sorted(groups.items()):
+        whole = [i for members in same.values() for i in members[: len(members) - len(members) % LANES]]
+        order = whole + [i for members in same.values() for i in members[len(members) - len(members) % LANES :]]
+        tasks += [order[lo : lo + BLOCK] for lo in range(0, len(order), BLOCK)]
+    return tasks
 
 
 def _check_memory(sim: BatchSimulator, method: Method) -> None:

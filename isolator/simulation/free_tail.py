@@ -24,14 +24,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
+import casadi as ca
 import numpy as np
 
 from isolator.model.signals import signal_jacobian
 from isolator.model.variants import Model
 from isolator.scenario.definitions import SIGNALS
 
-__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeTail", "TailVerdict", "free_tail", "micro"]
+__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeTail", "TailVerdict", "free_tail", "free_tails", "micro"]
 
 #: points per radian of the fastest mode that matters: the deviation is read every 0.2 rad of it
 STEP_ANGLE = 0.2
@@ -81,6 +83,11 @@ class TailVerdict:
     offset: np.ndarray
     band: np.ndarray
 
+    def needed(self, i: int) -> float:
+        """A duration [s] (tenths, rounded up) whose run shows row ``i`` settled."""
+        needed = math.ceil(10 * float(self.enters[i]) * (1 + 1e-12)) / 10
+        return needed + 0.1 if needed <= self.enters[i] else needed
+
     def reason(self, i: int, outside_at_end: bool, rest_note: str = "") -> str:
         """Why signal ``i`` shows no settling time, in one true sentence (``rest_note``: what keeps the
         table off its final rest, said when the signal comes to rest outside its band)."""
@@ -90,9 +97,7 @@ class TailVerdict:
             why = f": {rest_note}" if rest_note else ""
             return (f"{name} comes to rest {micro(name, abs(float(self.offset[i])))} from its final value, outside its "
                     f"band ±{micro(name, float(self.band[i]))}{why}; a longer run cannot help")
-        needed = math.ceil(10 * float(self.enters[i]) * (1 + 1e-12)) / 10
-        if needed <= self.enters[i]:
-            needed += 0.1
+        needed = self.needed(i)
         if outside_at_end:
             return (f"{name} is still outside its band when the run ends at {self.end:.4g} s, by up to {over} "
                     f"after it (at {self.when[i]:.4g} s), and stays inside from {self.enters[i]:.4g} s by the linear "
@@ -118,6 +123,11 @@ class FreeTail:
         ``o``: where the free motion comes to rest, from the final values [m or rad].
     rest : ndarray (n_states,)
         The state the free motion comes to rest in (``x*`` moved by the conserved modes).
+    modes : ndarray (n_states, m) complex
+        Each moving mode's part of the state's deviation from ``x*`` at the end (its eigenvector times its
+        amplitude).
+    shift : ndarray (n_states,)
+        ``rest - x*``.
     """
 
     end: float
@@ -125,6 +135,15 @@ class FreeTail:
     weights: np.ndarray
     offset: np.ndarray
     rest: np.ndarray
+    modes: np.ndarray
+    shift: np.ndarray
+
+    def outputs(self, matrix: np.ndarray) -> FreeTail:
+        """The free motion of other outputs linear in the state, ``matrix`` (k, n_states) their Jacobian at
+        the final rest (a point's displacement on some axes, for its window)."""
+        matrix = np.asarray(matrix, dtype=float)
+        return FreeTail(self.end, self.rates, matrix @ self.modes, matrix @ self.shift, self.rest, self.modes,
+                        self.shift)
 
     def deviation(self, i: int, t: np.ndarray, modes: np.ndarray | None = None) -> np.ndarray:
         """Signal ``i``'s deviation from its final value at times ``t`` [s] (>= ``end``), by ``modes``
@@ -134,11 +153,12 @@ class FreeTail:
         return self.offset[i] + (phase @ self.weights[i, k]).real
 
     def judge(self, band: np.ndarray) -> TailVerdict:
-        """What the free motion does in the band of half-widths ``band`` (6,) [m or rad]."""
+        """What the free motion does in the band of half-widths ``band`` (one per output row) [m or rad]."""
         band = np.asarray(band, dtype=float)
-        leaves, excess = np.zeros(6, dtype=bool), np.zeros(6)
-        when, enters = np.full(6, self.end), np.full(6, self.end)
-        for i in range(6):
+        rows = self.weights.shape[0]
+        leaves, excess = np.zeros(rows, dtype=bool), np.zeros(rows)
+        when, enters = np.full(rows, self.end), np.full(rows, self.end)
+        for i in range(rows):
             leaves[i], excess[i], when[i], enters[i] = self._signal(i, float(band[i]))
         return TailVerdict(self.end, leaves, excess, when, enters, self.offset.copy(), band)
 
@@ -153,6 +173,9 @@ class FreeTail:
             return True, offset - band, math.inf, math.inf
         keep = size > NEGLIGIBLE * band
         slack = float(size[~keep].sum())
+        if not keep.any():  # only modes too small to read, about an offset at the band's edge: the bound decides
+            return (True, start - band, math.inf, math.inf) if start > band else (False, start - band, self.end,
+                                                                                  self.end)
         rates, sizes = self.rates[keep], size[keep]
         room = band - offset - slack
         decay = float(np.max(rates.real))
@@ -177,6 +200,13 @@ class FreeTail:
         return True, float(fine_gap[best]), float(fine[best]), enters
 
 
+@lru_cache(maxsize=16)
+def _jacobians(model: Model, count: int) -> tuple[ca.Function, ca.Function]:
+    """The model's state Jacobian and the signals' Jacobian, each mapped over ``count`` runs at once."""
+    signals = signal_jacobian(model.variant, model.n_states)
+    return model.state_jacobian.map(count), signals.map(count)
+
+
 def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
               reference: np.ndarray, last: np.ndarray, end: float) -> FreeTail:
     """The free motion after a run's end.
@@ -197,16 +227,31 @@ def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: n
     end : float
         The run's end [s].
     """
-    x_star = np.asarray(final_state, dtype=float)
-    a = np.asarray(model.state_jacobian(x_star, model.layout.rest_inputs(positions), p), dtype=float)
-    c = np.asarray(signal_jacobian(model.variant, model.n_states)(x_star, reference), dtype=float)
+    p, final_state, positions, reference, last = (np.asarray(a, dtype=float)[None] for a in (
+        p, final_state, positions, reference, last))
+    return free_tails(model, p, final_state, positions, reference, last, end)[0]
+
+
+def free_tails(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
+               reference: np.ndarray, last: np.ndarray, end: float) -> list[FreeTail]:
+    """:func:`free_tail` of several runs at once, each argument but ``end`` stacked (runs, ...)."""
+    count, n = final_state.shape
+    state_map, signal_map = _jacobians(model, count)
+    inputs = np.array([model.layout.rest_inputs(q) for q in positions])
+    a = np.asarray(state_map(final_state.T, inputs.T, np.asarray(p, dtype=float).T), dtype=float)
+    c = np.asarray(signal_map(final_state.T, np.asarray(reference, dtype=float).T), dtype=float)
+    a, c = a.reshape(n, count, n).transpose(1, 0, 2), c.reshape(6, count, n).transpose(1, 0, 2)
     rates, vectors = np.linalg.eig(a)
-    try:
-        amplitude = np.linalg.solve(vectors, np.asarray(last, dtype=float) - x_star)
-    except np.linalg.LinAlgError:
-        amplitude = np.linalg.lstsq(vectors, np.asarray(last, dtype=float) - x_star, rcond=None)[0]
-    zero = np.abs(rates) <= ZERO * max(float(np.max(np.abs(rates), initial=0.0)), 1.0)
-    weights = (c @ vectors) * amplitude[None, :]
-    offset = weights[:, zero].sum(axis=1).real
-    rest = x_star + (vectors[:, zero] @ amplitude[zero]).real
-    return FreeTail(float(end), rates[~zero], weights[:, ~zero], offset, rest)
+    deviation = np.asarray(last, dtype=float) - final_state
+    out = []
+    for k in range(count):
+        try:
+            amplitude = np.linalg.solve(vectors[k], deviation[k])
+        except np.linalg.LinAlgError:
+            amplitude = np.linalg.lstsq(vectors[k], deviation[k], rcond=None)[0]
+        zero = np.abs(rates[k]) <= ZERO * max(float(np.max(np.abs(rates[k]), initial=0.0)), 1.0)
+        modes = vectors[k] * amplitude[None, :]
+        weights, shift = c[k] @ modes, modes[:, zero].sum(axis=1).real
+        out.append(FreeTail(float(end), rates[k][~zero], weights[:, ~zero], weights[:, zero].sum(axis=1).real,
+                            final_state[k] + shift, modes[:, ~zero], shift))
+    return out

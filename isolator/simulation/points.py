@@ -87,6 +87,15 @@ class PointSet:
         """Each point's displacement from its initial position (points, 3, N) [m] at states (N, n_states)."""
         return point_positions(states, self.arms, self.kind) - self.start[:, :, None]
 
+    def jacobian(self, state: np.ndarray) -> np.ndarray:
+        """Each point's position's Jacobian (points, 3, n_states) at ``state`` [m per state unit], by central
+        differences (steps of 1e-7 of each state's size: about 1e-9 relative)."""
+        state = np.asarray(state, dtype=float)
+        step = 1e-7 * np.maximum(1.0, np.abs(state))
+        moved = np.vstack([state + np.diag(step), state - np.diag(step)])
+        at = point_positions(moved, self.arms, self.kind)
+        return (at[:, :, : state.size] - at[:, :, state.size :]) / (2 * step)
+
     @property
     def columns(self) -> tuple[str, ...]:
         """The CSV/signal names ``<point>:x, <point>:y, <point>:z`` per point."""

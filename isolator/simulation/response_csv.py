@@ -57,8 +57,8 @@ def response_dict(self: Any) -> dict[str, Any]:
     return {
         "name": self.name,
         "model": self.model,
-        "move_start": num(self.move_start),
-        "stop_time": num(self.stop_time),
+        "move_start": num(clean_time(self.move_start)),  # as the inputs give them (not 7.8999999999999995)
+        "stop_time": num(clean_time(self.stop_time)),
         "move_time": num(clean_time(self.stop_time - self.move_start)),
         "signals": list(SIGNALS),
         "peak": {k: num(v) for k, v in self.peak.items()},

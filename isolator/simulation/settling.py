@@ -16,6 +16,7 @@ __all__ = [
     "MOTION_FLOOR",
     "Band",
     "SettlingResult",
+    "judged_times",
     "last_outside",
     "settling_metrics",
     "settling_results",
@@ -319,21 +320,35 @@ def settling_results(
     rest_note : str
         What keeps the table off its final rest (said of a signal that comes to rest outside its band).
     """
-    still = still_signals(settling, peaks) if stops else np.zeros(len(SIGNALS), dtype=bool)
     bands = signal_bands(settling, peaks)
-    verdict = None if tail is None or why else tail.judge(np.maximum(bands, 1e-300))
-    out: dict[str, SettlingResult] = {}
-    for i, name in enumerate(SIGNALS):
+    kept, reasons = judged_times(times, short, peaks, stops, settling, why, tail, rest_note)
+    return {name: SettlingResult(None if math.isnan(kept[i]) else float(kept[i]), float(peaks[i]), float(bands[i]),
+                                 reasons[i]) for i, name in enumerate(SIGNALS)}
+
+
+def judged_times(
+    times: np.ndarray,
+    short: np.ndarray,
+    peaks: np.ndarray,
+    stops: bool,
+    settling: Band | Settling,
+    why: str = "",
+    tail: FreeTail | None = None,
+    rest_note: str = "",
+) -> tuple[np.ndarray, list[str]]:
+    """The rule of :func:`settling_results` as numbers: the six settling times [s] (NaN: none; 0 for a
+    signal that does not move) and each one's reason ("" when settled normally)."""
+    still = still_signals(settling, peaks) if stops else np.zeros(len(SIGNALS), dtype=bool)
+    verdict = None if tail is None or why else tail.judge(np.maximum(signal_bands(settling, peaks), 1e-300))
+    kept, reasons = np.array(times, dtype=float), [""] * len(SIGNALS)
+    for i in range(len(SIGNALS)):
         if still[i]:
-            time, reason = 0.0, "does not move"
+            kept[i], reasons[i] = 0.0, "does not move"
         elif verdict is not None and (verdict.leaves[i] or math.isnan(times[i])):
-            time, reason = None, verdict.reason(i, bool(math.isnan(times[i])), rest_note)
+            kept[i], reasons[i] = math.nan, verdict.reason(i, bool(math.isnan(times[i])), rest_note)
         elif math.isnan(times[i]):
-            time, reason = None, why or _outside(short[i])
-        else:
-            time, reason = float(times[i]), ""
-        out[name] = SettlingResult(time, float(peaks[i]), float(bands[i]), reason)
-    return out
+            reasons[i] = why or _outside(short[i])
+    return kept, reasons
 
 
 check_public(globals(), ("SettlingResult", "settling_time"))

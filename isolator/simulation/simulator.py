@@ -282,11 +282,11 @@ class Simulator:
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
                               polynomials[..., None], start.state[None, :], self.model.variant.signals)
             x0, dense = start.state, polynomials
-            tail, note = run_tail(self.scenario, self.model, p, start, end,
-                                  DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)
+            free = run_tail(self.scenario, self.model, p, start, end,
+                            DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)
 
             def measure(rule: Band) -> dict[str, SettlingResult]:
-                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals, tail, note)
+                return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals, *free)
 
             @cache  # the states at the samples, once for the response, leveling and windows
             def history() -> np.ndarray:
@@ -344,7 +344,7 @@ class Simulator:
 
         metrics, resolved, pneumatic = remeasure(Band.from_settling(self.scenario.settling) if band is None else band)
         points, windows = run_points(self.scenario, self.model.kind, start.state, None if end is None else end.state,
-                                     self.stop_time, hold, fine)
+                                     self.stop_time, hold, fine, free)
 
         return Response(
             name=self.scenario.name,

@@ -18,6 +18,7 @@ from isolator.model.variants import Model
 from isolator.numerics.dop853 import DenseStepper, StepPlan
 from isolator.numerics.native import MappedFunction
 from isolator.numerics.rk4 import Stepper
+from isolator.numerics.systems import Unstaged
 
 __all__ = [
     "DENSE_STEP_ANGLE",
@@ -47,7 +48,7 @@ DENSE_STEP_ANGLE = 0.9
 MAX_DENSE_STEP = 0.05
 
 _STEPPERS: dict[tuple[ParameterLayout, str, int], Stepper] = {}
-_DENSE: dict[tuple[ParameterLayout, str, int], DenseStepper] = {}
+_DENSE: dict[tuple[ParameterLayout, str, int, bool], DenseStepper] = {}
 
 
 @dataclass(frozen=True)
@@ -67,11 +68,14 @@ def rk4_stepper(model: Model, substeps: int) -> Stepper:
     return _STEPPERS[key]
 
 
-def dense_stepper(model: Model, lanes: int = 1) -> DenseStepper:
-    """The DOP853 stepper of a model, ``lanes`` runs per call (built once)."""
-    key = (model.layout, model.kind, lanes)
+def dense_stepper(model: Model, lanes: int = 1, staged: bool = True) -> DenseStepper:
+    """The DOP853 stepper of a model, ``lanes`` runs per call (built once); ``staged`` False: through the
+    whole right-hand side (:class:`~isolator.numerics.systems.Unstaged`: inputs shared by runs whose
+    time-only part differs)."""
+    key = (model.layout, model.kind, lanes, staged)
     if key not in _DENSE:
-        _DENSE[key] = DenseStepper(model, signal_function(model.variant, model.n_states), lanes)
+        system = model if staged or model.staged_rhs is None else Unstaged.of(model)
+        _DENSE[key] = DenseStepper(system, signal_function(model.variant, model.n_states), lanes)
     return _DENSE[key]
 
 

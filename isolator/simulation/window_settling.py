@@ -18,6 +18,7 @@ import numpy as np
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.readable import length_text
 from isolator.scenario.windows import Window
+from isolator.simulation.free_tail import FreeTail, TailVerdict
 from isolator.simulation.points import PointSet
 
 __all__ = ["WindowResult", "moves_per_hour", "plot_windows", "run_points", "window_exit", "window_result"]
@@ -115,17 +116,35 @@ class WindowResult:
         return lines
 
 
+def _after_the_end(w: Window, verdict: TailVerdict, outside_at_end: bool, note: str) -> str:
+    """Why a window shows no settling time, from the free motion after the run's end (its worst axis)."""
+    k = int(np.argmax(verdict.excess))
+    axis, over = w.axes[k], length_text(float(verdict.excess[k]))
+    if not math.isfinite(verdict.enters[k]):
+        return (f"the point comes to rest {length_text(abs(float(verdict.offset[k])))} from its settled position "
+                f"on {axis}, outside the window{': ' + note if note else ''}; a longer run cannot help")
+    where = "is still outside the window when the run ends" if outside_at_end else "leaves the window again"
+    return (f"{where} at {verdict.end:.4g} s, by up to {over} on {axis} (at {verdict.when[k]:.4g} s), and stays "
+            f"inside from {verdict.enters[k]:.4g} s by the linear model about the final rest; lengthen "
+            f"simulation.duration to {verdict.needed(k):g} s or more")
+
+
 def window_result(
     windows: tuple[Window, ...],
     points: PointSet,
     stop_time: float,
     hold: float,
     fine: Callable[[], tuple[np.ndarray, np.ndarray]],
+    tail: FreeTail | None = None,
+    note: str = "",
 ) -> WindowResult:
-    """The window settling of a run whose states on a >= 1 kHz grid ``fine()`` gives (times, states)."""
+    """The window settling of a run whose states on a >= 1 kHz grid ``fine()`` gives (times, states); with
+    the free motion after the run's end (``tail``), a window settling time stands only if the point stays
+    inside the window after it (``hold`` not waited; ``note``: what keeps the table off its final rest)."""
     t, states = fine()
     moved = points.displacements(states)
     times, reasons, deviations = [], [], []
+    jacobian = None if tail is None else points.jacobian(tail.rest - tail.shift)
     for w in windows:
         i, axes = points.index(w.point), list(w.axis_indices)
         if points.settled is None:
@@ -133,7 +152,11 @@ def window_result(
             st, why = None, "the carriages never stop"
         else:
             deviation = moved[i, axes] - points.settled[i, axes, None]
-            st, why = window_exit(t, deviation, w.translation, stop_time, hold)
+            st, why = window_exit(t, deviation, w.translation, stop_time, 0.0 if tail else hold)
+            if jacobian is not None and tail is not None and (st is not None or why.startswith("outside")):
+                verdict = tail.outputs(jacobian[i, axes]).judge(np.full(len(axes), w.translation))
+                if verdict.leaves.any() or st is None:
+                    st, why = None, _after_the_end(w, verdict, st is None, note)
         times.append(st)
         reasons.append(why)
         deviations.append(deviation)
@@ -174,11 +197,12 @@ def plot_windows(result: WindowResult, stop_time: float, title: str) -> Any:
 
 def run_points(
     scenario: Scenario, kind: str, start: np.ndarray, end: np.ndarray | None, stop_time: float, hold: float,
-    fine: Callable[[], tuple[np.ndarray, np.ndarray]],
+    fine: Callable[[], tuple[np.ndarray, np.ndarray]], free: tuple[FreeTail | None, str] = (None, ""),
 ) -> tuple[PointSet, Callable[[], WindowResult] | None]:
     """A run's points (from its initial state ``start`` and final rest state ``end``) and, with
-    ``[[windows]]``, its window settling computed on first use."""
+    ``[[windows]]``, its window settling computed on first use (``free``: the free motion after the run's
+    end and the note of :func:`~isolator.simulation.tail_check.run_tail`)."""
     points = PointSet.of(scenario, kind, start, end)
     if not scenario.windows:
         return points, None
-    return points, lambda: window_result(scenario.windows, points, stop_time, hold, fine)
+    return points, lambda: window_result(scenario.windows, points, stop_time, hold, fine, *free)

@@ -81,3 +81,47 @@ def test_valves_stopped_in_their_dead_band_off_level_say_so_with_the_offset():
     offset = float(re.search(r"ry comes to rest ([0-9.]+) µrad from its final value", ry.reason).group(1)) * 1e-6
     i = SIGNALS.index("ry")
     assert abs(run.signals[i, -1] - run.final[i]) == pytest.approx(offset, rel=0.02)
+
+
+def _windowed(duration: float):
+    import tomllib
+
+    from isolator import bundled_scenarios, scenario_from_dict
+
+    data = tomllib.loads(bundled_scenarios()["paper-table-3-2"].read_text(encoding="utf-8"))
+    data["points"] = [{"name": "probe", "position": [0.3, 0.0, 0.45]}]
+    data["windows"] = [{"point": "probe", "translation": 2e-6}]
+    data["simulation"]["duration"] = duration
+    return scenario_from_dict(data)
+
+
+def test_windows_are_judged_by_the_free_motion_too():
+    short = Simulator(_windowed(12.0)).run({"isolators[*].damping": 52500.0}).windows
+    long = Simulator(_windowed(60.0)).run({"isolators[*].damping": 52500.0}).windows
+    assert short.settling_time[0] == pytest.approx(long.settling_time[0], rel=1e-9)
+    early = Simulator(_windowed(9.0)).run().windows
+    assert early.settling_time[0] is None
+    assert "is still outside the window when the run ends at 9 s" in early.reasons[0]
+    needed = _lengthen_to(early.reasons[0])
+    assert Simulator(_windowed(needed)).run().windows.settling_time[0] == pytest.approx(
+        Simulator(_windowed(12.0)).run().windows.settling_time[0], rel=1e-6)
+
+
+def test_the_verdict_is_the_analytic_free_response_s():
+    """One mode, y = 0.8 e^(-0.3 s) cos(5 s + 0.4) after the end: the largest excess and the last exit on a fine
+    grid, by brute force."""
+    from isolator.simulation.free_tail import FreeTail
+
+    lam = -0.3 + 5j
+    weight = 0.4 * np.exp(0.4j)
+    weights = np.tile([weight, np.conj(weight)], (6, 1))
+    tail = FreeTail(2.0, np.array([lam, np.conj(lam)]), weights, np.zeros(6), np.zeros(1), np.zeros((1, 2)),
+                    np.zeros(1))
+    verdict = tail.judge(np.full(6, 0.3))
+    s = np.linspace(0.0, 20.0, 2_000_001)
+    gap = np.abs(0.8 * np.exp(-0.3 * s) * np.cos(5 * s + 0.4)) - 0.3
+    assert verdict.leaves.all()
+    assert verdict.excess[0] == pytest.approx(gap.max(), abs=1e-6)
+    assert verdict.when[0] == pytest.approx(2.0 + s[np.argmax(gap)], abs=1e-4)
+    last = s[np.flatnonzero(gap > 0)[-1]]
+    assert 2.0 + last <= verdict.enters[0] <= 2.0 + last + 0.2 / 5.0 + 1e-9

@@ -19,7 +19,6 @@ def test_json_times_are_the_inputs_own(capsys):
     data = json.loads(capsys.readouterr().out)
     assert data["stop_time"] == 7.9  # 0.5 s + the profile's phases: 7.8999999999999995 before
     assert data["move_time"] == 7.4
-    assert load_scenario("paper-table-3-2").stop_time == 7.9
 
 
 def test_a_final_value_at_rounding_level_prints_as_zero():

@@ -185,7 +185,7 @@ def test_short_run_says_so():
     r = simulate(make(data))
     assert r.window_settling_time == [None]
     assert r.window_settling_time_max is None
-    assert "end of the run" in r.windows.reasons[0]
+    assert "outside the window when the run ends" in r.windows.reasons[0]
     assert "not available" in r.summary()
 
 

@@ -229,3 +229,29 @@ def test_benefit_percentiles_are_the_lower_order_statistic():
     assert data["p5"] == "-inf"  # the machine ZVD does not settle on
     assert data["p50"] == pytest.approx(0.5)  # of -inf, 0.5, 1.0, 1.5: the lower middle one
     assert data["only_method_unsettled"] == 1
+
+
+def test_the_cdf_figure_shows_its_axis_labels_whole(tmp_path, monkeypatch):
+    """Issue 26, item 7: the benefit panel's x-label was cut off at the figure's right edge."""
+    import dataclasses
+
+    import studies.robustness_report as report
+
+    rng = np.random.default_rng(0)
+    samples = np.column_stack([rng.uniform(0.8, 1.2, 50), rng.uniform(0.95, 1.05, 50)])
+    paper = 3.0 - 2.0 * samples[:, 0]
+    study = dataclasses.replace(_study(samples, {"paper": paper, "ZVD": paper - 0.5}), folder=tmp_path)
+    inside = []
+
+    def check(fig, path, *args, **kwargs):
+        fig.canvas.draw()
+        renderer, box = fig.canvas.get_renderer(), fig.bbox
+        for ax in fig.axes:
+            for label in (ax.xaxis.label, ax.yaxis.label):
+                extent = label.get_window_extent(renderer)
+                inside.append(box.x0 <= extent.x0 and extent.x1 <= box.x1 and box.y0 <= extent.y0)
+
+    monkeypatch.setattr(report, "save_figure", check)
+    report.plot_cdf(study)
+    assert inside
+    assert all(inside)
