@@ -3,7 +3,8 @@ logarithms of the fitted parameters.
 
 - ``floor``: the multi-input H1 from the floor sensors' signals to the table sensors' signals
   (:func:`isolator.calibration.spectra.h1_estimate`) against the linearised model's response over the
-  experiment's band (:class:`~isolator.calibration.floor_model.FloorModel`, exact derivatives), each bin's
+  experiment's band (:class:`~isolator.calibration.floor_model.FloorModel`, exact derivatives) as the same
+  estimator sees it (the segment window's smoothing, :mod:`isolator.calibration.window_view`), each bin's
   real and imaginary part divided by its random error (the coherence-based variance of the estimate).
 - ``move``: the table sensors' records against the full time-varying model sample by sample
   (:class:`~isolator.calibration.move_model.MoveModel`), each channel divided by its noise, estimated from
@@ -25,6 +26,7 @@ from isolator.calibration.floor_model import FloorModel
 from isolator.calibration.move_model import MoveModel
 from isolator.calibration.records import Record
 from isolator.calibration.spectra import h1_estimate
+from isolator.calibration.window_view import WindowView
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.sensors import Sensor
 
@@ -32,6 +34,8 @@ __all__ = ["FloorExperiment", "MoveExperiment", "Residuals", "noise_estimate", "
 
 #: forward-difference step in a parameter's logarithm (move experiments)
 LOG_STEP = 1e-6
+#: the Hann window's equivalent noise bandwidth [bins]: N sum w^2 / (sum w)^2
+ENBW_HANN = 1.5
 #: least random error of an H1 bin, relative to its magnitude (noise-free records)
 FLOOR_ERROR = 1e-6
 
@@ -108,10 +112,13 @@ class FloorExperiment:
         self.f = estimate.f[band]
         self.H1 = estimate.H[:, :, band]
         self.coherence = estimate.coherence[:, band]
-        sigma = np.sqrt(np.asarray(estimate.variance[:, :, band], dtype=float) / 2.0)
+        # each part's random error; neighbouring bins are correlated through the window (Hann: its equivalent
+        # noise bandwidth is 1.5 bins), so a bin carries 1 / ENBW of an independent bin's information
+        sigma = np.sqrt(np.asarray(estimate.variance[:, :, band], dtype=float) / 2.0 * ENBW_HANN)
         self.sigma = np.maximum(sigma, FLOOR_ERROR * np.abs(self.H1) + 1e-300)
+        self.view = WindowView.of(x, record.rate, self.segment, self.f)
         # floor translation (3) per floor-sensor signal: g = pinv(N) x, a signal of order k is (jw)^k times it
-        jw = 2j * np.pi * self.f
+        jw = 2j * np.pi * self.view.fine
         orders = np.array([s.order for s in floor])
         self.to_signals = np.linalg.pinv(directions)[None, :, :] * (jw[:, None, None] ** -orders[None, None, :])
 
@@ -126,10 +133,12 @@ class FloorExperiment:
         return float(min(max(4.0 / (2 * zeta * f1), 4.0 / f1), duration / 8.0))
 
     def predict(self, p: np.ndarray, tangents: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
-        """The model's H (table sensors, floor sensors, nf) and its derivatives (params, ...) along ``tangents``."""
-        response = self.model.response(p, self.f, tangents)
-        h = np.einsum("skf,fkm->smf", response.H, self.to_signals)
-        dh = None if response.dH is None else np.einsum("jskf,fkm->jsmf", response.dH, self.to_signals)
+        """The model's H1 as the estimator sees it (table sensors, floor sensors, nf), and its derivatives
+        (params, ...) along ``tangents`` (:class:`~isolator.calibration.window_view.WindowView`)."""
+        response = self.model.response(p, self.view.fine, tangents)
+        h = self.view.seen(np.einsum("skf,fkm->smf", response.H, self.to_signals))
+        dh = None if response.dH is None else self.view.seen(
+            np.einsum("jskf,fkm->jsmf", response.dH, self.to_signals))
         return h, dh
 
     def residuals(self, p: np.ndarray, tangents: np.ndarray | None = None) -> Residuals:

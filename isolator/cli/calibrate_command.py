@@ -41,7 +41,8 @@ def _calibrate(args: argparse.Namespace) -> int:
     out = output_path(args.out, "--out", (".toml",))
     plot = figure_path(args.plot, "--plot")
     folder = output_folder(args.report, "--report") if args.report else None
-    progress = None if args.json else (lambda line: print(f"  {line}", file=sys.stderr, flush=True))
+    show = not args.json and sys.stderr.isatty()  # a line per model evaluation, in a terminal only
+    progress = (lambda line: print(f"  {line}", file=sys.stderr, flush=True)) if show else None
     result = calibrate(args.calibration, fit=args.fit, allow_unidentifiable=args.allow_unidentifiable,
                        progress=progress)
     result.write_scenario(out)

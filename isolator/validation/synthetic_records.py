@@ -144,11 +144,11 @@ def move_record(scenario: Scenario, duration: float, rate: float, rtol: float = 
     return SyntheticRecord(run.t, _read(table, scenario.sensors, run.t, run.states, acc, None))
 
 
-def floor_record(scenario: Scenario, motion: FloorMotion, duration: float, rate: float, rtol: float = 1e-9
-                 ) -> SyntheticRecord:
+def floor_record(scenario: Scenario, motion: FloorMotion, duration: float, rate: float, rtol: float = 1e-9,
+                 settle: float = 10.0) -> SyntheticRecord:
     """The table on a moving floor in MuJoCo (carriages parked at their start), its ``[[sensors]]`` read at
-    ``rate`` [Hz] from 0 to ``duration`` [s]; the table starts at rest (its first seconds are a transient a
-    calibration's spectra average over)."""
+    ``rate`` [Hz] for ``duration`` [s]. The floor has moved for ``settle`` [s] before the record starts (the
+    table starts at rest; a measured table has long been moving with its floor), the record's time from 0."""
     table = MujocoTable(scenario)
     parked = np.zeros((3, len(scenario.carriages)))
     parked[0] = scenario.initial_positions()
@@ -167,6 +167,20 @@ def floor_record(scenario: Scenario, motion: FloorMotion, duration: float, rate:
 
     t = np.arange(round(duration * rate) + 1) / rate
     y0 = table.equilibrium(parked[0])
-    states = solve_piecewise(rhs, y0, t, (), rtol=rtol, atol=1e-13, max_step=0.25 / motion.high)
-    acc = np.array([table.accelerations(y, parked, ti, ground(ti)) for ti, y in zip(t, states, strict=True)])
-    return SyntheticRecord(t, _read(table, scenario.sensors, t, states, acc, motion.at(t)))
+    run = np.r_[0.0, settle + t] if settle > 0 else t
+    states = solve_piecewise(rhs, y0, run, (), rtol=rtol, atol=1e-13, max_step=0.25 / motion.high)
+    states = states[1:] if settle > 0 else states
+    acc = np.array([table.accelerations(y, parked, ti, ground(ti)) for ti, y in zip(settle + t, states, strict=True)])
+    channels = _read(table, scenario.sensors, t, states, acc, motion.at(settle + t))
+    table_sensors = [s.name for s in scenario.sensors if s.on == "table" and s.order == 0]
+    for name in table_sensors:  # displacements from the table's rest, not from where the record starts
+        channels[name] = channels[name] + _rest_offset(table, scenario, states[0], y0, name)
+    return SyntheticRecord(t, channels)
+
+
+def _rest_offset(table: MujocoTable, scenario: Scenario, first: np.ndarray, rest: np.ndarray, name: str) -> float:
+    """A displacement sensor's reading at the record's first state, measured from the rest state."""
+    sensor = next(s for s in scenario.sensors if s.name == name)
+    both = np.vstack([rest, first])
+    reading = _read(table, (sensor,), np.zeros(2), both, np.zeros((2, 6)), None)[name]
+    return float(reading[1])
