@@ -24,7 +24,7 @@ CONTROL_SCENARIO = "paper-table-3-2-active"
 
 def register(sub: Any) -> None:
     """Add ``study`` and its subcommands (``paper``, ``control``, ``profiles``, ``tradeoff``, ``pneumatic``,
-    ``robustness``)."""
+    ``robustness``, ``calibration``)."""
     study = sub.add_parser("study", help="run a study that writes figures and a report",
                            description="Run a study; each writes its figures and report.md into --out.")
     studies = study.add_subparsers(dest="study", required=True, metavar="STUDY")
@@ -69,6 +69,13 @@ def register(sub: Any) -> None:
     robustness.add_argument("--workers", type=int, default=None, metavar="N",
                             help="processes of the sweeps (default: the machine's cores)")
     robustness.set_defaults(handler=_robustness)
+
+    calibration = _study(studies, "calibration", "what calibration buys: profiles optimised on the datasheet and on "
+                         "the calibrated model, both run on the true table",
+                         "calibration file (default: the bundled example, SYNTHETIC records)")
+    calibration.add_argument("--true", type=Path, metavar="TRUE.toml", dest="truth",
+                             help="the true table's scenario (default: true.toml beside the calibration file)")
+    calibration.set_defaults(handler=_calibration)
 
 
 def _workers(parser: argparse.ArgumentParser) -> None:
@@ -172,6 +179,19 @@ def _pneumatic(args: argparse.Namespace) -> int:
         print(f"N = {o.ratio:.3g}: optimal orifice {o.diameter * 1e3:.4g} mm, heave peak {o.peak:.4g} "
               f"(one-mass closed form {c.peak:.4g} with {c.diameter * 1e3:.4g} mm)")
     print(f"{len(pneumatic.pareto())} Pareto-optimal designs of {pneumatic.diameters.size * pneumatic.ratios.size}")
+    print(f"report: {args.out / 'report.md'}")
+    return 0
+
+
+def _calibration(args: argparse.Namespace) -> int:
+    from studies.calibration import run_calibration_study
+
+    output_folder(args.out, "--out")
+    use_agg()
+    study = run_calibration_study(args.out, args.scenario, args.truth)
+    for name, m in study.actual.items():
+        settled = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3g} s"
+        print(f"{name:>10}: settling on the true table {settled}")
     print(f"report: {args.out / 'report.md'}")
     return 0
 

@@ -42,6 +42,7 @@ def calibrate(
     fit: Sequence[str] | None = None,
     allow_unidentifiable: bool = False,
     progress: Callable[[str], None] | None = None,
+    jacobian: str = "model",
 ) -> CalibrationResult:
     """Fit a scenario's parameters to measured records.
 
@@ -56,6 +57,9 @@ def calibrate(
         Give the fit even when the records cannot tell some parameters apart (``identifiable`` False).
     progress : callable, optional
         Called with a line per model evaluation.
+    jacobian : {"model", "differences"}
+        The fit's Jacobian: the model's (floor: exact derivatives; move: the perturbed runs in one batch of SIMD
+        lanes), or scipy's forward differences run by run (a baseline for ``benchmarks/bench_calibration.py``).
 
     Returns
     -------
@@ -84,7 +88,7 @@ def calibrate(
     if fit is not None:
         calibration = _restricted(calibration, fit)
     experiments = prepare(calibration, read_records(calibration))
-    outcome = fit_parameters(calibration, experiments, progress)
+    outcome = fit_parameters(calibration, experiments, progress, jacobian)
     if outcome.unidentifiable and not allow_unidentifiable:
         groups = "; ".join(" with ".join(g) for g in outcome.unidentifiable)
         raise UnidentifiableError(f"calibrate: the records cannot tell apart {groups} (fit fewer parameters, add "

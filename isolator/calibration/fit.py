@@ -25,7 +25,7 @@ from scipy.optimize import least_squares
 
 from isolator.calibration.definition import Calibration
 from isolator.calibration.experiments import FloorExperiment, MoveExperiment, Residuals
-from isolator.errors import OptimisationError, SimulationError, UnstableTableError
+from isolator.errors import OptimisationError, ParameterError, SimulationError, UnstableTableError
 
 __all__ = ["CORRELATION_LIMIT", "EIGEN_LIMIT", "Fit", "fit_parameters", "unidentifiable_groups"]
 
@@ -78,14 +78,20 @@ def _tangents(calibration: Calibration, values: np.ndarray) -> np.ndarray:
 
 
 def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperiment | MoveExperiment],
-                   progress: Callable[[str], None] | None = None) -> Fit:
+                   progress: Callable[[str], None] | None = None, jacobian: str = "model") -> Fit:
     """Fit the calibration's parameters to every experiment together.
+
+    ``jacobian``: "model" (the floor model's exact derivatives, the move's perturbed runs in one batch of SIMD
+    lanes) or "differences" (scipy's forward differences, every run on its own: the baseline the benchmark
+    compares with).
 
     Raises
     ------
     OptimisationError
         The model cannot be evaluated near the start (no stable rest, a diverging run).
     """
+    if jacobian not in ("model", "differences"):
+        raise ParameterError(f"jacobian: must be 'model' or 'differences', got {jacobian!r}")
     names = calibration.names
     lo = np.log([f.bounds[0] for f in calibration.parameters])
     hi = np.log([f.bounds[1] for f in calibration.parameters])
@@ -97,7 +103,7 @@ def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperime
         if key not in cache:
             values = np.exp(x)
             p = calibration.vector(values)
-            tangents = _tangents(calibration, values)
+            tangents = _tangents(calibration, values) if jacobian == "model" else None
             try:
                 cache.clear()
                 cache[key] = [e.residuals(p, tangents) for e in experiments]
@@ -118,9 +124,13 @@ def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperime
 
     x0 = np.log(calibration.initial)
     before = {e.name: _rms(r.r) for e, r in zip(experiments, evaluate(x0), strict=True)}
-    solution = least_squares(fun, x0, jac=jac, bounds=(lo, hi), method="trf", x_scale=1.0, xtol=1e-10,
+    solution = least_squares(fun, x0, jac=jac if jacobian == "model" else "2-point", bounds=(lo, hi), method="trf",
+                             x_scale=1.0, xtol=1e-10,
                              ftol=1e-12, gtol=1e-12, max_nfev=200)
     x = solution.x
+    if jacobian != "model":  # the covariance from the model's Jacobian all the same
+        jacobian = "model"
+        cache.clear()
     final = evaluate(x)
     after = {e.name: _rms(r.r) for e, r in zip(experiments, final, strict=True)}
     r = np.concatenate([f.r for f in final])

@@ -123,9 +123,10 @@ def _main() -> None:
     args = parser.parse_args()
     move, floor = records()
     if args.noise_free is not None:
-        np.savez_compressed(args.noise_free, move_t=move.t, floor_t=floor.t,
-                            **{f"move:{k}": v for k, v in move.channels.items()},
-                            **{f"floor:{k}": v for k, v in floor.channels.items()})
+        arrays: dict[str, Any] = {"move_t": move.t, "floor_t": floor.t,
+                                  **{f"move:{k}": v for k, v in move.channels.items()},
+                                  **{f"floor:{k}": v for k, v in floor.channels.items()}}
+        np.savez_compressed(args.noise_free, **arrays)
     print(make_example(args.folder, (move, floor)))
 
 
