@@ -4,8 +4,9 @@ logarithms of the fitted parameters.
 - ``floor``: the multi-input H1 from the floor sensors' signals to the table sensors' signals
   (:func:`isolator.calibration.spectra.h1_estimate`) against the linearised model's response over the
   experiment's band (:class:`~isolator.calibration.floor_model.FloorModel`, exact derivatives) as the same
-  estimator sees it (the segment window's smoothing, :mod:`isolator.calibration.window_view`), each bin's
-  real and imaginary part divided by its random error (the coherence-based variance of the estimate).
+  estimator sees it (the model's response to the measured floor through the same segments, after the same
+  warm-up: :mod:`isolator.calibration.estimator_view`), each bin's real and imaginary part divided by its random
+  error (the coherence-based variance of the estimate).
 - ``move``: the table sensors' records against the full time-varying model sample by sample
   (:class:`~isolator.calibration.move_model.MoveModel`), each channel divided by its noise, estimated from
   the record alone (the median absolute second difference, robust to the move's steps:
@@ -22,11 +23,11 @@ import numpy as np
 from isolator.analysis.linear import linearise, rest_positions
 from isolator.analysis.modes import modes
 from isolator.calibration.definition import Calibration, Experiment
+from isolator.calibration.estimator_view import EstimatorView
 from isolator.calibration.floor_model import FloorModel
 from isolator.calibration.move_model import MoveModel
 from isolator.calibration.records import Record
 from isolator.calibration.spectra import h1_estimate
-from isolator.calibration.window_view import WindowView
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.sensors import Sensor
 
@@ -94,11 +95,22 @@ class FloorExperiment:
             raise ScenarioError(f"{key}.{exc}") from None
         self.table, self.floor = table, floor
         self.model = FloorModel(calibration.layout, positions, table)
-        self.segment = experiment.segment or self.default_segment(calibration, positions, record)
+        lowest = modes(linearise(scenario, positions))
+        f1 = float(lowest.frequencies_hz[0])
+        zeta = float(np.clip(np.min(lowest.damping_ratios), 1e-3, 1.0))
+        duration = float(record.t[-1] - record.t[0])
+        # the slowest decay's time constant sets the warm-up (4 of them, at most a quarter of the record) and the
+        # default segment (four half-power bandwidths of the lowest mode per bin, at least 4 of its periods, at
+        # most an eighth of what is left)
+        tau = 1.0 / (zeta * 2 * np.pi * f1)
+        self.warm = float(min(4.0 * tau, duration / 4.0))
+        used = duration - self.warm
+        self.segment = experiment.segment or float(min(max(4.0 / (2 * zeta * f1), 4.0 / f1), used / 8.0))
+        start = round(self.warm * record.rate)
         x = np.array([record.channels[s.name] for s in floor])
         y = np.array([record.channels[s.name] for s in table])
         try:
-            estimate = h1_estimate(x, y, record.rate, self.segment)
+            estimate = h1_estimate(x[:, start:], y[:, start:], record.rate, self.segment)
         except ParameterError as exc:
             raise ScenarioError(f"{key}: {exc}") from None
         low, high = experiment.frequency
@@ -116,26 +128,18 @@ class FloorExperiment:
         # noise bandwidth is 1.5 bins), so a bin carries 1 / ENBW of an independent bin's information
         sigma = np.sqrt(np.asarray(estimate.variance[:, :, band], dtype=float) / 2.0 * ENBW_HANN)
         self.sigma = np.maximum(sigma, FLOOR_ERROR * np.abs(self.H1) + 1e-300)
-        self.view = WindowView.of(x, record.rate, self.segment, self.f)
+        nperseg = round(estimate.segment * record.rate)
+        self.view = EstimatorView.of(x, record.rate, nperseg, start, np.flatnonzero(band), estimate.f,
+                                     pad=2 * start + nperseg)
         # floor translation (3) per floor-sensor signal: g = pinv(N) x, a signal of order k is (jw)^k times it
-        jw = 2j * np.pi * self.view.fine
+        jw = 2j * np.pi * self.view.lines
         orders = np.array([s.order for s in floor])
         self.to_signals = np.linalg.pinv(directions)[None, :, :] * (jw[:, None, None] ** -orders[None, None, :])
 
-    @staticmethod
-    def default_segment(calibration: Calibration, positions: np.ndarray, record: Record) -> float:
-        """Welch segment [s]: four half-power bandwidths of the lowest mode per bin (at least 4 of its
-        periods), at most an eighth of the record."""
-        lowest = modes(linearise(calibration.scenario, positions))
-        f1 = float(lowest.frequencies_hz[0])
-        zeta = float(np.clip(lowest.damping_ratios[0], 1e-3, 1.0))
-        duration = float(record.t[-1] - record.t[0])
-        return float(min(max(4.0 / (2 * zeta * f1), 4.0 / f1), duration / 8.0))
-
     def predict(self, p: np.ndarray, tangents: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray | None]:
         """The model's H1 as the estimator sees it (table sensors, floor sensors, nf), and its derivatives
-        (params, ...) along ``tangents`` (:class:`~isolator.calibration.window_view.WindowView`)."""
-        response = self.model.response(p, self.view.fine, tangents)
+        (params, ...) along ``tangents`` (:class:`~isolator.calibration.estimator_view.EstimatorView`)."""
+        response = self.model.response(p, self.view.lines, tangents)
         h = self.view.seen(np.einsum("skf,fkm->smf", response.H, self.to_signals))
         dh = None if response.dH is None else self.view.seen(
             np.einsum("jskf,fkm->jsmf", response.dH, self.to_signals))
