@@ -2,28 +2,30 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
-import multiprocessing
 import os
-import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
-from isolator.errors import ParameterError
+from isolator.errors import ExecutorError, ParameterError
 from isolator.model.parameters import ParameterLayout
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import load_scenario
 from isolator.simulation.settling import Band
 from isolator.sweep import output
+from isolator.sweep.cluster import connect
 from isolator.sweep.designs import Designs, Values, build_designs
 from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
 from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
+from isolator.sweep.pool import SweepPool
+from isolator.sweep.progress import progress_bar
 from isolator.sweep.result import SweepResult, Tally
 from isolator.sweep.runner import run_chunks
 from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key, simulator_for
@@ -65,6 +67,8 @@ def sweep(
     progress: bool = False,
     chunk_size: int | None = None,
     band: Band | None = None,
+    scheduler: str | None = None,
+    security: Any = None,
 ) -> SweepResult:
     """Run a scenario for many designs; per design the settling times, peaks and status.
 
@@ -116,6 +120,13 @@ def sweep(
         Designs per task (default :func:`chunk_size_for`).
     band : Band, optional
         The settling band (default the scenario's ``[settling]`` rule).
+    scheduler : str, optional
+        Run on the Dask cluster of this scheduler (instead of ``executor``): ``tls://HOST:PORT`` with
+        ``security``, or ``tcp://HOST:PORT`` (warned about beyond this machine: anyone who reaches it runs code
+        on its workers); see :func:`isolator.sweep.cluster.connect`.
+    security : distributed.Security, optional
+        The TLS certificates of a ``tls://`` scheduler (:func:`isolator.sweep.cluster.tls_security` makes one
+        from the three files; default Dask's configuration).
 
     Returns
     -------
@@ -146,8 +157,16 @@ def sweep(
     ------
     ParameterError
         A bad argument, named; nothing is written then.
+    ExecutorError
+        The executor could no longer run the chunks (a Dask scheduler that is gone): the rows written to
+        ``out`` are kept, ``resume=True`` finishes the sweep. A worker process of the default pool that dies
+        is no error: the pool is renewed (one warning) and every row is kept.
     """
     start_time = time.perf_counter()
+    if scheduler is not None and executor is not None:
+        raise ParameterError("scheduler, executor: choose one (the scheduler's cluster runs the chunks)")
+    if security is not None and scheduler is None:
+        raise ParameterError("security: the certificates of a tls:// scheduler: give scheduler= too")
     scene = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     layout = ParameterLayout.of(scene)
     designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
@@ -182,40 +201,48 @@ def sweep(
             if not done.all():
                 raise ParameterError(f"out: '{path}' is a finished sweep of other designs; --force starts again")
             return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
-    n_workers = _workers(workers, executor)
-    size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
-    swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
-    template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
-    simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
-    if path is not None:
-        output.write_sidecar(path, identity)
-    sink = None if path is None else RowSink(path, columns, append=resume)
-    if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
-        path.unlink()
-    rows: list[list[Any]] | None = [] if sink is None else None
+    with contextlib.ExitStack() as cluster:
+        if scheduler is not None:  # connected once the arguments are known good, before anything is written
+            client = connect(scheduler, security)
+            cluster.callback(_close, client)
+            executor = client.get_executor()
+        n_workers = _workers(workers, executor)
+        size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
+        swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
+        template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
+        simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
+        if path is not None:
+            output.write_sidecar(path, identity)
+        sink = None if path is None else RowSink(path, columns, append=resume)
+        if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
+            path.unlink()
+        rows: list[list[Any]] | None = [] if sink is None else None
 
-    def finished(result: ChunkResult) -> None:
-        block = _rows(designs, result)
-        tally.add(result)
-        if sink is not None:
-            sink.write(block)
-        elif rows is not None:
-            rows.extend(block)
-        bar(len(block))
+        def finished(result: ChunkResult) -> None:
+            block = _rows(designs, result)
+            tally.add(result)
+            if sink is not None:
+                sink.write(block)
+            elif rows is not None:
+                rows.extend(block)
+            bar(len(block))
 
-    pool, renew = _executor(executor, n_workers)
-    bar = _bar(progress, designs.count, int(np.sum(done)))
-    complete = False
-    try:
-        run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew)
-        complete = True
-    finally:
-        if pool is not None and renew is not None:
-            pool.shutdown(wait=complete, cancel_futures=True)
-        if sink is not None:
-            sink.close(complete)
-        bar(-1)
-    return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
+        pool, renew = _executor(executor, n_workers)
+        bar = progress_bar(progress, designs.count, int(np.sum(done)))
+        complete = False
+        try:
+            run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew,
+                       _alive(pool))
+            complete = True
+        except ExecutorError as exc:
+            kept = f"the {tally.resumed + tally.runs} rows done are kept in '{path}'" if path is not None else \
+                "the rows are lost (out= keeps them as they arrive)"
+            raise ExecutorError(f"{exc}; {kept}: run the same sweep with --resume (resume=True) to finish it") from None
+        finally:
+            if sink is not None:
+                sink.close(complete)
+            bar(-1)
+        return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
 
 
 def _rows(designs: Designs, result: ChunkResult) -> list[list[Any]]:
@@ -252,13 +279,25 @@ def _executor(executor: Executor | None, workers: int) -> tuple[Executor | None,
         return executor, None
     if workers <= 1:
         return None, None
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else None)
 
     def make() -> Executor:
-        return ProcessPoolExecutor(max_workers=workers, mp_context=context)
+        return SweepPool(workers)
 
     return make(), make
+
+
+def _close(client: Any) -> None:
+    """Close a Dask client the sweep opened (quietly: its scheduler may be gone)."""
+    with contextlib.suppress(Exception):
+        client.close(timeout=2)
+
+
+def _alive(executor: Executor | None) -> Callable[[], bool] | None:
+    """Whether a Dask executor's client still talks to its scheduler (None: an executor that cannot tell)."""
+    client = getattr(executor, "_client", None)
+    if client is None or not hasattr(client, "status"):
+        return None
+    return lambda: str(client.status) in ("running", "connecting", "newly-created")
 
 
 def _workers(workers: int | None, executor: Executor | None) -> int:
@@ -287,14 +326,3 @@ def _frequencies(values: Sequence[float]) -> tuple[float, ...]:
     if bad:
         raise ParameterError(f"frequencies: must be finite and >= 0 [Hz], got {bad[0]:g}")
     return out
-
-
-def _bar(progress: bool, total: int, initial: int) -> Callable[[int], None]:
-    """A tqdm bar on stderr, when asked and stderr is a terminal: ``bar(k)`` adds k runs, ``bar(-1)`` closes."""
-    if not (progress and sys.stderr.isatty()):
-        return lambda k: None
-    from tqdm import tqdm
-
-    tqdm.monitor_interval = 0  # no monitor thread: the pool's workers are forked after the bar starts
-    shown = tqdm(total=total, initial=initial, unit="run", file=sys.stderr, smoothing=0.1)
-    return lambda k: shown.close() if k < 0 else shown.update(k)

@@ -134,7 +134,8 @@ ORIGINAL = worker.run_chunk
 @pytest.mark.skipif(sys.platform != "linux", reason="the patched task reaches the workers by fork")
 def test_a_process_pool_whose_worker_died_is_renewed_and_nothing_lost(monkeypatch, tmp_path):
     monkeypatch.setattr(worker, "run_chunk", functools.partial(_dies_once, tmp_path / "died"))
-    result = sweep(SCENARIO, scale=GRID, workers=2, chunk_size=2)
+    with pytest.warns(UserWarning, match="renewed its pool"):
+        result = sweep(SCENARIO, scale=GRID, workers=2, chunk_size=2)
     assert (tmp_path / "died").exists()
     monkeypatch.setattr(worker, "run_chunk", ORIGINAL)
     table = result.table()
@@ -153,7 +154,8 @@ def _always_dies(chunk: worker.Chunk) -> worker.ChunkResult:
 def test_a_chunk_that_always_kills_its_worker_fails_alone(monkeypatch):
     damping = {"isolators[*].damping": [0.5 + 0.1 * i for i in range(12)]}
     monkeypatch.setattr(importlib.import_module("isolator.sweep.worker"), "run_chunk", _always_dies)
-    result = sweep(SCENARIO, scale=damping, workers=2, chunk_size=2)
+    with pytest.warns(UserWarning, match="renewed its pool"):
+        result = sweep(SCENARIO, scale=damping, workers=2, chunk_size=2)
     monkeypatch.setattr(importlib.import_module("isolator.sweep.worker"), "run_chunk", ORIGINAL)
     table = result.table()
     assert table["status"].tolist() == ["failed"] * 2 + ["ok"] * 10  # the chunks in flight with it were spared
