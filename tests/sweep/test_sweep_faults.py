@@ -149,7 +149,8 @@ def test_the_command_survives_a_killed_worker_with_one_warning(monkeypatch, tmp_
         repr(v) for v in DAMPING["isolators[*].damping"]), "--workers", "2", "--chunk-size", "4", "--out", str(out)])
     err = capsys.readouterr().err
     assert status == 0
-    assert err.count("isolator: warning:") == 1 and "renewed its pool" in err
+    assert err.count("isolator: warning:") == 1
+    assert "renewed its pool" in err
     assert "Traceback" not in err
     assert out.read_bytes() == undisturbed
 
@@ -163,7 +164,8 @@ def test_a_pool_the_sweep_cannot_renew_ends_it_with_resume_named(monkeypatch, tm
             sweep(SCENARIO, scale=DAMPING, executor=pool, workers=2, chunk_size=4, out=out)
     monkeypatch.undo()
     kept = out.read_bytes()
-    assert kept.count(b"\n") >= 1 + 8 and undisturbed.startswith(kept)  # the rows done, as they were
+    assert kept.count(b"\n") >= 1 + 8
+    assert undisturbed.startswith(kept)
     sweep(SCENARIO, scale=DAMPING, workers=2, out=out, resume=True)
     assert out.read_bytes() == undisturbed
 
@@ -214,7 +216,8 @@ def test_workers_end_when_their_pool_s_process_is_killed(tmp_path):
     try:
         assert proc.stdout is not None
         pids = [int(w) for w in proc.stdout.readline().split()]
-        assert len(pids) == 2 and not any(gone(pid) for pid in pids)
+        assert len(pids) == 2
+        assert not any(gone(pid) for pid in pids)
         os.kill(proc.pid, signal.SIGKILL)
         proc.wait(DEADLINE)
         wait_until(lambda: all(gone(pid) for pid in pids), "the orphaned workers ending")
