@@ -122,7 +122,7 @@ def tls_security(ca_file: str | os.PathLike[str], cert: str | os.PathLike[str], 
                                 require_encryption=True)
 
 
-def connect(address: str, security: Any = None, *, timeout: float = SCHEDULER_TIMEOUT,
+def connect(address: str, security: Any = None, *, timeout: float | None = None,
             names: Mapping[str, str] = PYTHON_NAMES) -> Any:
     """A :class:`distributed.Client` of the scheduler at ``address``, every problem one clear line.
 
@@ -133,8 +133,8 @@ def connect(address: str, security: Any = None, *, timeout: float = SCHEDULER_TI
         warning when HOST is not this machine's loopback.
     security : distributed.Security, optional
         TLS certificates (:func:`tls_security` checks files first); for ``tls://`` only.
-    timeout : float
-        How long to try reaching the scheduler [s].
+    timeout : float, optional
+        How long to try reaching the scheduler [s] (default :data:`SCHEDULER_TIMEOUT`).
     names : mapping of str to str
         How messages name the inputs (keys ``scheduler``, ``tls`` for the certificates; ``ca``, ``cert``,
         ``key``): the Python arguments by default, the command's options from the command line.
@@ -147,6 +147,7 @@ def connect(address: str, security: Any = None, *, timeout: float = SCHEDULER_TI
         scheduler not reached within ``timeout``.
     """
     option = names["scheduler"]
+    timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     if not isinstance(address, str):
         raise ParameterError(f"{option}: must be an address 'tls://HOST:PORT', got {type(address).__name__}")
     distributed = _import_distributed(option)
