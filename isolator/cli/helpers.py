@@ -165,8 +165,9 @@ def scheduler_client(args: argparse.Namespace) -> Iterator[Any]:
     if args.scheduler is None:
         yield None
         return
-    from isolator.sweep.cluster import connect, tls_security
+    from isolator.sweep.cluster import connect, import_distributed, tls_security
 
+    import_distributed("--scheduler")  # Dask sets its loggers' levels as it is imported: silenced after
     quiet = _silence("distributed")
     try:
         security = tls_security(files["ca"], files["cert"], files["key"], CLI_NAMES) if given else None

@@ -22,7 +22,8 @@ from typing import Any
 
 from isolator.errors import ParameterError
 
-__all__ = ["PYTHON_NAMES", "SCHEDULER_TIMEOUT", "UNENCRYPTED_WARNING", "connect", "is_loopback", "tls_security"]
+__all__ = ["PYTHON_NAMES", "SCHEDULER_TIMEOUT", "UNENCRYPTED_WARNING", "connect", "import_distributed", "is_loopback",
+           "tls_security"]
 
 #: how long [s] to try reaching a Dask scheduler
 SCHEDULER_TIMEOUT = 5.0
@@ -36,7 +37,8 @@ UNENCRYPTED_WARNING = ("{option} {address}: the connection is unencrypted and un
                        "scheduler ({tls})")
 
 
-def _import_distributed(option: str) -> Any:
+def import_distributed(option: str) -> Any:
+    """Dask's ``distributed`` module; without it one line naming ``option`` and the extra to install."""
     try:
         import distributed
     except ImportError:
@@ -104,7 +106,7 @@ def tls_security(ca_file: str | os.PathLike[str], cert: str | os.PathLike[str], 
     ParameterError
         A file missing or unreadable, not PEM, or a key that is not the certificate's, named.
     """
-    distributed = _import_distributed(names["ca"])
+    distributed = import_distributed(names["ca"])
     ca = _readable(ca_file, names["ca"], "CERTIFICATE", "certificate")
     mine = _readable(cert, names["cert"], "CERTIFICATE", "certificate")
     secret = _readable(key, names["key"], "PRIVATE KEY", "private key")
@@ -150,7 +152,7 @@ def connect(address: str, security: Any = None, *, timeout: float | None = None,
     timeout = SCHEDULER_TIMEOUT if timeout is None else timeout
     if not isinstance(address, str):
         raise ParameterError(f"{option}: must be an address 'tls://HOST:PORT', got {type(address).__name__}")
-    distributed = _import_distributed(option)
+    distributed = import_distributed(option)
     protocol, host = _split(address, option)
     if security is not None and not isinstance(security, distributed.Security):
         raise ParameterError(f"{names['tls']}: must be a distributed.Security, got {type(security).__name__}")
