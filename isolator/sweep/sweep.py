@@ -115,7 +115,8 @@ def sweep(
         Overwrite ``out`` and its description (without ``resume`` or ``force`` an existing ``out`` is an
         error).
     progress : bool
-        A progress bar on stderr (only when it is a terminal).
+        Show how far the sweep has got on stderr once it has run 2 s: a bar on a terminal, else a line per
+        tenth of the designs (:mod:`isolator.sweep.progress`).
     chunk_size : int, optional
         Designs per task (default :func:`chunk_size_for`).
     band : Band, optional
