@@ -13,8 +13,9 @@ A process group would not do: the sweep would have to lead it (a shell's job con
 group is ended by whoever signals it, not when the sweep dies.
 
 Stopping a pool (:meth:`SweepPool.stop`) uses public API only: Python 3.14's ``terminate_workers``, else the
-process ids the workers reported from the initializer, terminated through :func:`multiprocessing.active_children`
-(never another process that happens to reuse an id).
+pool's own worker processes, which it creates through the multiprocessing context it is given (a context that
+keeps the :class:`multiprocessing.Process` objects it makes): each terminated through its object, never through
+a process id another process may have taken since.
 """
 
 from __future__ import annotations
@@ -28,7 +29,10 @@ import sys
 import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
+
+if TYPE_CHECKING:
+    from multiprocessing.context import BaseContext
 
 __all__ = ["WATCH_INTERVAL", "SweepPool"]
 
@@ -43,6 +47,22 @@ def _context() -> Any:
     return multiprocessing.get_context("fork" if "fork" in multiprocessing.get_all_start_methods() else None)
 
 
+class _Recording:
+    """A multiprocessing context that keeps every process it makes (the pool makes its workers with it)."""
+
+    def __init__(self, base: Any) -> None:
+        self._base = base
+        self.made: list[Any] = []
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self._base, name)
+
+    def Process(self, *args: Any, **kwargs: Any) -> Any:  # noqa: N802 (the context's own name)
+        process = self._base.Process(*args, **kwargs)
+        self.made.append(process)
+        return process
+
+
 class SweepPool(ProcessPoolExecutor):
     """A process pool whose workers end with the process that made it.
 
@@ -53,17 +73,13 @@ class SweepPool(ProcessPoolExecutor):
     """
 
     def __init__(self, workers: int) -> None:
-        context = _context()
-        self._reports = context.SimpleQueue()
-        self._pids: set[int] = set()
-        super().__init__(max_workers=workers, mp_context=context, initializer=_started,
-                         initargs=(os.getpid(), self._reports))
+        self._recording = _Recording(_context())
+        super().__init__(max_workers=workers, mp_context=cast("BaseContext", self._recording),
+                         initializer=_started, initargs=(os.getpid(),))
 
     def worker_pids(self) -> set[int]:
-        """The process ids of the workers started so far (those that have run the initializer)."""
-        while not self._reports.empty():
-            self._pids.add(int(self._reports.get()))
-        return set(self._pids)
+        """The process ids of the pool's workers running now."""
+        return {p.pid for p in self._recording.made if p.pid is not None and p.exitcode is None}
 
     def stop(self) -> None:
         """End the pool at once: its workers terminated (SIGTERM), its queued chunks dropped."""
@@ -71,16 +87,14 @@ class SweepPool(ProcessPoolExecutor):
         if terminate is not None:
             terminate()
             return
-        mine = self.worker_pids()
-        for child in multiprocessing.active_children():
-            if child.pid in mine:
-                child.terminate()
+        for process in self._recording.made:
+            if process.pid is not None and process.exitcode is None:  # started, not ended
+                process.terminate()
         self.shutdown(wait=True, cancel_futures=True)  # the pool sees its workers gone and ends
 
 
-def _started(parent: int, reports: Any) -> None:
-    """The pool's initializer, in each worker: report the process id, then end with the sweep."""
-    reports.put(os.getpid())
+def _started(parent: int) -> None:
+    """The pool's initializer, in each worker: end with the sweep."""
     watched = os.getppid()
     if sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):

@@ -57,7 +57,7 @@ def sweep(
     method: Literal["sobol", "lhs"] = "sobol",
     seed: int = 0,
     model: str = "exact",
-    executor: Executor | None = None,
+    executor: Executor | Callable[[], Executor] | None = None,
     workers: int | None = None,
     frequencies: Sequence[float] = (),
     modes: bool = False,
@@ -89,9 +89,12 @@ def sweep(
         Draw this many designs over the ranges, by ``method``: "sobol" (scrambled) or "lhs" (Latin
         hypercube), seeded by ``seed`` (reproducible).
     model : {"exact", "paper"}
-    executor : concurrent.futures.Executor, optional
+    executor : concurrent.futures.Executor or callable, optional
         Where the chunks run: any executor (a Dask ``Client.get_executor()``, mpi4py's
-        ``MPIPoolExecutor``); default a local process pool of ``workers`` processes.
+        ``MPIPoolExecutor``), or a function of no arguments making one (``MPIPoolExecutor``), which the sweep
+        calls again for a fresh executor when one breaks (``BrokenExecutor``), as it renews its own pool; default
+        a local process pool of ``workers`` processes whose workers end with the sweep
+        (:mod:`isolator.sweep.pool`).
     workers : int, optional
         Processes of the default pool (default: the machine's cores; 1: in this process, one chunk after
         another); with ``executor``, how many workers it has (sizes the chunks; default its own count).
@@ -212,6 +215,9 @@ def sweep(
         swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
         template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
         simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
+        pool, renew = _executor(executor, n_workers)  # made (a function's executor checked) before any file
+        if pool is not None and renew is not None:  # should the sweep fail before its chunks run (else a no-op)
+            cluster.callback(pool.shutdown, wait=False, cancel_futures=True)
         if path is not None:
             output.write_sidecar(path, identity)
         sink = None if path is None else RowSink(path, columns, append=resume)
@@ -228,7 +234,6 @@ def sweep(
                 rows.extend(block)
             bar(len(block))
 
-        pool, renew = _executor(executor, n_workers)
         bar = progress_bar(progress, designs.count, int(np.sum(done)))
         complete = False
         try:
@@ -274,10 +279,20 @@ def _chunks(designs: Designs, template: Chunk, done: np.ndarray, size: int) -> I
         lo = hi
 
 
-def _executor(executor: Executor | None, workers: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
-    """The executor and how to make a fresh one (only for the pool made here)."""
-    if executor is not None:
+def _executor(executor: Executor | Callable[[], Executor] | None,
+              workers: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
+    """The executor and how to make a fresh one (the pool made here, or the caller's function making one)."""
+    if isinstance(executor, Executor):
         return executor, None
+    if executor is not None:
+        if not callable(executor):
+            raise ParameterError(f"executor: must be a concurrent.futures.Executor or a function making one, got "
+                                 f"{type(executor).__name__}")
+        made = executor()
+        if not isinstance(made, Executor):
+            raise ParameterError(f"executor: the function must return a concurrent.futures.Executor, got "
+                                 f"{type(made).__name__}")
+        return made, executor
     if workers <= 1:
         return None, None
 
@@ -301,7 +316,7 @@ def _alive(executor: Executor | None) -> Callable[[], bool] | None:
     return lambda: str(client.status) in ("running", "connecting", "newly-created")
 
 
-def _workers(workers: int | None, executor: Executor | None) -> int:
+def _workers(workers: int | None, executor: Executor | Callable[[], Executor] | None) -> int:
     if workers is not None:
         return _positive(workers, "workers")
     if executor is not None:  # a pool's own count, a Dask cluster's threads, else this machine's cores

@@ -15,6 +15,7 @@ import warnings
 from collections.abc import Callable
 from concurrent.futures import Executor, ProcessPoolExecutor, ThreadPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
+from concurrent.futures.thread import BrokenThreadPool
 from pathlib import Path
 from typing import Any
 
@@ -23,7 +24,7 @@ import pytest
 
 import isolator.sweep.runner as runner
 from isolator.cli.app import main
-from isolator.errors import ExecutorError
+from isolator.errors import ExecutorError, ParameterError
 from isolator.sweep import sweep
 from isolator.sweep.pool import SweepPool
 
@@ -225,3 +226,31 @@ def test_workers_end_when_their_pool_s_process_is_killed(tmp_path):
         proc.kill()
         proc.wait()
     assert np.all([gone(pid) for pid in pids])
+
+
+def test_a_caller_s_executor_made_by_a_function_is_renewed_when_it_breaks(tmp_path, undisturbed):
+    made: list[Executor] = []
+
+    class Breaking(ThreadPoolExecutor):
+        """The first one made refuses work after three chunks, as a broken pool does."""
+
+        def submit(self, fn: Any, /, *args: Any, **kwargs: Any) -> Any:
+            self.handed = getattr(self, "handed", 0) + 1
+            if self is made[0] and self.handed > 3:
+                raise BrokenThreadPool("a worker thread's initializer failed")
+            return super().submit(fn, *args, **kwargs)
+
+    def make() -> Executor:
+        made.append(Breaking(2))
+        return made[-1]
+
+    out = tmp_path / "rows.csv"
+    with pytest.warns(UserWarning, match="renewed its pool"):
+        sweep(SCENARIO, scale=DAMPING, executor=make, workers=2, chunk_size=4, out=out)
+    assert len(made) == 2
+    assert out.read_bytes() == undisturbed
+    with pytest.raises(ParameterError, match=r"^executor: must be a concurrent\.futures\.Executor or a function"):
+        sweep(SCENARIO, scale=DAMPING, executor=42, out=tmp_path / "none.csv")  # type: ignore[arg-type]
+    with pytest.raises(ParameterError, match=r"^executor: the function must return"):
+        sweep(SCENARIO, scale=DAMPING, executor=lambda: 42, out=tmp_path / "none.csv")  # type: ignore[arg-type]
+    assert not (tmp_path / "none.csv").exists()
