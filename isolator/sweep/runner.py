@@ -128,8 +128,8 @@ class _Flight:
             if self.renew is not None:
                 _stop(self.pool)
             raise
-        if self.renew is not None:
-            self.pool.shutdown()
+        if self.renew is not None:  # stopped, not shut down: a worker killed while it waited for work holds the
+            _stop(self.pool)        # queue's lock, and the pool, not yet aware, would wait for the others for ever
 
     def submit(self, chunk: Chunk, attempt: int, alone: bool = False) -> None:
         """Hand a chunk to the executor; one it refuses waits for the renewed pool (or ends the sweep)."""

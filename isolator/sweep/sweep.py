@@ -138,8 +138,9 @@ def sweep(
         Columns in design order: one per swept name as given (a scale column holds the factor),
         ``settling_time_max`` [s], ``settling:<signal>`` [s], ``peak:<signal>`` [m or rad], ``status``
         ("ok", "tipped": no stable rest or turned past 0.2 rad, "diverged", "refused": it would need far too
-        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "unsettled": a
-        step of the ``[sequence]`` did not settle, named in ``reason``, "failed": its chunk failed twice),
+        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "unsettled": no
+        settling time within the run, the signals named in ``reason``, or a step of the ``[sequence]`` that did not
+        settle, "failed": its chunk failed twice),
         ``reason``, ``design``, ``band:<signal>`` (the six half-widths [m or rad] of the band the design's
         settling time is measured in, as ``isolator simulate --band`` takes them), then the columns of the
         scenario's kind, then the transmissibility and mode columns.
