@@ -168,7 +168,7 @@ def scheduler_client(args: argparse.Namespace) -> Iterator[Any]:
     from isolator.sweep.cluster import connect, import_distributed, tls_security
 
     import_distributed("--scheduler")  # Dask sets its loggers' levels as it is imported: silenced after
-    quiet = _silence("distributed")
+    quiet = [*_silence("distributed"), *_silence("tornado")]  # tornado: the event loop Dask's client runs on
     try:
         security = tls_security(files["ca"], files["cert"], files["key"], CLI_NAMES) if given else None
         with warnings.catch_warnings(record=True) as caught:

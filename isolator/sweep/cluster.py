@@ -182,6 +182,9 @@ def _failure(address: str, exc: Exception, timeout: float, names: Mapping[str, s
             or "certificate unknown" in text.lower():
         return (f"{names['cert']}: the scheduler {address} rejected this certificate (not signed by a CA it "
                 "trusts)")
+    if "SSLEOFError" in text or "EOF occurred in violation of protocol" in text:  # the alert lost in the race
+        return (f"{names['cert']}: the scheduler {address} ended the TLS handshake: it rejects this certificate "
+                "(not signed by a CA it trusts), or does not speak TLS")
     if "certificate does not match" in text or "CERTIFICATE_VERIFY_FAILED" in text:
         return (f"{names['ca']}: the certificate of the scheduler {address} is not signed by this CA (or the "
                 "scheduler is another one)")

@@ -109,7 +109,7 @@ def test_a_killed_scheduler_is_one_error_naming_resume_and_the_sweep_resumes(sch
         _, err = sweeping.communicate(timeout=DEADLINE)
     finally:
         sweeping.kill()
-    lines = err.splitlines()
+    lines = [line for line in err.splitlines() if not line.startswith("isolator sweep: ")]  # progress, if slow
     assert sweeping.returncode == 2, err
     assert len(lines) == 1, err
     assert lines[0].startswith("isolator: error: the executor"), err
