@@ -177,13 +177,19 @@ def test_certificates_need_a_tls_scheduler(certs, tmp_path, capsys):
     assert not out.exists()
 
 
-def test_python_names_its_arguments(tls_cluster, certs):
+def test_python_names_its_arguments(tls_cluster, certs, tmp_path):
     with pytest.raises(ParameterError, match=r"^security: the scheduler tls://"):
         sweep("paper-table-3-2", scale=GRID, scheduler=tls_cluster)
     with pytest.raises(ParameterError, match=r"^security \(tls_ca_file\): no such file"):
         tls_security(certs / "nowhere.pem", certs / "cluster.pem", certs / "cluster-key.pem")
     with pytest.raises(ParameterError, match=r"^security: must be a distributed.Security"):
         sweep("paper-table-3-2", scale=GRID, scheduler=tls_cluster, security="certs.pem")
+    from isolator import load_scenario
+    from studies.robustness import run_robustness_study
+
+    with pytest.raises(ParameterError, match=r"^security: the scheduler tls://"):
+        run_robustness_study(tmp_path / "study", load_scenario("paper-table-3-2"), samples=2, scheduler=tls_cluster)
+    assert not (tmp_path / "study").exists()
 
 
 def test_the_robustness_study_takes_the_same_options(certs, tmp_path, capsys):
@@ -232,3 +238,13 @@ def test_a_plain_scheduler_beyond_loopback_runs_with_one_warning(local_rows, tmp
                              "unencrypted and unauthenticated")
     assert "--tls-ca-file" in err[0]
     assert out.read_bytes() == local_rows
+
+
+def test_the_robustness_study_runs_on_the_tls_cluster(tls_cluster, certs, tmp_path, capsys):
+    study = ["study", "robustness", "paper-table-3-2", "--quick", "--samples", "4", "--tolerance",
+             "isolators[*].stiffness=+-10%"]
+    assert main([*study, "--workers", "1", "--out", str(tmp_path / "local")]) == 0
+    status, _, err = run([*study, "--scheduler", tls_cluster, *tls_options(certs), "--out", str(tmp_path / "tls")],
+                         capsys)
+    assert status == 0, err
+    assert (tmp_path / "tls" / "samples.csv").read_bytes() == (tmp_path / "local" / "samples.csv").read_bytes()
