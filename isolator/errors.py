@@ -6,12 +6,15 @@ controller designed for another plant) is a :class:`ParameterError` naming the
 argument; only a scenario whose own content makes the request impossible (no
 ``[[actuators]]`` to control with, moves that never stop, an undamped table) is
 a :class:`ScenarioError` naming the scenario key; an optimiser or synthesis
-that finds no answer is an :class:`OptimisationError`.
+that finds no answer is an :class:`OptimisationError`; an executor that can no
+longer run a sweep's chunks (its cluster gone) is an :class:`ExecutorError`
+naming ``--resume``.
 """
 
 from __future__ import annotations
 
 __all__ = [
+    "ExecutorError",
     "IsolatorError",
     "OptimisationError",
     "ParameterError",
@@ -63,3 +66,8 @@ class UnidentifiableError(IsolatorError):
     def __init__(self, message: str, groups: list[list[str]] | None = None) -> None:
         super().__init__(message)
         self.groups = groups or []
+
+
+class ExecutorError(IsolatorError):
+    """The executor running a sweep's chunks can no longer run them (a Dask scheduler that is gone, a broken
+    pool the sweep cannot renew); the rows written are kept and the message names ``--resume``."""

@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from isolator.cli.helpers import check_run_memory, output_folder, use_agg
+from isolator.cli.helpers import check_run_memory, output_folder, scheduler_arguments, scheduler_client, use_agg
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -66,8 +66,10 @@ def register(sub: Any) -> None:
                             "stiffness +-10%%, damping +-20%%, isolator positions +-2 mm)")
     robustness.add_argument("--samples", type=int, default=200, metavar="N", help="machines drawn (default 200)")
     robustness.add_argument("--seed", type=int, default=0, help="of the Latin-hypercube sampling (default 0)")
-    robustness.add_argument("--workers", type=int, default=None, metavar="N",
-                            help="processes of the sweeps (default: the machine's cores)")
+    where = robustness.add_mutually_exclusive_group()
+    where.add_argument("--workers", type=int, default=None, metavar="N",
+                       help="processes of the sweeps (default: the machine's cores)")
+    scheduler_arguments(robustness, where)
     robustness.set_defaults(handler=_robustness)
 
     calibration = _study(studies, "calibration", "what calibration buys: profiles optimised on the datasheet and on "
@@ -207,8 +209,10 @@ def _robustness(args: argparse.Namespace) -> int:
     tolerances = parse_tolerances(args.tolerance)
     samples = min(args.samples, 12) if args.quick else args.samples
     settings = ProfileSettings(objective="settling", variants=(ModelVariant(),)) if args.quick else None
-    study = run_robustness_study(args.out, _scenario(args, None), tolerances, samples, args.seed, args.workers,
-                                 optimiser=settings)
+    with scheduler_client(args) as client:  # before any work or file
+        scenario = _scenario(args, None)
+        study = run_robustness_study(args.out, scenario, tolerances, samples, args.seed, args.workers,
+                                     optimiser=settings, executor=None if client is None else client.get_executor())
     for name, m in study.methods.items():
         print(f"{name:>10}: settling P50 {m.percentile(50):.3g} s, P95 {m.percentile(95):.3g} s, "
               f"worst {m.worst:.3g} s")

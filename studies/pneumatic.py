@@ -356,7 +356,7 @@ def _run_designs(scenario: Scenario, duration: float, designs: list[tuple[Transi
     valves = any(g.valve is not None for g in scenario.leveling)
     windows = bool(scenario.windows)
     for r, (into, ij, _) in enumerate(designs):
-        if rows["status"][r] != "ok":
+        if rows["status"][r] not in ("ok", "unsettled"):  # unsettled: the run's figures are there
             into.record_failure(ij, duration, str(rows["reason"][r]))
             continue
         level = _known(rows["leveling_time"][r])
@@ -365,7 +365,8 @@ def _run_designs(scenario: Scenario, duration: float, designs: list[tuple[Transi
                     tuple(float(rows[f"band:{s}"][r]) for s in SIGNALS),
                     _known(rows["window_settling_time_max"][r]) if windows else None,
                     _known(rows["moves_per_hour"][r]) if windows else None)
-    say(f"  runs: {len(designs)} designs, {int(np.sum(rows['status'] != 'ok'))} without a run's figures")
+    say(f"  runs: {len(designs)} designs, {int(np.sum(~np.isin(rows['status'], ('ok', 'unsettled'))))} without a "
+        "run's figures")
 
 
 def _known(value: float) -> float | None:

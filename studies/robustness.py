@@ -22,9 +22,12 @@ band). The study writes
 
 from __future__ import annotations
 
+import contextlib
 import csv
 from collections.abc import Sequence
+from concurrent.futures import Executor
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,6 +35,7 @@ from controllers.profiles import ProfileSettings, command_time, evaluate_move, o
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator
 from isolator.scenario.arguments import check_public
 from isolator.sweep import sweep
+from isolator.sweep.cluster import connect
 
 from .reporting import output_folder, progress_printer, write_json
 from .robustness_report import plot_cdf, plot_sensitivity, write_robustness_report
@@ -39,6 +43,7 @@ from .robustness_results import MethodSpread, RobustnessStudy
 from .tolerances import (
     DEFAULT_TOLERANCES,
     Tolerance,
+    Varied,
     draw_samples,
     parse_tolerance,
     sweep_columns,
@@ -60,6 +65,9 @@ def run_robustness_study(
     workers: int | None = None,
     progress: bool = True,
     optimiser: ProfileSettings | None = None,
+    executor: Executor | None = None,
+    scheduler: str | None = None,
+    security: Any = None,
 ) -> RobustnessStudy:
     """Run the Monte Carlo study; write figures, ``samples.csv`` and ``report.md`` to ``folder``.
 
@@ -80,21 +88,47 @@ def run_robustness_study(
         Progress lines and bars.
     optimiser : ProfileSettings, optional
         Of the optimised profile (default: the settling-time objective on the nominal model).
+    executor : concurrent.futures.Executor, optional
+        Where the sweeps' chunks run (:func:`isolator.sweep.sweep`; default a local process pool).
+    scheduler : str, optional
+        Instead, a Dask scheduler's address: ``tls://HOST:PORT`` with ``security``, or ``tcp://HOST:PORT``
+        (:func:`isolator.sweep.cluster.connect`, connected once before any work).
+    security : distributed.Security, optional
+        The TLS certificates of a ``tls://`` scheduler (:func:`isolator.sweep.cluster.tls_security`).
 
     Raises
     ------
     ParameterError
-        A tolerance that is malformed, names an unknown parameter or one that cannot vary.
+        A tolerance that is malformed, names an unknown parameter or one that cannot vary; a scheduler that
+        cannot be reached or refuses the certificates (named).
+    ExecutorError
+        The cluster was lost during a sweep.
     """
+    if scheduler is not None and executor is not None:
+        raise ParameterError("scheduler, executor: choose one (the scheduler's cluster runs the sweeps)")
+    if security is not None and scheduler is None:
+        raise ParameterError("security: the certificates of a tls:// scheduler: give scheduler= too")
     if scenario.sequence is not None:
         raise ScenarioError("sequence: the robustness study varies a single move (the carriages' profiles); "
                             "this scenario has a [sequence]: sweep its parameters with isolator sweep instead")
-    say = progress_printer(progress)
     given = DEFAULT_TOLERANCES if tolerances is None else tolerances
     parsed = [t if isinstance(t, Tolerance) else parse_tolerance(t) for t in given]
     sim = Simulator(scenario)
     varied = varied_parameters(parsed, sim.layout, sim.parameters, skip_missing=tolerances is None)
     values = draw_samples(varied, samples, seed)
+    with contextlib.ExitStack() as cluster:
+        if scheduler is not None:  # before any work or file
+            client = connect(scheduler, security)
+            cluster.callback(client.close)
+            executor = client.get_executor()
+        return _study(folder, scenario, varied, values, samples, workers, progress, optimiser, executor)
+
+
+def _study(folder: str | Path, scenario: Scenario, varied: list[Varied], values: np.ndarray, samples: int,
+           workers: int | None, progress: bool, optimiser: ProfileSettings | None,
+           executor: Executor | None) -> RobustnessStudy:
+    """The study of :func:`run_robustness_study`, its machines drawn."""
+    say = progress_printer(progress)
     out = output_folder(folder)
     command = command_time(scenario)
     paper = evaluate_move(scenario, "paper", command)
@@ -109,7 +143,7 @@ def run_robustness_study(
         say(f"{name}: {samples} machines ...")
         nominal = evaluate_move(sc, name, command, band=band)
         result = sweep(sc, set=absolute or None, scale=relative or None, zip=True, band=band, workers=workers,
-                       progress=progress)
+                       progress=progress, executor=executor)
         # air springs: the settling about the leveling table, as evaluate_move measures the nominal machine
         column = "dynamic_settling_time_max" if sc.is_pneumatic else "settling_time_max"
         methods[name] = MethodSpread(name, nominal.settling_time_max, np.asarray(result[column], dtype=float),

@@ -144,8 +144,10 @@ def run_tradeoff_study(
             window[where], per_hour[where] = rows["window_settling_time_max"], rows["moves_per_hour"]
         if sequence:
             per_hour[where] = rows["throughput_per_hour"]
-        status[where] = np.where((rows["status"] == "ok") & np.isnan(rows[time]), "no settling time", rows["status"])
-        failures = {(int(i), int(j)): str(why) for i, j, st, why in zip(*where, rows["status"], rows["reason"],
+        # a single move's "unsettled" is judged here by the study's own column (pneumatic: the dynamic settling)
+        swept = rows["status"] if sequence else np.where(rows["status"] == "unsettled", "ok", rows["status"])
+        status[where] = np.where((swept == "ok") & np.isnan(rows[time]), "no settling time", swept)
+        failures = {(int(i), int(j)): str(why) for i, j, st, why in zip(*where, swept, rows["reason"],
                                                                        strict=True) if st != "ok"}
     study = TradeoffStudy(scenario, k, c, reference_hz, settling, trans, peak, peak_hz, stable, duration, failures, out,
                           band, widths, window, per_hour, status, sequence)

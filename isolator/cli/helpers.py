@@ -4,12 +4,16 @@ before any work, memory estimates, reports, figures."""
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
+import logging
 import math
 import os
 import re
+import sys
 import unicodedata
-from collections.abc import Callable, Sequence
+import warnings
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -21,6 +25,7 @@ if TYPE_CHECKING:
     pass
 
 __all__ = [
+    "CLI_NAMES",
     "Handler",
     "available_memory",
     "check_memory",
@@ -33,6 +38,8 @@ __all__ = [
     "report",
     "save_figure",
     "scenario_argument",
+    "scheduler_arguments",
+    "scheduler_client",
     "use_agg",
 ]
 
@@ -57,6 +64,11 @@ def _quoted(path: Path) -> str:
     """A path as an error message quotes it (long ones shortened)."""
     text = str(path)
     return text if len(text) <= QUOTED else f"{text[: QUOTED - 20]}...{text[-17:]}"
+
+
+#: how the messages of :func:`isolator.sweep.cluster.connect` name the command's options
+CLI_NAMES = {"scheduler": "--scheduler", "ca": "--tls-ca-file", "cert": "--tls-cert", "key": "--tls-key",
+             "tls": "--tls-ca-file, --tls-cert, --tls-key"}
 
 
 def scenario_argument(parser: argparse.ArgumentParser, help_text: str | None = None) -> None:
@@ -150,3 +162,63 @@ def report(
         if path is not None:
             print(f"{label}: {path}")
     return 0
+
+
+def scheduler_arguments(parser: argparse.ArgumentParser, where: Any = None) -> None:
+    """``--scheduler`` (into ``where``, e.g. a group exclusive with ``--workers``) and the TLS options, named as
+    Dask's own command line names them."""
+    (where or parser).add_argument(
+        "--scheduler", metavar="tls://HOST:PORT",
+        help="run on a Dask cluster through its scheduler: tls://HOST:PORT with --tls-ca-file, --tls-cert and "
+        "--tls-key (or Dask's TLS configuration), or tcp://HOST:PORT (unencrypted: on this machine only)")
+    tls = parser.add_argument_group("TLS to the Dask scheduler (as 'dask scheduler --protocol tls' takes them)")
+    tls.add_argument("--tls-ca-file", type=Path, metavar="CA.pem",
+                     help="the CA certificate that signed the scheduler's and this client's certificates")
+    tls.add_argument("--tls-cert", type=Path, metavar="CERT.pem", help="this client's certificate")
+    tls.add_argument("--tls-key", type=Path, metavar="KEY.pem", help="this client's private key (unencrypted)")
+
+
+@contextlib.contextmanager
+def scheduler_client(args: argparse.Namespace) -> Iterator[Any]:
+    """The Dask client of ``--scheduler`` (None without one), every problem one line naming the option, closed
+    at the end. Its warnings (a plain tcp:// scheduler beyond this machine) are printed at once, and Dask's own
+    log lines are silenced while it runs: the command reports what goes wrong in one line."""
+    files = {"ca": args.tls_ca_file, "cert": args.tls_cert, "key": args.tls_key}
+    given = [k for k, v in files.items() if v is not None]
+    if given and args.scheduler is None:
+        raise ParameterError(f"{CLI_NAMES[given[0]]}: only with --scheduler tls://HOST:PORT")
+    if given and len(given) < 3:
+        missing = ", ".join(CLI_NAMES[k] for k in files if files[k] is None)
+        raise ParameterError(f"{missing}: TLS needs all three of --tls-ca-file, --tls-cert and --tls-key")
+    if args.scheduler is None:
+        yield None
+        return
+    from isolator.sweep.cluster import connect, import_distributed, tls_security
+
+    import_distributed("--scheduler")  # Dask sets its loggers' levels as it is imported: silenced after
+    quiet = [*_silence("distributed"), *_silence("tornado")]  # tornado: the event loop Dask's client runs on
+    try:
+        security = tls_security(files["ca"], files["cert"], files["key"], CLI_NAMES) if given else None
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            client = connect(args.scheduler, security, names=CLI_NAMES)
+        for w in caught:
+            print(f"isolator: warning: {w.message}", file=sys.stderr, flush=True)
+        try:
+            yield client
+        finally:
+            with contextlib.suppress(Exception):
+                client.close(timeout=2)
+    finally:
+        for logger, level in quiet:
+            logger.setLevel(level)
+
+
+def _silence(prefix: str) -> list[tuple[logging.Logger, int]]:
+    """Raise the loggers under ``prefix`` above CRITICAL; their levels before, to restore."""
+    names = [prefix, *[n for n in logging.root.manager.loggerDict if n.startswith(prefix + ".")]]
+    loggers = [logging.getLogger(n) for n in names]
+    before = [(logger, logger.level) for logger in loggers]
+    for logger in loggers:
+        logger.setLevel(logging.CRITICAL + 1)
+    return before

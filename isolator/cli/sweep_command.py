@@ -11,16 +11,22 @@ from typing import Any
 
 import numpy as np
 
-from isolator.cli.helpers import count, figure_path, output_path, save_figure, scenario_argument, use_agg
+from isolator.cli.helpers import (
+    count,
+    figure_path,
+    output_path,
+    save_figure,
+    scenario_argument,
+    scheduler_arguments,
+    scheduler_client,
+    use_agg,
+)
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.sweep import METHODS, sweep
 from isolator.sweep.output import SUFFIXES, staging_path
 
-__all__ = ["SCHEDULER_TIMEOUT", "parse_values", "register"]
-
-#: how long [s] to try reaching a Dask scheduler
-SCHEDULER_TIMEOUT = 5.0
+__all__ = ["parse_values", "register"]
 
 
 class _Swept(argparse.Action):
@@ -39,7 +45,8 @@ def register(sub: Any) -> None:
         description="Run a scenario for many designs of any named parameters (Simulator.layout.names; [*] for "
         "every element, a vector's name for all its components) and write one row per design: the swept "
         "values, settling_time_max, settling:<signal>, peak:<signal>, status (ok, tipped, diverged, refused, "
-        "invalid, unsettled: a step of the [sequence] did not settle, failed: its chunk failed twice), reason, "
+        "invalid, unsettled: no settling time within the run, or a step of the [sequence] did not settle, failed: its "
+        "chunk failed twice), reason, "
         "design, band:<signal> (the half-widths of the settling band), then the columns of the scenario's kind "
         "(pneumatic: dynamic_settling_time_max, leveling_time, supply_exhausted; [[windows]]: "
         "window_settling_time_max, moves_per_hour; a [sequence], instead of these: total_time, "
@@ -59,7 +66,7 @@ def register(sub: Any) -> None:
     p.add_argument("--seed", type=count, default=0, help="seed of the sampling (default: 0)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=count, metavar="N", help="local worker processes (default: the cores)")
-    where.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="run on a Dask cluster through its scheduler")
+    scheduler_arguments(p, where)
     p.add_argument("--frequency", type=float, action="append", default=[], metavar="HZ",
                    help="add the x, y, z transmissibility at this frequency per design; repeat for more")
     p.add_argument("--modes", action="store_true", help="add the mode frequencies per design")
@@ -133,36 +140,18 @@ def _swept(args: argparse.Namespace) -> dict[str, dict[str, list[float]]]:
     return out
 
 
-def _client(address: str) -> Any:
-    """A Dask client of the scheduler at ``address``; one clear line when it cannot be reached."""
-    try:
-        from distributed import Client
-    except ImportError:
-        raise ParameterError("--scheduler: needs Dask's distributed: pip install 'isolator[dask]'") from None
-    try:
-        client = Client(address, timeout=SCHEDULER_TIMEOUT)
-    except (OSError, TimeoutError, ValueError) as exc:
-        raise ParameterError(f"--scheduler: cannot reach a Dask scheduler at {address} within "
-                             f"{SCHEDULER_TIMEOUT:g} s ({type(exc).__name__})") from None
-    return client
-
-
 def _sweep(args: argparse.Namespace) -> int:
     swept = _swept(args)
     out = output_path(args.out, "--out", SUFFIXES)
     figure = figure_path(args.plot, "--plot")
     if (out.exists() or staging_path(out).exists()) and not (args.resume or args.force):
         raise ParameterError(f"--out: '{out}' exists; --resume continues it, --force overwrites it")
-    client = None if args.scheduler is None else _client(args.scheduler)
-    executor: Executor | None = None if client is None else client.get_executor()
-    try:
+    with scheduler_client(args) as client:
+        executor: Executor | None = None if client is None else client.get_executor()
         result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip,
                        samples=args.samples, method=args.method, seed=args.seed, model=args.model, executor=executor,
                        workers=args.workers, frequencies=args.frequency, modes=args.modes, out=out,
                        resume=args.resume, force=args.force, progress=True, chunk_size=args.chunk_size)
-    finally:
-        if client is not None:
-            client.close()
     print(result.summary())
     if figure is not None:
         from isolator.sweep.figure import plot_sweep

@@ -6,12 +6,15 @@ The designs (:mod:`~isolator.sweep.designs`, names in :mod:`~isolator.sweep.name
 (:mod:`~isolator.sweep.output`).
 
 Executors: the default is a local process pool (``workers`` processes, forked where the platform can, so that
-they inherit the simulator built here; ``workers=1`` runs in this process). Any
-:class:`concurrent.futures.Executor` works, as the tasks are plain picklable functions and dataclasses: a
-Dask cluster's ``Client(address).get_executor()`` (``pip install "isolator[dask]"``; ``isolator sweep
---scheduler tcp://HOST:PORT``), or mpi4py's ``MPIPoolExecutor`` (``mpiexec -n 9 python -m mpi4py.futures
-script.py`` with ``sweep(..., executor=MPIPoolExecutor(), workers=8)``). Each worker builds the scenario's
-simulator on its first chunk (the compiled model comes from its own cache, ``ISOLATOR_CACHE``) and reuses it.
+they inherit the simulator built here; ``workers=1`` runs in this process), renewed when a worker dies, its
+workers ending with the sweep (:mod:`~isolator.sweep.pool`). Any :class:`concurrent.futures.Executor` works, as
+the tasks are plain picklable functions and dataclasses: a Dask cluster (``pip install "isolator[dask]"``;
+``sweep(..., scheduler="tls://HOST:PORT", security=tls_security(ca, cert, key))``, ``isolator sweep --scheduler
+tls://HOST:PORT --tls-ca-file CA --tls-cert CERT --tls-key KEY``: :mod:`~isolator.sweep.cluster`), or mpi4py's
+``MPIPoolExecutor`` (``mpiexec -n 9 python -m mpi4py.futures script.py`` with ``sweep(...,
+executor=MPIPoolExecutor, workers=8)``: the class, so that a broken one is made again). Each worker builds the
+scenario's simulator on its first chunk (the compiled model comes from its own cache, ``ISOLATOR_CACHE``) and
+reuses it. An executor lost mid-sweep is an :class:`~isolator.errors.ExecutorError`; ``resume=True`` finishes.
 """
 
 from __future__ import annotations

@@ -51,7 +51,7 @@ def plot_sweep(result: SweepResult, title: str = "", grid: bool | None = None,
     names = list(result.names)
     label = {n: (labels or {}).get(n, n) for n in names}
     bad = ~np.isfinite(y)
-    why = sorted({"not settled within the run" if s == "ok" else str(s) for s in status[bad]})
+    why = sorted({"not settled within the run" if s in ("ok", "unsettled") else str(s) for s in status[bad]})
     heading = title or f"{len(y)} designs, {int(bad.sum())} without a {what} ({', '.join(why) or 'none'})"
     crossed = _crossed(table, names) if grid is None else grid
     if crossed:

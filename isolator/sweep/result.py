@@ -32,6 +32,8 @@ class Tally:
         Run by this call.
     failed : int
         Rows (all of them) whose status is not "ok".
+    statuses : dict of str to int
+        Those rows by status ("unsettled", "tipped", ...).
     best : int or None
         The design with the smallest :attr:`column` among those "ok" (None: none has one).
     best_time : float
@@ -46,6 +48,7 @@ class Tally:
     resumed: int = 0
     runs: int = 0
     failed: int = 0
+    statuses: dict[str, int] = field(default_factory=dict)
     best: int | None = None
     best_time: float = math.inf
     column: str = "settling_time_max"
@@ -66,6 +69,8 @@ class Tally:
         """Count rows: their designs, :attr:`column` [s] (NaN or inf: none) and status."""
         ok = status == "ok"
         self.failed += int(np.sum(~ok))
+        for kind, n in zip(*np.unique(np.asarray(status[~ok], dtype=str), return_counts=True), strict=True):
+            self.statuses[str(kind)] = self.statuses.get(str(kind), 0) + int(n)
         value = np.where(ok & np.isfinite(worst), worst, np.inf)
         if value.size and np.min(value) < self.best_time:
             at = int(np.argmin(value))
@@ -152,12 +157,16 @@ class SweepResult:
     def summary(self) -> str:
         """Runs, failures, wall time, runs/s and the best design, in a few lines."""
         t = self.tally
+        kinds = ", ".join(f"{n} {kind}" for kind, n in sorted(t.statuses.items()))
         lines = [f"designs: {t.designs} ({t.runs} run now" + (f", {t.resumed} from the file" if t.resumed else "")
-                 + f"), not ok: {t.failed}",
+                 + f"), not ok: {t.failed}" + (f" ({kinds})" if kinds else ""),
                  f"wall time: {self.wall_time:.3g} s ({self.runs_per_second:.4g} runs/s)"]
         best = self.best()
+        skipped = f" (of the {t.designs - t.failed} ok; skipped {kinds})" if t.failed else ""
         if best is not None:
-            lines.append("best design: " + ", ".join(f"{k} = {v:.6g}" for k, v in best.items()))
+            lines.append(f"best design{skipped}: " + ", ".join(f"{k} = {v:.6g}" for k, v in best.items()))
+        else:
+            lines.append(f"best design: none (no design is ok with a {t.column}; {kinds or 'no designs'})")
         if self.path is not None:
             lines.append(f"rows: {self.path}")
         return "\n".join(lines)

@@ -1,33 +1,47 @@
 """Chunks out to an executor, results back in design order: a bounded number in flight (memory flat),
 a chunk that fails (its worker died, or it raised) retried once, then its rows recorded "failed".
 
-When a worker of the sweep's own process pool dies, the pool is renewed; which of the chunks in flight
-killed it is unknown, so each of them is run again alone (one at a time), without charging it an attempt.
-A chunk that breaks the pool while it runs alone is the culprit: that counts as its attempt. Once the
-suspects are cleared the chunks are handed out as before."""
+When the sweep's own process pool breaks (a worker killed, out of memory, a crash in compiled code), found
+by a chunk's result or by a submission the broken pool refuses, the pool is renewed and the sweep goes on
+(one warning): which of the chunks in flight killed it is unknown, so each of them is run again alone (one
+at a time), without charging it an attempt; a chunk that breaks the pool while it runs alone is the culprit:
+that counts as its attempt. Once the suspects are cleared the chunks are handed out as before.
+
+An executor the sweep cannot renew (a user's: Dask, MPI, threads) that refuses work (broken, shut down) or
+drops it (a Dask scheduler that is gone cancels every task), or a pool that keeps breaking without finishing
+a chunk, ends the sweep with an :class:`~isolator.errors.ExecutorError`: the rows given to ``done`` are
+kept, and the sweep continues with ``resume``."""
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
-from concurrent.futures.process import BrokenProcessPool
+from concurrent.futures import FIRST_COMPLETED, BrokenExecutor, Executor, Future, wait
 
 import numpy as np
 
+from isolator.errors import ExecutorError
 from isolator.sweep import worker
 from isolator.sweep.metrics import metric_columns
 from isolator.sweep.worker import Chunk, ChunkResult
 
-__all__ = ["ATTEMPTS", "failed_result", "run_chunks"]
+__all__ = ["ATTEMPTS", "BROKEN_POOL_WARNING", "MAX_BREAKS", "POLL", "failed_result", "run_chunks"]
 
 #: tries of a chunk before its rows are recorded "failed"
 ATTEMPTS = 2
+#: breaks of the sweep's pool in a row, without a chunk finished in between, before the sweep gives up
+MAX_BREAKS = 5
+#: how often [s] the runner asks ``alive`` while no chunk finishes
+POLL = 1.0
+#: the warning (one per sweep) when the sweep's pool broke and was renewed
+BROKEN_POOL_WARNING = ("a worker process of the sweep died (killed, out of memory, or a crash): the sweep "
+                       "renewed its pool and ran the chunks in flight again")
 
 
 def failed_result(chunk: Chunk, exc: BaseException) -> ChunkResult:
     """The rows of a chunk that failed every attempt: status "failed", the reason the last error."""
     n = chunk.params.shape[0]
-    died = isinstance(exc, BrokenProcessPool)
+    died = isinstance(exc, BrokenExecutor)
     why = f"the worker died ({type(exc).__name__}: {exc})" if died else f"{type(exc).__name__}: {exc}"
     width = len(chunk.frequencies) * len(worker.TRANSMISSIBILITY_AXES) + chunk.modes
     return ChunkResult(chunk.start, np.full((n, 6), np.nan), np.full((n, 6), np.nan),
@@ -42,6 +56,7 @@ def run_chunks(
     in_flight: int,
     done: Callable[[ChunkResult], None],
     renew: Callable[[], Executor] | None = None,
+    alive: Callable[[], bool] | None = None,
 ) -> None:
     """Run every chunk and give ``done`` each result in the chunks' order.
 
@@ -57,89 +72,153 @@ def run_chunks(
         Called with each chunk's result, in order.
     renew : callable, optional
         A fresh executor when the current one broke (a process pool whose worker died): the chunks that
-        were in flight then run again alone, uncharged (see the module's description); None: a chunk
-        whose executor broke is retried like one that raised.
+        were in flight then run again alone, uncharged (see the module's description); the old one is
+        stopped with its ``stop()`` method if it has one. None: the executor is the caller's; a chunk whose
+        future broke is retried like one that raised, and an executor that refuses or drops work ends the
+        sweep.
+    alive : callable, optional
+        Asked every :data:`POLL` s while no chunk finishes: False (a Dask client that has closed) ends the
+        sweep rather than wait for results that will not come.
+
+    Raises
+    ------
+    ExecutorError
+        The executor can no longer run the chunks (see the module's description).
     """
     if executor is None:
         for chunk in chunks:
             done(_serial(chunk))
         return
-    pending: dict[Future[ChunkResult], tuple[Chunk, int, bool]] = {}  # chunk, attempt, run alone
-    ready: dict[int, ChunkResult] = {}
-    order: list[int] = []
-    suspects: list[tuple[Chunk, int]] = []  # in flight when the pool broke: each to run alone
-    pool = [executor]
+    _Flight(chunks, executor, in_flight, done, renew, alive).run()
 
-    def submit(chunk: Chunk, attempt: int, alone: bool = False) -> None:
-        pending[pool[0].submit(worker.run_chunk, chunk)] = (chunk, attempt, alone)
 
-    def fill() -> None:
-        if suspects:  # one at a time, so that a break is the running chunk's
-            if not pending:
-                submit(*suspects.pop(0), alone=True)
+class _Flight:
+    """The chunks in flight on one executor (renewed when it breaks), and the results waiting for their turn."""
+
+    def __init__(self, chunks: Iterator[Chunk], executor: Executor, in_flight: int,
+                 done: Callable[[ChunkResult], None], renew: Callable[[], Executor] | None,
+                 alive: Callable[[], bool] | None) -> None:
+        self.chunks, self.pool, self.in_flight, self.done = chunks, executor, in_flight, done
+        self.renew, self.alive = renew, alive
+        self.pending: dict[Future[ChunkResult], tuple[Chunk, int, bool]] = {}  # chunk, attempt, run alone
+        self.ready: dict[int, ChunkResult] = {}
+        self.order: list[int] = []
+        self.suspects: list[tuple[Chunk, int]] = []  # in flight when the pool broke: each to run alone
+        self.queue: list[tuple[Chunk, int]] = []  # retries, and chunks a broken pool refused: before new ones
+        self.breaks = 0  # in a row, without a chunk finished
+        self.warned = False
+
+    def run(self) -> None:
+        try:
+            self.fill()
+            while self.pending:
+                finished, _ = wait(list(self.pending), timeout=POLL, return_when=FIRST_COMPLETED)
+                if not finished and self.alive is not None and not self.alive():
+                    raise ExecutorError("the executor stopped answering (its Dask client has closed: the "
+                                        "scheduler is gone)")
+                for future in finished:
+                    if future in self.pending:  # else dropped with its broken pool
+                        self.collect(future, *self.pending.pop(future))
+                while self.order and self.order[0] in self.ready:
+                    self.done(self.ready.pop(self.order.pop(0)))
+                self.fill()
+        except BaseException:  # an interrupt, a lost executor: no worker left running; the rows given are kept
+            for future in self.pending:
+                future.cancel()
+            if self.renew is not None:
+                _stop(self.pool)
+            raise
+        if self.renew is not None:  # stopped, not shut down: a worker killed while it waited for work holds the
+            _stop(self.pool)        # queue's lock, and the pool, not yet aware, would wait for the others for ever
+
+    def submit(self, chunk: Chunk, attempt: int, alone: bool = False) -> None:
+        """Hand a chunk to the executor; one it refuses waits for the renewed pool (or ends the sweep)."""
+        try:
+            future = self.pool.submit(worker.run_chunk, chunk)
+        except (BrokenExecutor, RuntimeError) as exc:  # broken, or shut down
+            if self.renew is None or not isinstance(exc, BrokenExecutor):
+                raise ExecutorError(f"the executor refuses the sweep's chunks ({type(exc).__name__}: "
+                                    f"{exc})") from None
+            self.broke(exc)
+            (self.suspects if alone else self.queue).insert(0, (chunk, attempt))  # it never ran: uncharged
             return
-        while len(pending) + len(ready) < in_flight:
-            chunk = next(chunks, None)
-            if chunk is None:
-                return
-            order.append(chunk.start)
-            submit(chunk, 1)
+        self.pending[future] = (chunk, attempt, alone)
 
-    def broke(chunk: Chunk, attempt: int) -> None:
-        """The pool broke while several chunks ran: a fresh pool, and each of them a suspect."""
-        suspects.append((chunk, attempt))
-        for future, (other, tries, _) in pending.items():
-            if future.done() and not future.cancelled() and future.exception() is None:
-                ready[other.start] = future.result()  # it finished before the break
+    def fill(self) -> None:
+        """Submit what may run now: a suspect alone, else the queue, else new chunks up to ``in_flight``."""
+        while True:
+            if self.suspects:  # one at a time, so that a break is the running chunk's
+                if self.pending:
+                    return
+                self.submit(*self.suspects.pop(0), alone=True)
+            elif self.queue:
+                self.submit(*self.queue.pop(0))
+            elif len(self.pending) + len(self.ready) < self.in_flight:
+                chunk = next(self.chunks, None)
+                if chunk is None:
+                    return
+                self.order.append(chunk.start)
+                self.submit(chunk, 1)
             else:
-                suspects.append((other, tries))
-        pending.clear()
-        suspects.sort(key=lambda s: s[0].start)
+                return
 
-    try:
-        fill()
-        while pending:
-            finished, _ = wait(list(pending), return_when=FIRST_COMPLETED)
-            for future in finished:
-                if future not in pending:  # dropped with its broken pool
-                    continue
-                chunk, attempt, alone = pending.pop(future)
-                try:
-                    ready[chunk.start] = future.result()
-                    continue
-                except Exception as exc:  # a chunk's failure is recorded, never the sweep's
-                    error: BaseException = exc
-                if isinstance(error, BrokenProcessPool) and renew is not None:
-                    pool[0].shutdown(wait=False, cancel_futures=True)
-                    pool[0] = renew()
-                    if not alone:  # not known to be this chunk's doing: no attempt charged
-                        broke(chunk, attempt)
-                        continue
-                if attempt >= ATTEMPTS:
-                    ready[chunk.start] = failed_result(chunk, error)
-                elif alone:
-                    suspects.insert(0, (chunk, attempt + 1))
-                else:
-                    submit(chunk, attempt + 1)
-            while order and order[0] in ready:
-                done(ready.pop(order.pop(0)))
-            fill()
-    except BaseException:  # an interrupt: no worker left running; the rows given to ``done`` are kept
-        for future in pending:
-            future.cancel()
-        if renew is not None:
-            _stop(pool[0])
-        raise
-    if renew is not None:
-        pool[0].shutdown()
+    def collect(self, future: Future[ChunkResult], chunk: Chunk, attempt: int, alone: bool) -> None:
+        """A finished future: its result kept, or its chunk retried, suspected or recorded "failed"."""
+        if future.cancelled():  # not by the sweep: the executor dropped it
+            if self.renew is None:
+                raise ExecutorError("the executor cancelled the sweep's chunks (a Dask scheduler that is gone "
+                                    "cancels every task)")
+            error: BaseException = BrokenExecutor("the pool cancelled a chunk")
+        else:
+            try:
+                self.ready[chunk.start] = future.result()
+                self.breaks = 0
+                return
+            except Exception as exc:  # a chunk's failure is recorded, never the sweep's
+                error = exc
+        if isinstance(error, BrokenExecutor) and self.renew is not None:
+            self.broke(error)
+            if not alone:  # not known to be this chunk's doing: no attempt charged
+                self.suspects.append((chunk, attempt))
+                self.suspects.sort(key=lambda s: s[0].start)
+                return
+        if attempt >= ATTEMPTS:
+            self.ready[chunk.start] = failed_result(chunk, error)
+            self.breaks = 0
+        elif alone:
+            self.suspects.insert(0, (chunk, attempt + 1))
+        else:
+            self.queue.append((chunk, attempt + 1))
+
+    def broke(self, error: BaseException) -> None:
+        """The pool broke: a fresh pool, and each chunk that was in flight a suspect (finished ones kept)."""
+        assert self.renew is not None
+        self.breaks += 1
+        if self.breaks > MAX_BREAKS:
+            raise ExecutorError(f"the sweep's worker processes died {MAX_BREAKS} times in a row without "
+                                f"finishing a chunk ({type(error).__name__}: {error})")
+        if not self.warned:
+            warnings.warn(BROKEN_POOL_WARNING, stacklevel=2)
+            self.warned = True
+        for future, (other, tries, _) in self.pending.items():
+            if future.done() and not future.cancelled() and future.exception() is None:
+                self.ready[other.start] = future.result()  # it finished before the break
+            else:
+                self.suspects.append((other, tries))
+        self.pending.clear()
+        self.suspects.sort(key=lambda s: s[0].start)
+        _stop(self.pool)
+        self.pool = self.renew()
 
 
 def _stop(pool: Executor) -> None:
-    """Stop a process pool the sweep made, at once: its workers terminated, its queued chunks dropped."""
-    processes = getattr(pool, "_processes", None) or {}  # no public way to stop them before Python 3.14
-    for process in list(processes.values()):
-        process.terminate()
-    pool.shutdown(wait=True, cancel_futures=True)  # the pool sees its workers gone and ends
+    """Stop a pool the sweep made, at once (:meth:`~isolator.sweep.pool.SweepPool.stop`; another executor
+    is shut down, its queued chunks dropped)."""
+    stop = getattr(pool, "stop", None)
+    if callable(stop):
+        stop()
+    else:
+        pool.shutdown(wait=False, cancel_futures=True)
 
 
 def _serial(chunk: Chunk) -> ChunkResult:

@@ -2,28 +2,30 @@
 
 from __future__ import annotations
 
+import contextlib
 import math
-import multiprocessing
 import os
-import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import Executor, ProcessPoolExecutor
+from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 
-from isolator.errors import ParameterError
+from isolator.errors import ExecutorError, ParameterError
 from isolator.model.parameters import ParameterLayout
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import load_scenario
 from isolator.simulation.settling import Band
 from isolator.sweep import output
+from isolator.sweep.cluster import connect
 from isolator.sweep.designs import Designs, Values, build_designs
 from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
 from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
+from isolator.sweep.pool import SweepPool
+from isolator.sweep.progress import progress_bar
 from isolator.sweep.result import SweepResult, Tally
 from isolator.sweep.runner import run_chunks
 from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key, simulator_for
@@ -55,7 +57,7 @@ def sweep(
     method: Literal["sobol", "lhs"] = "sobol",
     seed: int = 0,
     model: str = "exact",
-    executor: Executor | None = None,
+    executor: Executor | Callable[[], Executor] | None = None,
     workers: int | None = None,
     frequencies: Sequence[float] = (),
     modes: bool = False,
@@ -65,6 +67,8 @@ def sweep(
     progress: bool = False,
     chunk_size: int | None = None,
     band: Band | None = None,
+    scheduler: str | None = None,
+    security: Any = None,
 ) -> SweepResult:
     """Run a scenario for many designs; per design the settling times, peaks and status.
 
@@ -85,9 +89,12 @@ def sweep(
         Draw this many designs over the ranges, by ``method``: "sobol" (scrambled) or "lhs" (Latin
         hypercube), seeded by ``seed`` (reproducible).
     model : {"exact", "paper"}
-    executor : concurrent.futures.Executor, optional
+    executor : concurrent.futures.Executor or callable, optional
         Where the chunks run: any executor (a Dask ``Client.get_executor()``, mpi4py's
-        ``MPIPoolExecutor``); default a local process pool of ``workers`` processes.
+        ``MPIPoolExecutor``), or a function of no arguments making one (``MPIPoolExecutor``), which the sweep
+        calls again for a fresh executor when one breaks (``BrokenExecutor``), as it renews its own pool; default
+        a local process pool of ``workers`` processes whose workers end with the sweep
+        (:mod:`isolator.sweep.pool`).
     workers : int, optional
         Processes of the default pool (default: the machine's cores; 1: in this process, one chunk after
         another); with ``executor``, how many workers it has (sizes the chunks; default its own count).
@@ -111,11 +118,19 @@ def sweep(
         Overwrite ``out`` and its description (without ``resume`` or ``force`` an existing ``out`` is an
         error).
     progress : bool
-        A progress bar on stderr (only when it is a terminal).
+        Show how far the sweep has got on stderr once it has run 2 s: a bar on a terminal, else a line per
+        tenth of the designs (:mod:`isolator.sweep.progress`).
     chunk_size : int, optional
         Designs per task (default :func:`chunk_size_for`).
     band : Band, optional
         The settling band (default the scenario's ``[settling]`` rule).
+    scheduler : str, optional
+        Run on the Dask cluster of this scheduler (instead of ``executor``): ``tls://HOST:PORT`` with
+        ``security``, or ``tcp://HOST:PORT`` (warned about beyond this machine: anyone who reaches it runs code
+        on its workers); see :func:`isolator.sweep.cluster.connect`.
+    security : distributed.Security, optional
+        The TLS certificates of a ``tls://`` scheduler (:func:`isolator.sweep.cluster.tls_security` makes one
+        from the three files; default Dask's configuration).
 
     Returns
     -------
@@ -123,8 +138,9 @@ def sweep(
         Columns in design order: one per swept name as given (a scale column holds the factor),
         ``settling_time_max`` [s], ``settling:<signal>`` [s], ``peak:<signal>`` [m or rad], ``status``
         ("ok", "tipped": no stable rest or turned past 0.2 rad, "diverged", "refused": it would need far too
-        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "unsettled": a
-        step of the ``[sequence]`` did not settle, named in ``reason``, "failed": its chunk failed twice),
+        many steps or too much memory, "invalid": the design breaks a rule of its parameters, "unsettled": no
+        settling time within the run, the signals named in ``reason``, or a step of the ``[sequence]`` that did not
+        settle, "failed": its chunk failed twice),
         ``reason``, ``design``, ``band:<signal>`` (the six half-widths [m or rad] of the band the design's
         settling time is measured in, as ``isolator simulate --band`` takes them), then the columns of the
         scenario's kind, then the transmissibility and mode columns.
@@ -146,8 +162,16 @@ def sweep(
     ------
     ParameterError
         A bad argument, named; nothing is written then.
+    ExecutorError
+        The executor could no longer run the chunks (a Dask scheduler that is gone): the rows written to
+        ``out`` are kept, ``resume=True`` finishes the sweep. A worker process of the default pool that dies
+        is no error: the pool is renewed (one warning) and every row is kept.
     """
     start_time = time.perf_counter()
+    if scheduler is not None and executor is not None:
+        raise ParameterError("scheduler, executor: choose one (the scheduler's cluster runs the chunks)")
+    if security is not None and scheduler is None:
+        raise ParameterError("security: the certificates of a tls:// scheduler: give scheduler= too")
     scene = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     layout = ParameterLayout.of(scene)
     designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
@@ -182,40 +206,50 @@ def sweep(
             if not done.all():
                 raise ParameterError(f"out: '{path}' is a finished sweep of other designs; --force starts again")
             return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
-    n_workers = _workers(workers, executor)
-    size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
-    swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
-    template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
-    simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
-    if path is not None:
-        output.write_sidecar(path, identity)
-    sink = None if path is None else RowSink(path, columns, append=resume)
-    if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
-        path.unlink()
-    rows: list[list[Any]] | None = [] if sink is None else None
+    with contextlib.ExitStack() as cluster:
+        if scheduler is not None:  # connected once the arguments are known good, before anything is written
+            client = connect(scheduler, security)
+            cluster.callback(_close, client)
+            executor = client.get_executor()
+        n_workers = _workers(workers, executor)
+        size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
+        swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
+        template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
+        simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
+        pool, renew = _executor(executor, n_workers)  # made (a function's executor checked) before any file
+        if pool is not None and renew is not None:  # should the sweep fail before its chunks run (else a no-op)
+            cluster.callback(pool.shutdown, wait=False, cancel_futures=True)
+        if path is not None:
+            output.write_sidecar(path, identity)
+        sink = None if path is None else RowSink(path, columns, append=resume)
+        if path is not None and path.suffix.lower() == ".parquet" and force and path.exists():
+            path.unlink()
+        rows: list[list[Any]] | None = [] if sink is None else None
 
-    def finished(result: ChunkResult) -> None:
-        block = _rows(designs, result)
-        tally.add(result)
-        if sink is not None:
-            sink.write(block)
-        elif rows is not None:
-            rows.extend(block)
-        bar(len(block))
+        def finished(result: ChunkResult) -> None:
+            block = _rows(designs, result)
+            tally.add(result)
+            if sink is not None:
+                sink.write(block)
+            elif rows is not None:
+                rows.extend(block)
+            bar(len(block))
 
-    pool, renew = _executor(executor, n_workers)
-    bar = _bar(progress, designs.count, int(np.sum(done)))
-    complete = False
-    try:
-        run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew)
-        complete = True
-    finally:
-        if pool is not None and renew is not None:
-            pool.shutdown(wait=complete, cancel_futures=True)
-        if sink is not None:
-            sink.close(complete)
-        bar(-1)
-    return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
+        bar = progress_bar(progress, designs.count, int(np.sum(done)))
+        complete = False
+        try:
+            run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew,
+                       _alive(pool))
+            complete = True
+        except ExecutorError as exc:
+            kept = f"the {tally.resumed + tally.runs} rows done are kept in '{path}'" if path is not None else \
+                "the rows are lost (out= keeps them as they arrive)"
+            raise ExecutorError(f"{exc}; {kept}: run the same sweep with --resume (resume=True) to finish it") from None
+        finally:
+            if sink is not None:
+                sink.close(complete)
+            bar(-1)
+        return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
 
 
 def _rows(designs: Designs, result: ChunkResult) -> list[list[Any]]:
@@ -246,22 +280,44 @@ def _chunks(designs: Designs, template: Chunk, done: np.ndarray, size: int) -> I
         lo = hi
 
 
-def _executor(executor: Executor | None, workers: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
-    """The executor and how to make a fresh one (only for the pool made here)."""
-    if executor is not None:
+def _executor(executor: Executor | Callable[[], Executor] | None,
+              workers: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
+    """The executor and how to make a fresh one (the pool made here, or the caller's function making one)."""
+    if isinstance(executor, Executor):
         return executor, None
+    if executor is not None:
+        if not callable(executor):
+            raise ParameterError(f"executor: must be a concurrent.futures.Executor or a function making one, got "
+                                 f"{type(executor).__name__}")
+        made = executor()
+        if not isinstance(made, Executor):
+            raise ParameterError(f"executor: the function must return a concurrent.futures.Executor, got "
+                                 f"{type(made).__name__}")
+        return made, executor
     if workers <= 1:
         return None, None
-    methods = multiprocessing.get_all_start_methods()
-    context = multiprocessing.get_context("fork" if "fork" in methods else None)
 
     def make() -> Executor:
-        return ProcessPoolExecutor(max_workers=workers, mp_context=context)
+        return SweepPool(workers)
 
     return make(), make
 
 
-def _workers(workers: int | None, executor: Executor | None) -> int:
+def _close(client: Any) -> None:
+    """Close a Dask client the sweep opened (quietly: its scheduler may be gone)."""
+    with contextlib.suppress(Exception):
+        client.close(timeout=2)
+
+
+def _alive(executor: Executor | None) -> Callable[[], bool] | None:
+    """Whether a Dask executor's client still talks to its scheduler (None: an executor that cannot tell)."""
+    client = getattr(executor, "_client", None)
+    if client is None or not hasattr(client, "status"):
+        return None
+    return lambda: str(client.status) in ("running", "connecting", "newly-created")
+
+
+def _workers(workers: int | None, executor: Executor | Callable[[], Executor] | None) -> int:
     if workers is not None:
         return _positive(workers, "workers")
     if executor is not None:  # a pool's own count, a Dask cluster's threads, else this machine's cores
@@ -287,14 +343,3 @@ def _frequencies(values: Sequence[float]) -> tuple[float, ...]:
     if bad:
         raise ParameterError(f"frequencies: must be finite and >= 0 [Hz], got {bad[0]:g}")
     return out
-
-
-def _bar(progress: bool, total: int, initial: int) -> Callable[[int], None]:
-    """A tqdm bar on stderr, when asked and stderr is a terminal: ``bar(k)`` adds k runs, ``bar(-1)`` closes."""
-    if not (progress and sys.stderr.isatty()):
-        return lambda k: None
-    from tqdm import tqdm
-
-    tqdm.monitor_interval = 0  # no monitor thread: the pool's workers are forked after the bar starts
-    shown = tqdm(total=total, initial=initial, unit="run", file=sys.stderr, smoothing=0.1)
-    return lambda k: shown.close() if k < 0 else shown.update(k)

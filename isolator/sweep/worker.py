@@ -16,13 +16,14 @@ import numpy as np
 from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes
 from isolator.errors import IsolatorError
-from isolator.scenario.definitions import Scenario
+from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.simulation.batch import run_batch
-from isolator.simulation.settling import Band
+from isolator.simulation.settling import Band, unavailable_reason
 from isolator.simulation.simulator import Simulator
 from isolator.sweep.metrics import Runs, metric_columns, run_each, run_each_sequence, runs_alone
 
-__all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "run_chunk", "scenario_key", "simulator_for"]
+__all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "run_chunk", "scenario_key", "simulator_for",
+           "unsettled_reason"]
 
 #: the same-axis transmissibilities reported at each ``frequencies`` entry (floor motion to table motion)
 TRANSMISSIBILITY_AXES = ("x", "y", "z")
@@ -136,7 +137,9 @@ def keep_freed_memory() -> None:
 def run_chunk(chunk: Chunk) -> ChunkResult:
     """Run a chunk's designs: a batch (tipped and diverged runs recorded), or each design on its own when the
     scenario is pneumatic, has windows or a sequence (:mod:`isolator.sweep.metrics`); the linear extras of each
-    design that stands, and designs whose swept entries break a joint rule recorded "invalid"."""
+    design that stands, designs whose swept entries break a joint rule recorded "invalid", and designs that ran
+    without a settling time (a signal not settled by the run's end, a carriage that never stops) "unsettled",
+    the reason saying which signals and why."""
     sim = simulator_for(chunk)
     n = chunk.params.shape[0]
     status = np.full(n, "ok", dtype=object)
@@ -164,12 +167,27 @@ def run_chunk(chunk: Chunk) -> ChunkResult:
         status[valid] = batch.status
         for i, why in batch.failures.items():
             reason[valid[i]] = why
+    if chunk.scenario.sequence is None:  # a sequence's own "unsettled" names its step
+        for row in np.flatnonzero((status == "ok") & np.any(np.isnan(settling), axis=1)):
+            status[row], reason[row] = "unsettled", unsettled_reason(sim, settling[row])
     width = len(chunk.frequencies) * len(TRANSMISSIBILITY_AXES) + chunk.modes
     extras = np.full((n, width), np.nan)
     if width:
         for row in np.flatnonzero((status != "invalid") & (status != "tipped")):
             extras[row] = _linear(sim.scenario, chunk.params[row], chunk.frequencies, chunk.modes)
     return ChunkResult(chunk.start, settling, peak, status, reason, extras, band, metrics)
+
+
+def unsettled_reason(sim: Simulator, settling: np.ndarray) -> str:
+    """Why a design that ran has no settling time: no stop within the run, or the signals (NaN in
+    ``settling`` [s]) not settled in the band before the run ends."""
+    end = float(sim.scenario.simulation.duration)
+    why = unavailable_reason(end, sim.stop_time)
+    if why:
+        return f"no settling time: {why}"
+    late = ", ".join(s for s, t in zip(SIGNALS, settling, strict=True) if np.isnan(t))
+    return (f"no settling time: {late} not settled in the band by the run's end at {end:g} s "
+            "([simulation] duration)")
 
 
 def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], count: int) -> np.ndarray:

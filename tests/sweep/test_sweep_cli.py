@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from isolator.cli import sweep_command
 from isolator.cli.app import main
 from isolator.cli.sweep_command import parse_values
 from isolator.errors import ParameterError
+from isolator.sweep import cluster
 
 
 def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, list[str]]:
@@ -84,7 +84,7 @@ def test_ranges_are_inclusive_and_log_is_geometric():
      "cannot reach a Dask scheduler at tcp://127.0.0.1:9"),
 ])
 def test_bad_input_is_one_line_and_nothing_written(tmp_path: Path, capsys, monkeypatch, args, named):
-    monkeypatch.setattr(sweep_command, "SCHEDULER_TIMEOUT", 0.5)  # the address is closed: no need to wait 5 s
+    monkeypatch.setattr(cluster, "SCHEDULER_TIMEOUT", 0.5)  # the address is closed: no need to wait 5 s
     out = tmp_path / "rows.csv"
     status, _, err = run(["sweep", *args, "--out", str(out), "--workers", "1"] if "--scheduler" not in args
                          else ["sweep", *args, "--out", str(out)], capsys)

@@ -15,13 +15,13 @@ def test_an_interrupt_stops_the_workers_and_keeps_the_rows(tmp_path, monkeypatch
     seen = []
     original = runner.run_chunks
 
-    def interrupted(chunks, executor, in_flight, done, renew=None):
+    def interrupted(chunks, executor, in_flight, done, *rest):
         def after_one(result):
             done(result)
             seen.append(result.start)
             raise KeyboardInterrupt
 
-        return original(chunks, executor, in_flight, after_one, renew)
+        return original(chunks, executor, in_flight, after_one, *rest)
 
     monkeypatch.setattr(importlib.import_module("isolator.sweep.sweep"), "run_chunks", interrupted)
     out = tmp_path / "rows.csv"

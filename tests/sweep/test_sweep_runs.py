@@ -42,7 +42,7 @@ def test_each_row_is_the_single_run_of_its_design():
         expected = [np.nan if v is None else v for v in run.settling_time.values()]
         np.testing.assert_allclose([table[f"settling:{s}"][r] for s in SIGNALS], expected, rtol=0, atol=1e-9)
         np.testing.assert_allclose([table[f"peak:{s}"][r] for s in SIGNALS], list(run.peak.values()), rtol=1e-9)
-        assert table["status"][r] == "ok"
+        assert table["status"][r] == ("ok" if np.all(np.isfinite(expected)) else "unsettled")  # the run's verdict
         assert table["design"][r] == r
 
 
@@ -79,6 +79,7 @@ def test_an_invalid_design_is_recorded():
 
 def test_a_chunk_that_raises_is_retried_once_then_recorded(monkeypatch):
     original, calls = worker.run_chunk, []
+    plain = sweep(SCENARIO, scale=GRID, workers=1)["status"].tolist()  # "ok", or "unsettled" within the run
 
     def flaky(chunk: worker.Chunk) -> worker.ChunkResult:
         calls.append(chunk.start)
@@ -93,7 +94,7 @@ def test_a_chunk_that_raises_is_retried_once_then_recorded(monkeypatch):
         calls.clear()
         result = sweep(SCENARIO, scale=GRID, chunk_size=2, **options)
         assert sorted(calls) == [0, 2, 2, 4, 4]
-        assert result["status"].tolist() == ["ok", "ok", "failed", "failed", "ok", "ok"]
+        assert result["status"].tolist() == [*plain[:2], "failed", "failed", *plain[4:]]
         assert result["reason"][2] == "after 2 attempts: RuntimeError: a bad node"
         assert np.all(np.isfinite(result["peak:z"][[0, 1, 4, 5]]))
         assert np.all(np.isnan(result["peak:z"][[2, 3]]))
@@ -134,11 +135,12 @@ ORIGINAL = worker.run_chunk
 @pytest.mark.skipif(sys.platform != "linux", reason="the patched task reaches the workers by fork")
 def test_a_process_pool_whose_worker_died_is_renewed_and_nothing_lost(monkeypatch, tmp_path):
     monkeypatch.setattr(worker, "run_chunk", functools.partial(_dies_once, tmp_path / "died"))
-    result = sweep(SCENARIO, scale=GRID, workers=2, chunk_size=2)
+    with pytest.warns(UserWarning, match="renewed its pool"):
+        result = sweep(SCENARIO, scale=GRID, workers=2, chunk_size=2)
     assert (tmp_path / "died").exists()
     monkeypatch.setattr(worker, "run_chunk", ORIGINAL)
     table = result.table()
-    assert table["status"].tolist() == ["ok"] * 6  # every chunk in flight when the pool broke ran again
+    assert "failed" not in table["status"].tolist()  # every chunk in flight when the pool broke ran again
     same_columns(table, sweep(SCENARIO, scale=GRID, workers=1).table())
 
 
@@ -153,7 +155,8 @@ def _always_dies(chunk: worker.Chunk) -> worker.ChunkResult:
 def test_a_chunk_that_always_kills_its_worker_fails_alone(monkeypatch):
     damping = {"isolators[*].damping": [0.5 + 0.1 * i for i in range(12)]}
     monkeypatch.setattr(importlib.import_module("isolator.sweep.worker"), "run_chunk", _always_dies)
-    result = sweep(SCENARIO, scale=damping, workers=2, chunk_size=2)
+    with pytest.warns(UserWarning, match="renewed its pool"):
+        result = sweep(SCENARIO, scale=damping, workers=2, chunk_size=2)
     monkeypatch.setattr(importlib.import_module("isolator.sweep.worker"), "run_chunk", ORIGINAL)
     table = result.table()
     assert table["status"].tolist() == ["failed"] * 2 + ["ok"] * 10  # the chunks in flight with it were spared
@@ -174,3 +177,22 @@ def test_transmissibility_and_modes_per_design():
     h = lin.frequency_response(np.array([20.0]), ["ground:z"], ["z"])[0, 0, 0]
     assert result["transmissibility:z@20Hz"][1] == pytest.approx(abs(h), rel=1e-12)
     np.testing.assert_allclose([result[f"mode:{k}"][1] for k in range(1, 7)], modes(lin).frequencies_hz, rtol=1e-12)
+
+
+def test_a_design_that_does_not_settle_is_unsettled_counted_and_skipped(tmp_path):
+    damping = {"isolators[*].damping": [1.0, 0.02, 0.005]}
+    result = sweep(SCENARIO, scale=damping, workers=1, out=tmp_path / "rows.csv")
+    assert result["status"].tolist() == ["ok", "unsettled", "unsettled"]
+    assert result["reason"][0] == ""
+    for why in result["reason"][1:]:
+        assert why.startswith("no settling time: x, y, z"), why
+        assert why.endswith("not settled in the band by the run's end at 12 s ([simulation] duration)"), why
+    assert np.isnan(result["settling_time_max"][1:]).all()
+    assert (result.tally.failed, result.tally.statuses) == (2, {"unsettled": 2})
+    summary = result.summary().splitlines()
+    assert summary[0] == "designs: 3 (3 run now), not ok: 2 (2 unsettled)"
+    assert summary[2].startswith("best design (of the 1 ok; skipped 2 unsettled): isolators[*].damping = 1,")
+    resumed = sweep(SCENARIO, scale=damping, workers=1, out=tmp_path / "rows.csv", resume=True)
+    assert resumed.summary().splitlines()[0] == "designs: 3 (0 run now, 3 from the file), not ok: 2 (2 unsettled)"
+    none = sweep(SCENARIO, scale={"isolators[*].damping": [0.005]}, workers=1)
+    assert none.summary().splitlines()[2] == "best design: none (no design is ok with a settling_time_max; 1 unsettled)"
