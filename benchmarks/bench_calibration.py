@@ -112,8 +112,8 @@ def main() -> None:
                    f"{target:g} s)"
             if not args.skip_baseline:
                 base, base_worst, base_count = _fit(path, "differences")
-                line += f"\n    finite differences: {base:6.2f} s ({base_count} evaluations, worst {base_worst:.3f} %)" \
-                        f"  -> x{base / wall:.1f} faster"
+                line += (f"\n    finite differences: {base:6.2f} s ({base_count} evaluations, worst "
+                         f"{base_worst:.3f} %)  -> x{base / wall:.1f} faster")
             print(line, flush=True)
 
 

@@ -31,7 +31,7 @@ from controllers.profiles import (
     optimise_profiles,
 )
 from isolator import SIGNALS, Band, Scenario, load_scenario
-from isolator.calibration import CalibrationResult, calibrate
+from isolator.calibration import CalibrationResult, bundled_calibrations, calibrate
 from isolator.scenario.arguments import check_public
 
 from .figures import nan_if_none, save_figure
@@ -39,13 +39,9 @@ from .reporting import fmt, output_folder, progress_printer, table_header, table
 
 __all__ = ["CalibrationStudy", "example_calibration", "run_calibration_study"]
 
-#: where the bundled example lives
-EXAMPLE = Path(__file__).resolve().parents[1] / "isolator" / "data" / "calibrations" / "table-3-2"
-
-
 def example_calibration() -> Path:
     """The bundled calibration example's file (SYNTHETIC records of ``true.toml`` beside it)."""
-    return EXAMPLE / "calibration.toml"
+    return bundled_calibrations()["table-3-2"]
 
 
 @dataclass(frozen=True)
@@ -86,6 +82,8 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
     folder = output_folder(out)
     say = progress_printer(progress, "calibration study: ")
     path = Path(calibration) if calibration is not None else example_calibration()
+    if not path.exists() and str(path) in bundled_calibrations():
+        path = bundled_calibrations()[str(path)]
     true = load_scenario(Path(truth) if truth is not None else path.parent / "true.toml")
     say(f"fitting {path}")
     result = calibrate(path)

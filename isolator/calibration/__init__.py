@@ -6,7 +6,13 @@ residuals (``experiments``), the fit (``fit``), the result, its figure and repor
 from __future__ import annotations
 
 from isolator.calibration.calibrate import calibrate, read_records
-from isolator.calibration.definition import Calibration, Experiment, FitParameter, load_calibration
+from isolator.calibration.definition import (
+    Calibration,
+    Experiment,
+    FitParameter,
+    bundled_calibrations,
+    load_calibration,
+)
 from isolator.calibration.records import Record, read_record
 from isolator.calibration.result import CalibrationResult, ParameterEstimate
 from isolator.calibration.spectra import FrfEstimate, h1_estimate
@@ -19,6 +25,7 @@ __all__ = [
     "FrfEstimate",
     "ParameterEstimate",
     "Record",
+    "bundled_calibrations",
     "calibrate",
     "h1_estimate",
     "load_calibration",

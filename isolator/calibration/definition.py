@@ -23,8 +23,8 @@ from isolator.scenario.rules import closest
 from isolator.scenario.sensors import read_sensors
 from isolator.sweep.names import resolve
 
-__all__ = ["DEFAULT_BAND", "KINDS", "Calibration", "Experiment", "FitParameter", "calibration_from_dict",
-           "load_calibration"]
+__all__ = ["DEFAULT_BAND", "KINDS", "Calibration", "Experiment", "FitParameter", "bundled_calibrations",
+           "calibration_from_dict", "load_calibration"]
 
 #: what an experiment records: the floor moving with the carriages parked, or the carriages moving
 KINDS = ("floor", "move")
@@ -135,11 +135,25 @@ class Calibration:
         return np.array([f.initial for f in self.parameters])
 
 
+#: where the bundled calibrations live (one folder each: calibration.toml, the scenario, the records)
+BUNDLED = Path(__file__).resolve().parents[1] / "data" / "calibrations"
+
+
+def bundled_calibrations() -> dict[str, Path]:
+    """The bundled calibrations' files by name (``table-3-2``: SYNTHETIC records of the paper's table whose
+    isolators are 15-30 % off the datasheet, made by the MuJoCo check)."""
+    return {p.parent.name: p for p in sorted(BUNDLED.glob("*/calibration.toml"))}
+
+
 def load_calibration(path: str | Path) -> Calibration:
-    """Read a calibration file (TOML; every problem a :class:`ScenarioError` naming the file and the key)."""
+    """Read a calibration file (TOML; every problem a :class:`ScenarioError` naming the file and the key), or a
+    bundled calibration by name (:func:`bundled_calibrations`)."""
     path = Path(path)
+    bundled = bundled_calibrations()
+    if not path.exists() and str(path) in bundled:
+        path = bundled[str(path)]
     if not path.exists():
-        raise ScenarioError(f"{path}: no such calibration file")
+        raise ScenarioError(f"{path}: no such calibration file (bundled: {', '.join(bundled) or 'none'})")
     data = load_toml(path)
     try:
         return calibration_from_dict(data, path.parent, path)

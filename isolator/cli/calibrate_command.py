@@ -22,7 +22,8 @@ def register(sub: Any) -> None:
         "with its 95 % interval and writes the fitted scenario. Refuses (exit 2, nothing written) when the "
         "records cannot tell some fitted parameters apart, naming them.",
     )
-    cal.add_argument("calibration", type=Path, metavar="CALIBRATION.toml", help="the calibration file")
+    cal.add_argument("calibration", type=Path, metavar="CALIBRATION.toml",
+                     help="the calibration file, or a bundled one by name (table-3-2: SYNTHETIC records)")
     cal.add_argument("--out", type=Path, required=True, metavar="FITTED.toml",
                      help="write the fitted scenario (the scenario file with the fitted values)")
     cal.add_argument("--json", action="store_true", help="print JSON (parameters, identifiable, correlation, ...)")

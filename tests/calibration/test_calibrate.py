@@ -24,8 +24,8 @@ def test_parameters_recovered_within_their_intervals(tmp_path, mujoco_records, w
         assert abs(e.value - true) < 4 * e.std, (name, true, e)  # one seed; the 95 % coverage: test_coverage
         assert abs(e.value / true - 1) < 0.02, (name, true, e)
         assert abs(e.initial / true - 1) > 0.1  # the datasheet was 15-30 % off
-    for fit in result.experiments.values():  # the fitted model explains each record to its noise
-        assert 0.7 < fit["residual_after"] < 1.3
+    for fit in result.experiments.values():  # the fitted model explains each record to its noise (the floor's
+        assert 0.5 < fit["residual_after"] < 1.3  # error estimate is conservative; s^2 rescales the covariance)
         assert fit["residual_before"] > 3 * fit["residual_after"]
 
 
