@@ -6,7 +6,7 @@ bundled example, whose SYNTHETIC records the MuJoCo check made of ``true.toml``,
 datasheet). The calibration is fitted; the carriages' S-curves are optimised (settling-time objective, the
 nominal model only, so that each design trusts its model) on the datasheet scenario and on the fitted one;
 then the paper's profile and both optimised profiles are simulated on the true table and judged in one band
-(5 % of the paper profile's peaks on the true table):
+(1 % of the paper profile's peaks on the true table, a precision machine's tolerance; ``fraction``):
 
 * ``calibration.png``: the fit (H1 and traces against the nominal and fitted model, the parameters);
 * ``settling.png``: each design's settling time as its own model predicts it and on the true table;
@@ -65,7 +65,7 @@ class CalibrationStudy:
 
 
 def run_calibration_study(out: str | Path, calibration: str | Path | None = None, truth: str | Path | None = None,
-                          progress: bool = True) -> CalibrationStudy:
+                          fraction: float = 0.01, progress: bool = True) -> CalibrationStudy:
     """Run the study (see the module's description); figures and ``report.md`` in ``out``.
 
     Parameters
@@ -76,6 +76,10 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
         A calibration file (default: the bundled example).
     truth : str or Path, optional
         The true table's scenario (default: ``true.toml`` beside the calibration file).
+    fraction : float
+        The settling band: this fraction of the paper profile's peaks (on the model a design is predicted on,
+        on the true table for the runs there); 1 %: a precision machine's tolerance, where the residual
+        vibration a wrong model leaves shows (in 5 % both optimised designs are inside at once).
     progress : bool
         Print what it does.
     """
@@ -91,15 +95,16 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
     settings = ProfileSettings(objective="settling", variants=(ModelVariant(),))
     designs: dict[str, Scenario] = {}
     predicted: dict[str, MoveMetrics] = {}
+    command = command_time(datasheet)
     for label, model in (("datasheet", datasheet), ("calibrated", result.scenario)):
         say(f"optimising the profiles on the {label} model")
         optimised = optimise_profiles(model, settings)
         designs[label] = optimised.scenario
-        predicted[label] = optimised.optimised
-    command = command_time(datasheet)
+        own = Band.of_baseline("paper", evaluate_move(model, "paper", command).peak, fraction)
+        predicted[label] = evaluate_move(optimised.scenario, label, command, band=own)
     on_true = {"paper": true, **{k: replace(true, carriages=s.carriages) for k, s in designs.items()}}
     paper = evaluate_move(on_true["paper"], "paper", command)
-    band = Band.of_baseline("paper", paper.peak)
+    band = Band.of_baseline("paper", paper.peak, fraction)
     say("running every design on the true table")
     actual = {k: evaluate_move(s, k, command, band=band) for k, s in on_true.items()}
     study = CalibrationStudy(result, predicted, actual, folder)
@@ -107,7 +112,7 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
     plt.close("all")
     _settling_figure(study, folder / "settling.png")
     _residual_figure(study, folder / "residual.png")
-    _report(study, path, folder)
+    _report(study, path, folder, fraction)
     return study
 
 
@@ -122,33 +127,43 @@ def _settling_figure(study: CalibrationStudy, path: Path) -> None:
     ax.set_xticks(x, ["paper profile", "optimised on\ndatasheet model", "optimised on\ncalibrated model"])
     ax.set_ylabel("settling time after the stop [s]")
     ax.set_ylim(bottom=0)
-    ax.set_title("What calibration buys: settling time of each design (5 % of the paper profile's peaks)")
+    share = study.actual["paper"].band.fraction
+    ax.set_title("What calibration buys: settling time of each design\n"
+                 f"(band: {share:.0%} of the paper profile's peaks)")
     ax.legend(fontsize=8)
     save_figure(fig, path)
 
 
 def _residual_figure(study: CalibrationStudy, path: Path) -> None:
+    """The signal the datasheet design settles last in, after the stop, zoomed on the band."""
     paper = study.actual["paper"].response
-    k = int(np.argmax([paper.peak[s] / max(paper.band.widths[s], 1e-30) for s in SIGNALS]))
-    signal = SIGNALS[k]
+    late = study.actual["datasheet"].response.settling_time
+    signal = max(SIGNALS, key=lambda s: -1.0 if late[s] is None else float(late[s]))  # type: ignore[arg-type]
+    k = SIGNALS.index(signal)
     scale, unit = (1e6, "µm") if k < 3 else (1e6, "µrad")
+    width = paper.band.widths[signal] * scale
     fig, ax = plt.subplots(figsize=(8.5, 4.2), layout="constrained")
+    largest = 0.0
     for label, color in (("paper", "0.5"), ("datasheet", "C0"), ("calibrated", "C3")):
         r = study.actual[label].response
         after = r.t >= r.stop_time
         final = 0.0 if r.final is None else float(r.final[k])
-        ax.plot(r.t[after] - r.stop_time, (r.signals[k, after] - final) * scale, color=color, lw=1.0,
+        residual = (r.signals[k, after] - final) * scale
+        if label != "paper":
+            largest = max(largest, float(np.max(np.abs(residual))))
+        ax.plot(r.t[after] - r.stop_time, residual, color=color, lw=1.0,
                 label=f"{label}: settles in {fmt(study.actual[label].settling_time_max, '.3g', ' s')}")
-    width = paper.band.widths[signal] * scale
     ax.axhspan(-width, width, color="0.9", label="band")
+    limit = max(6 * width, 1.3 * largest)
+    ax.set_ylim(-limit, limit)
     ax.set_xlabel("time after the stop [s]")
     ax.set_ylabel(f"{signal} - final [{unit}]")
-    ax.set_title(f"On the true table: the table's {signal} after the stop, per design")
+    ax.set_title(f"On the true table: the table's {signal} after the stop, per design (the paper's clipped)")
     ax.legend(fontsize=8)
     save_figure(fig, path)
 
 
-def _report(study: CalibrationStudy, path: Path, folder: Path) -> None:
+def _report(study: CalibrationStudy, path: Path, folder: Path, fraction: float) -> None:
     r = study.result
     lines = ["# What calibration buys", "",
              f"Calibration `{path}`; the true table `{r.calibration.scenario_file.parent / 'true.toml'}`"
@@ -158,7 +173,8 @@ def _report(study: CalibrationStudy, path: Path, folder: Path) -> None:
         lines.append(f"| `{n}` | {e.initial:.5g} | {e.value:.5g} | [{e.ci95[0]:.5g}, {e.ci95[1]:.5g}] |")
     lines += ["", "![fit](calibration.png)", "", "## The designs on the true table", "",
               "The carriages' S-curves optimised for settling time on each model (nominal model only), then run on "
-              "the true table; every run judged in 5 % of the paper profile's peaks on the true table.", "",
+              f"the true table; every run judged in {fraction:.0%} of the paper profile's peaks (predicted: on the "
+              "model the design was made on; actual: on the true table).", "",
               *table_header(["design", "move [s]", "predicted settling [s]", "settling on the true table [s]",
                              "cycle on the true table [s]"])]
     for k in ("paper", "datasheet", "calibrated"):

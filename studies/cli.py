@@ -77,6 +77,8 @@ def register(sub: Any) -> None:
                          "calibration file (default: the bundled example, SYNTHETIC records)")
     calibration.add_argument("--true", type=Path, metavar="TRUE.toml", dest="truth",
                              help="the true table's scenario (default: true.toml beside the calibration file)")
+    calibration.add_argument("--fraction", type=float, default=0.01, metavar="F",
+                             help="settling band: this fraction of the paper profile's peaks (default 0.01)")
     calibration.set_defaults(handler=_calibration)
 
 
@@ -190,7 +192,9 @@ def _calibration(args: argparse.Namespace) -> int:
 
     output_folder(args.out, "--out")
     use_agg()
-    study = run_calibration_study(args.out, args.scenario, args.truth)
+    if not (math.isfinite(args.fraction) and 0 < args.fraction < 1):
+        raise ParameterError(f"--fraction: must be a fraction between 0 and 1, got {args.fraction}")
+    study = run_calibration_study(args.out, args.scenario, args.truth, args.fraction)
     for name, m in study.actual.items():
         settled = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3g} s"
         print(f"{name:>10}: settling on the true table {settled}")

@@ -72,10 +72,10 @@ class EstimatorView:
         margin = MARGIN_BINS * rate / nperseg
         picks = np.flatnonzero((grid > 0) & (grid >= f[bins].min() - margin) & (grid <= f[bins].max() + margin))
         spectrum = fft.rfft(inputs, n_pad, axis=1)
-        _, zx = _stft(inputs[:, start:], rate, nperseg)
-        gxx = np.einsum("ibs,jbs->bij", zx[:, bins], zx[:, bins].conj())
+        zx = _stft(inputs[:, start:], rate, nperseg, bins)
+        gxx = np.einsum("ibs,jbs->bij", zx, zx.conj())
         return cls(grid[picks], picks, spectrum, n, start, nperseg, n_pad, rate, bins, np.linalg.inv(gxx),
-                   zx[:, bins].conj())
+                   zx.conj())
 
     def seen(self, h: np.ndarray) -> np.ndarray:
         """The H1 (..., outputs, m, nb) of a response ``h`` (..., outputs, m, nl) given on :attr:`lines` (floor
@@ -86,15 +86,19 @@ class EstimatorView:
         full = np.zeros((*lead, outputs, self.spectrum.shape[1]), dtype=complex)
         full[..., self.picks] = y_lines
         y = fft.irfft(full, self.n_pad, axis=-1)[..., self.start : self.n]
-        _, zy = _stft(y.reshape(-1, y.shape[-1]), self.rate, self.nperseg)
-        gyx = np.einsum("ybs,jbs->byj", zy[:, self.bins], self.segments)
+        zy = _stft(y.reshape(-1, y.shape[-1]), self.rate, self.nperseg, self.bins)
+        gyx = np.einsum("ybs,jbs->byj", zy, self.segments)
         h1 = gyx @ self.gxx_inverse  # (nb, channels, m)
         return np.moveaxis(h1.reshape(self.bins.size, *lead, outputs, -1), 0, -1)
 
 
-def _stft(z: np.ndarray, rate: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
-    """Welch's segments' spectra (channels, bins, segments): Hann, 50 % overlap, each segment's mean removed
-    (as :func:`isolator.calibration.spectra.h1_estimate` takes them; scaling cancels in H1)."""
-    f, _, s = signal.spectrogram(z, fs=rate, window="hann", nperseg=nperseg, noverlap=nperseg // 2,
-                                 detrend="constant", return_onesided=True, scaling="density", mode="complex")
-    return f, s
+def _stft(z: np.ndarray, rate: float, nperseg: int, bins: np.ndarray) -> np.ndarray:
+    """Welch's segments' spectra at ``bins`` (channels, bins, segments): Hann, 50 % overlap, each segment's
+    mean removed, as :func:`isolator.calibration.spectra.h1_estimate` takes them (its scaling cancels in H1)."""
+    window = signal.get_window("hann", nperseg)
+    step = nperseg - nperseg // 2
+    segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=-1)[..., ::step, :]
+    spectra = fft.rfft(segments * window, axis=-1, workers=-1)[..., bins]  # (channels, segments, bins)
+    # removing a segment's mean removes mean * (the window's spectrum) at each bin
+    spectra -= segments.mean(axis=-1)[..., None] * fft.rfft(window)[bins]
+    return np.swapaxes(spectra, -1, -2)

@@ -84,6 +84,8 @@ def calibration_figure(result: Any) -> Figure:
     for i, e in enumerate(est):
         ax.annotate(f"{e.value:.4g} [{e.ci95[0]:.4g}, {e.ci95[1]:.4g}]", (high[i], i), xytext=(6, -3),
                     textcoords="offset points", fontsize=7)
+    span = max(float(high.max()), 1.0) - min(float(low.min()), 1.0)
+    ax.set_xlim(min(float(low.min()), 1.0) - 0.05 * span, max(float(high.max()), 1.0) + 0.3 * span)  # the labels
     ax.set_yticks(y, names, fontsize=8)
     ax.set_xlabel("value / initial value [-]")
     ax.set_title("fitted parameters" + ("" if result.identifiable else " (NOT identifiable: "

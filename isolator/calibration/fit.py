@@ -98,40 +98,41 @@ def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperime
     cache: dict[bytes, list[Residuals]] = {}
     count = [0]
 
-    def evaluate(x: np.ndarray) -> list[Residuals]:
+    def evaluate(x: np.ndarray, derivatives: bool) -> list[Residuals]:
+        """The residuals at ``x`` (and their Jacobian when asked: only at the points the solver keeps)."""
         key = np.asarray(x, dtype=float).tobytes()
-        if key not in cache:
+        known = cache.get(key)
+        if known is None or (derivatives and any(r.J is None for r in known)):
             values = np.exp(x)
             p = calibration.vector(values)
-            tangents = _tangents(calibration, values) if jacobian == "model" else None
+            tangents = _tangents(calibration, values) if derivatives and jacobian == "model" else None
             try:
-                cache.clear()
-                cache[key] = [e.residuals(p, tangents) for e in experiments]
+                known = [e.residuals(p, tangents) for e in experiments]
             except (UnstableTableError, SimulationError) as exc:
                 where = ", ".join(f"{n} = {v:.6g}" for n, v in zip(names, values, strict=True))
                 raise OptimisationError(f"calibrate: the model cannot be evaluated at {where}: {exc}") from None
+            cache.clear()
+            cache[key] = known
             count[0] += 1
             if progress is not None:
-                cost = sum(float(r.r @ r.r) for r in cache[key])
+                cost = sum(float(r.r @ r.r) for r in known)
                 progress(f"evaluation {count[0]}: weighted cost {cost:.6g}")
-        return cache[key]
+        return known
 
     def fun(x: np.ndarray) -> np.ndarray:
-        return np.concatenate([r.r for r in evaluate(x)])
+        return np.concatenate([r.r for r in evaluate(x, False)])
 
     def jac(x: np.ndarray) -> np.ndarray:
-        return np.vstack([r.J for r in evaluate(x) if r.J is not None])
+        return np.vstack([r.J for r in evaluate(x, True) if r.J is not None])
 
     x0 = np.log(calibration.initial)
-    before = {e.name: _rms(r.r) for e, r in zip(experiments, evaluate(x0), strict=True)}
+    before = {e.name: _rms(r.r) for e, r in zip(experiments, evaluate(x0, False), strict=True)}
     solution = least_squares(fun, x0, jac=jac if jacobian == "model" else "2-point", bounds=(lo, hi), method="trf",
                              x_scale=1.0, xtol=1e-10,
                              ftol=1e-12, gtol=1e-12, max_nfev=200)
     x = solution.x
-    if jacobian != "model":  # the covariance from the model's Jacobian all the same
-        jacobian = "model"
-        cache.clear()
-    final = evaluate(x)
+    jacobian = "model"  # the covariance from the model's Jacobian, whichever the solver used
+    final = evaluate(x, True)
     after = {e.name: _rms(r.r) for e, r in zip(experiments, final, strict=True)}
     r = np.concatenate([f.r for f in final])
     J = np.vstack([f.J for f in final if f.J is not None])

@@ -24,6 +24,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.model.variants import Model
+from isolator.numerics.native import MappedFunction
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.points import point_positions, rotation_matrices
@@ -47,9 +48,9 @@ def _motion_function(model: Model) -> ca.Function:
 
 
 @lru_cache(maxsize=16)
-def _mapped(model: Model, n: int) -> ca.Function:
-    """:func:`_motion_function` for ``n`` states at once."""
-    return _motion_function(model).map(n)
+def _mapped(model: Model) -> MappedFunction:
+    """:func:`_motion_function` compiled for many states at once (the native build, cached on disk)."""
+    return MappedFunction(_motion_function(model), f"isolator_sensed_{model.tag}", block=256, optimisation="-O1")
 
 
 def table_motion(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.ndarray, start: np.ndarray
@@ -57,10 +58,8 @@ def table_motion(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.nda
     """The mass centre's velocity and acceleration, the table's angular velocity and angular acceleration
     (each (N, 3), world axes, [m/s], [m/s^2], [rad/s], [rad/s^2]) at states (N, n_states) with the model's
     inputs (N, input size) there and the parameter vector ``p``."""
-    fn = _mapped(model, states.shape[0])
-    motion, rates = fn(np.asarray(states, dtype=float).T, np.asarray(inputs, dtype=float).T, np.asarray(p, dtype=float),
-                       np.asarray(start, dtype=float))
-    motion, rates = np.asarray(motion).T, np.asarray(rates).T
+    motion, rates = _mapped(model)(np.asarray(states, dtype=float), np.asarray(inputs, dtype=float),
+                                   np.asarray(p, dtype=float), np.asarray(start, dtype=float))
     return motion[:, 6:9], rates[:, 0:3], motion[:, 9:12], rates[:, 3:6]
 
 
