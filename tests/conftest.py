@@ -200,3 +200,15 @@ def write_calibration():
         return make_example(folder, (move, floor), seed, tuple(experiments))
 
     return write
+
+
+def run_command(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, list[str]]:
+    """Run ``isolator ARGV`` in this process: its exit status, stdout and stderr lines."""
+    from isolator.cli.app import main
+
+    try:
+        status = main(argv)
+    except SystemExit as exc:
+        status = int(exc.code or 0)
+    captured = capsys.readouterr()
+    return status, captured.out, captured.err.splitlines()

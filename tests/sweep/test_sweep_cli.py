@@ -9,19 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from isolator.cli.app import main
+from conftest import run_command as run
 from isolator.cli.sweep_command import parse_values
 from isolator.errors import ParameterError
 from isolator.sweep import cluster
-
-
-def run(argv: list[str], capsys: pytest.CaptureFixture[str]) -> tuple[int, str, list[str]]:
-    try:
-        status = main(argv)
-    except SystemExit as exc:
-        status = int(exc.code or 0)
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err.splitlines()
 
 
 def test_a_sweep_from_the_command_line(tmp_path: Path, capsys):

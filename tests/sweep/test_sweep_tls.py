@@ -12,6 +12,7 @@ from pathlib import Path
 
 import pytest
 
+from conftest import run_command as run
 from isolator.cli.app import main
 from isolator.errors import ParameterError
 from isolator.sweep import sweep
@@ -72,13 +73,6 @@ def tls_options(certs: Path, name: str = "cluster", ca: str = "cluster") -> list
             "--tls-key", str(certs / f"{name}-key.pem")]
 
 
-def run(argv: list[str], capsys) -> tuple[int, str, list[str]]:
-    try:
-        status = main(argv)
-    except SystemExit as exc:
-        status = int(exc.code or 0)
-    captured = capsys.readouterr()
-    return status, captured.out, captured.err.splitlines()
 
 
 def test_a_tls_cluster_runs_the_local_rows(tls_cluster, certs, local_rows, tmp_path, capsys):
