@@ -293,6 +293,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_carriage_tree(scenario.carriages)
     check_unique_names([a.name for a in scenario.actuators], "actuators")
     check_unique_names([pt.name for pt in scenario.points], "points")
+    check_unique_names([s.name for s in scenario.sensors], "sensors")
     check_windows(scenario.windows, [pt.name for pt in scenario.points])
     check_sequence(scenario)
     check_motion(scenario)

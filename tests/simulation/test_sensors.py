@@ -111,3 +111,17 @@ def test_a_sensor_name_used_twice_is_named():
     data["sensors"].append(dict(data["sensors"][0]))
     with pytest.raises(ScenarioError, match=r"sensors\[12\].name: 'a0-x' is used twice"):
         scenario_from_dict(data)
+
+
+def test_scenarios_built_in_python_check_their_sensors():
+    from dataclasses import replace
+
+    from isolator.scenario.sensors import Sensor
+    from isolator.scenario.validation import validate_scenario
+
+    sc = _scenario(9.0, 100.0)
+    with pytest.raises(ScenarioError, match=r"sensor\.quantity: must be one of"):
+        Sensor("s", "table", (0.0, 0.0, 0.0), (0.0, 0.0, 1.0), "jerk")
+    twice = replace(sc, sensors=(*sc.sensors, sc.sensors[0]))
+    with pytest.raises(ScenarioError, match=r"sensors\[14\].name: 'a0-x' is used twice"):
+        validate_scenario(twice)
