@@ -5,7 +5,7 @@ A Welch H1 of a lightly damped table is biased on any record of practical length
 bias is far larger than the estimate's random error, so the model is put through the same estimator: the
 linear model's response to the measured floor signals is computed (``Y = H X`` on a zero-padded FFT grid,
 the table at rest before the record), and its H1 is taken from the same segments as the record's, all
-after a warm-up of several of the slowest mode's decay times (the record's and the model's start transients
+after a warm-up of six of the slowest mode's decay times (the record's and the model's start transients
 gone), with the same window, overlap and detrending. It is linear in ``H``, so the derivatives of the model's
 H1 are the H1 of its derivatives' responses: exact.
 """

@@ -35,6 +35,8 @@ __all__ = ["FloorExperiment", "MoveExperiment", "Residuals", "noise_estimate", "
 
 #: forward-difference step in a parameter's logarithm (move experiments)
 LOG_STEP = 1e-6
+#: the warm-up left out of a floor record's spectra, in decay times of the slowest mode
+WARM_UP = 6.0
 #: the Hann window's equivalent noise bandwidth [bins]: N sum w^2 / (sum w)^2
 ENBW_HANN = 1.5
 #: least random error of an H1 bin, relative to its magnitude (noise-free records)
@@ -99,11 +101,12 @@ class FloorExperiment:
         f1 = float(lowest.frequencies_hz[0])
         zeta = float(np.clip(np.min(lowest.damping_ratios), 1e-3, 1.0))
         duration = float(record.t[-1] - record.t[0])
-        # the slowest decay's time constant sets the warm-up (4 of them, at most a quarter of the record) and the
+        # the slowest decay's time constant sets the warm-up (6 of them, at most a quarter of the record) and the
         # default segment (four half-power bandwidths of the lowest mode per bin, at least 4 of its periods, at
         # most an eighth of what is left)
-        tau = 1.0 / (zeta * 2 * np.pi * f1)
-        self.warm = float(min(4.0 * tau, duration / 4.0))
+        decay = np.clip(lowest.damping_ratios, 1e-3, 1.0) * 2 * np.pi * lowest.frequencies_hz
+        tau = 1.0 / float(np.min(decay))  # the slowest mode's decay time [s]
+        self.warm = float(min(WARM_UP * tau, duration / 4.0))
         used = duration - self.warm
         self.segment = experiment.segment or float(min(max(4.0 / (2 * zeta * f1), 4.0 / f1), used / 8.0))
         start = round(self.warm * record.rate)
