@@ -112,7 +112,7 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
     plt.close("all")
     _settling_figure(study, folder / "settling.png")
     _residual_figure(study, folder / "residual.png")
-    _report(study, path, folder, fraction)
+    _report(study, path, folder, fraction, Path(truth) if truth is not None else path.parent / "true.toml")
     return study
 
 
@@ -163,10 +163,10 @@ def _residual_figure(study: CalibrationStudy, path: Path) -> None:
     save_figure(fig, path)
 
 
-def _report(study: CalibrationStudy, path: Path, folder: Path, fraction: float) -> None:
+def _report(study: CalibrationStudy, path: Path, folder: Path, fraction: float, truth: Path) -> None:
     r = study.result
     lines = ["# What calibration buys", "",
-             f"Calibration `{path}`; the true table `{r.calibration.scenario_file.parent / 'true.toml'}`"
+             f"Calibration `{path}`; the true table `{truth}`"
              " (for the bundled example: SYNTHETIC records of it made by the MuJoCo check, 1 % noise).", "",
              "## The fit", "", "| parameter | datasheet | fitted | 95 % interval |", "|---|---:|---:|---|"]
     for n, e in r.parameters.items():

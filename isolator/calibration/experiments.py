@@ -102,7 +102,7 @@ class FloorExperiment:
         zeta = float(np.clip(np.min(lowest.damping_ratios), 1e-3, 1.0))
         duration = float(record.t[-1] - record.t[0])
         # the slowest decay's time constant sets the warm-up (6 of them, at most a quarter of the record) and the
-        # default segment (four half-power bandwidths of the lowest mode per bin, at least 4 of its periods, at
+        # default segment (four bins per half-power bandwidth of the lowest mode, at least 4 of its periods, at
         # most an eighth of what is left)
         decay = np.clip(lowest.damping_ratios, 1e-3, 1.0) * 2 * np.pi * lowest.frequencies_hz
         tau = 1.0 / float(np.min(decay))  # the slowest mode's decay time [s]

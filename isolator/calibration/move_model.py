@@ -60,7 +60,7 @@ class MoveModel:
         self.first = round(first)
         self.count = t.size
         settings = SimulationSettings(duration=(self.first + t.size - 1) / rate, sample_rate=rate)
-        self.scenario = replace(scenario, simulation=settings)
+        self.scenario = replace(scenario, simulation=settings, ground=None)  # the floor is still (the contract)
         self.sensors = sensors
         self.sim = Simulator(self.scenario)
         samples = self.sim.grid.samples

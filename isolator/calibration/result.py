@@ -3,6 +3,7 @@ experiments' residuals and curves, the modes before and after (``docs/scenario-f
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -41,8 +42,10 @@ class ParameterEstimate:
     bounds: tuple[float, float]
 
     def to_dict(self) -> dict[str, Any]:
-        """``{initial, value, std, ci95: [low, high]}``."""
-        return {"initial": self.initial, "value": self.value, "std": self.std, "ci95": list(self.ci95)}
+        """``{initial, value, std, ci95: [low, high]}`` (``std`` null for a parameter the records do not fix,
+        its ``ci95`` then its bounds)."""
+        return {"initial": self.initial, "value": self.value, "std": self.std if math.isfinite(self.std) else None,
+                "ci95": list(self.ci95)}
 
 
 @dataclass(frozen=True)

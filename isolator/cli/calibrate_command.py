@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 from pathlib import Path
 from typing import Any
@@ -39,13 +40,21 @@ def _calibrate(args: argparse.Namespace) -> int:
     from isolator.calibration import calibrate
     from isolator.calibration.report import write_report
 
+    wanted = [p for p in (args.out, args.plot, args.report / "report.md" if args.report else None) if p is not None]
+    missing = [above for p in wanted for above in (p.parent, *p.parent.parents) if not above.exists()]
     out = output_path(args.out, "--out", (".toml",))
     plot = figure_path(args.plot, "--plot")
     folder = output_folder(args.report, "--report") if args.report else None
     show = not args.json and sys.stderr.isatty()  # a line per model evaluation, in a terminal only
     progress = (lambda line: print(f"  {line}", file=sys.stderr, flush=True)) if show else None
-    result = calibrate(args.calibration, fit=args.fit, allow_unidentifiable=args.allow_unidentifiable,
-                       progress=progress)
+    try:
+        result = calibrate(args.calibration, fit=args.fit, allow_unidentifiable=args.allow_unidentifiable,
+                           progress=progress)
+    except BaseException:  # nothing written: the folders the output paths made are removed again
+        for above in sorted(set(missing), key=lambda q: len(q.parts), reverse=True):
+            with contextlib.suppress(OSError):
+                above.rmdir()
+        raise
     result.write_scenario(out)
     if plot is not None or folder is not None:
         use_agg()

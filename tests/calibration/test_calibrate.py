@@ -93,3 +93,23 @@ def test_coverage_of_the_95_percent_intervals(tmp_path, mujoco_records, write_ca
     share = sum(inside.values()) / (len(seeds) * len(inside))
     assert 0.85 <= share <= 1.0, inside
     assert min(inside.values()) >= 0.75 * len(seeds), inside
+
+
+def test_a_move_experiment_runs_with_the_floor_still(tmp_path, mujoco_records, write_calibration):
+    """The contract's move experiment: the scenario's [ground] motion is not simulated."""
+    import tomli_w
+
+    from isolator.calibration import load_calibration, read_records
+    from isolator.calibration.experiments import prepare
+
+    move, floor = mujoco_records
+    path = write_calibration(tmp_path, move, floor, 13, ("move",))
+    still = prepare(c := load_calibration(path), read_records(c))[0]
+    import tomllib
+
+    data = tomllib.loads((tmp_path / "table.toml").read_text())
+    data["ground"] = {"z": {"type": "sine", "amplitude": 1e-5, "omega": 20.0}}
+    (tmp_path / "table.toml").write_bytes(tomli_w.dumps(data).encode())
+    moving = prepare(c := load_calibration(path), read_records(c))[0]
+    p = c.vector()
+    assert np.array_equal(still.residuals(p).r, moving.residuals(p).r)

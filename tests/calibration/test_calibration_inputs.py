@@ -73,7 +73,19 @@ def test_heave_only_records_cannot_tell_mass_stiffness_and_damping_apart(heave, 
     data = json.loads(capsys.readouterr().out)
     assert data["identifiable"] is False
     assert data["unidentifiable"] == [["table.mass", "isolators[*].stiffness.z", "isolators[*].damping.z"]]
+    for name in ("table.mass", "isolators[*].stiffness.z", "isolators[*].damping.z"):  # no interval: the bounds
+        entry = data["parameters"][name]
+        assert entry["std"] is None
+        assert entry["ci95"] == pytest.approx([entry["initial"] / 10, entry["initial"] * 10])
     assert out.exists()
+
+
+def test_a_refusal_leaves_no_folder_behind(heave, tmp_path, capsys):
+    out, report, plot = tmp_path / "a" / "b" / "f.toml", tmp_path / "rep", tmp_path / "c" / "p.png"
+    assert main(["calibrate", str(heave), "--out", str(out), "--report", str(report), "--plot", str(plot)]) == 2
+    assert "cannot tell apart" in capsys.readouterr().err
+    for folder in (tmp_path / "a", report, tmp_path / "c"):
+        assert not folder.exists()
 
 
 def test_heave_records_fit_stiffness_and_damping_with_the_mass_known(heave):
