@@ -290,7 +290,7 @@ class DiscreteController:
             lines.append(f"#define ISOLATOR_CTRL_{macro} {len(getattr(self, key))}")
             lines += [f"/*   {i}: {c_literal(name)} */" for i, name in enumerate(getattr(self, key))]
         lines += [f"#define ISOLATOR_CTRL_SAMPLE_RATE {self.sample_rate!r} /* Hz */",
-                  f"#define ISOLATOR_CTRL_STATES {n}", "",
+                  f"#define ISOLATOR_CTRL_STATES {n}", "", "#ifdef __cplusplus", 'extern "C" {', "#endif",
                   "typedef struct isolator_ctrl_state isolator_ctrl_state;",
                   "struct isolator_ctrl_state {",
                   f"    double x[{max(n, 1)}]; /* the controller's state x_k (ISOLATOR_CTRL_STATES used) */",
@@ -301,7 +301,7 @@ class DiscreteController:
                   "extern const char *const isolator_ctrl_carriage_names[ISOLATOR_CTRL_CARRIAGES + 1];", "",
                   "void isolator_ctrl_reset(isolator_ctrl_state *s);",
                   "void isolator_ctrl_step(isolator_ctrl_state *s, const double y[], const double q[], double u[]);",
-                  "", "#endif /* ISOLATOR_CONTROLLER_H */", ""]
+                  "#ifdef __cplusplus", "}", "#endif", "", "#endif /* ISOLATOR_CONTROLLER_H */", ""]
         return "\n".join(lines)
 
     def _source(self) -> str:
@@ -324,7 +324,7 @@ class DiscreteController:
                       f"static const double ctrl_q[{last + 1}] = {{{', '.join(repr(e.q[c]) for e in points)}}};"]
         lines += ["", "void isolator_ctrl_reset(isolator_ctrl_state *s)", "{", "    memset(s, 0, sizeof *s);", "}", "",
                   "void isolator_ctrl_step(isolator_ctrl_state *s, const double y[], const double q[], double u[])",
-                  "{", *([f"    double xn[{n}];"] if n else ["    (void)s;"]), "    int i, j;"]
+                  "{", "    int i, j;", f"    double xn[{n}];" if n else "    (void)s;"]
         if last > 0:
             lines += ["    int k = 0;", "    double w = 0.0;",
                       f"    if (q[{c}] > ctrl_q[0]) {{", f"        k = {last - 1};", "        w = 1.0;",

@@ -117,6 +117,14 @@ def scheduled(rng, carriages=("x-stage", "y-stage"), positions=(-0.3, -0.1, 0.05
 
 
 @needs_compiler
+def test_a_single_point_schedule_is_a_plain_controller(tmp_path):
+    rng = np.random.default_rng(9)
+    ctrl = scheduled(rng, positions=(0.2,))
+    dll = build(ctrl, tmp_path)
+    compare(ctrl, dll, rng.normal(size=(100, 3)), rng.uniform(-1, 1, (100, 2)))
+
+
+@needs_compiler
 def test_scheduled_c_equals_python_across_and_beyond_the_points(tmp_path):
     rng = np.random.default_rng(2)
     ctrl = scheduled(rng)
