@@ -13,7 +13,11 @@ they return), :mod:`.loops` (:func:`closed_loop` on the linear plant with the
 actuators' lag, for transmissibility and compliance with control;
 :func:`check_stability` continuous and as sampled: Tustin controller around
 the plant held by a zero-order hold) and :mod:`.laws` (:func:`feedback_law`:
-the controller as the simulation runs it). The designs ignore the actuators'
+the controller as the simulation runs it) and :mod:`.export`
+(:class:`DiscreteController`: a discrete controller from the scenario's
+sensors to its actuators, optionally gain-scheduled over a carriage's
+travel, as ``controller.json`` and as C99 code; :func:`from_statespace`
+discretises a python-control design into one). The designs ignore the actuators'
 lag and saturation; the checks and the simulation include them. No
 anti-windup: an integrator keeps integrating while its actuator saturates.
 """
@@ -21,6 +25,7 @@ anti-windup: an integrator keeps integrating while its actuator saturates.
 from __future__ import annotations
 
 from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, hinf, lead, lqr, pid, skyhook
+from .export import DiscreteController, ScheduleEntry, from_statespace
 from .laws import DiscreteLaw, feedback_law
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
 
@@ -30,12 +35,15 @@ __all__ = [
     "SAMPLE_RATE",
     "ClosedLoop",
     "Controller",
+    "DiscreteController",
     "DiscreteLaw",
     "LoopStability",
+    "ScheduleEntry",
     "check_stability",
     "closed_loop",
     "decentralised",
     "feedback_law",
+    "from_statespace",
     "hinf",
     "lead",
     "lqr",
