@@ -16,9 +16,11 @@ logarithms of the fitted parameters.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import signal
 
 from isolator.analysis.linear import linearise, rest_positions
 from isolator.analysis.modes import modes
@@ -27,7 +29,7 @@ from isolator.calibration.estimator_view import EstimatorView
 from isolator.calibration.floor_model import FloorModel
 from isolator.calibration.move_model import MoveModel
 from isolator.calibration.records import Record
-from isolator.calibration.spectra import h1_estimate
+from isolator.calibration.spectra import FrfEstimate, h1_estimate
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.sensors import Sensor
 
@@ -127,6 +129,7 @@ class FloorExperiment:
         self.f = estimate.f[band]
         self.H1 = estimate.H[:, :, band]
         self.coherence = estimate.coherence[:, band]
+        _warn_input_noise(key, floor, x[:, start:], record.rate, estimate, band)
         # each part's random error; neighbouring bins are correlated through the window (Hann: its equivalent
         # noise bandwidth is 1.5 bins), so a bin carries 1 / ENBW of an independent bin's information
         sigma = np.sqrt(np.asarray(estimate.variance[:, :, band], dtype=float) / 2.0 * ENBW_HANN)
@@ -186,6 +189,27 @@ class MoveExperiment:
     def predict(self, p: np.ndarray) -> np.ndarray:
         """The model's sensor signals (table sensors, N) [SI]."""
         return self.model.signals(p[None, :])[0]
+
+
+def _warn_input_noise(key: str, floor: tuple[Sensor, ...], x: np.ndarray, rate: float, estimate: FrfEstimate,
+                      band: np.ndarray) -> None:
+    """Warn when a floor sensor's declared ``noise`` biases the H1 by more than half its random error: noise on
+    an input lowers any H1 by the noise's share of that input's spectrum (``Gnn / Gxx``), which the fit's
+    intervals do not include."""
+    nperseg = round(estimate.segment * rate)
+    _, pxx = signal.welch(x, fs=rate, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
+    relative = np.sqrt(estimate.variance[:, :, band]) / np.maximum(np.abs(estimate.H[:, :, band]), 1e-300)
+    for k, sensor in enumerate(floor):
+        if sensor.noise <= 0:
+            continue
+        share = float(np.max(2.0 * sensor.noise**2 / rate / np.maximum(pxx[k, band], 1e-300)))
+        error = float(np.median(relative[:, k, :]))
+        if share > 0.5 * error:
+            above = " (its declared noise exceeds the measured floor signal somewhere in the band)" if share > 1 else ""
+            warnings.warn(f"{key}: the floor sensor '{sensor.name}' (noise {sensor.noise:.3g} {sensor.unit} RMS) "
+                          f"biases the H1 low by up to {min(share, 1.0):.2%} in the band{above}, against a random "
+                          f"error of {error:.2%}; the intervals do not include it (a quieter sensor or a stronger "
+                          "floor excitation removes it)", stacklevel=3)
 
 
 def prepare(calibration: Calibration, records: dict[str, Record]) -> list[FloorExperiment | MoveExperiment]:

@@ -160,3 +160,25 @@ def test_bad_arguments_of_the_api_and_the_command(tmp_path, capsys):
     assert "--out" in capsys.readouterr().err
     assert main(["calibrate", str(tmp_path / "none.toml"), "--out", str(tmp_path / "f.toml")]) == 2
     assert "no such calibration file" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(("share", "warned"), [(0.3, True), (1e-6, False)])
+def test_a_noisy_floor_sensor_is_warned_about(heave, share, warned):
+    """Noise on the floor sensor (declared by its ``noise`` key) biases every H1 low; the fit says so when the
+    bias exceeds half the estimate's random error."""
+    import tomllib
+    import warnings
+
+    folder = heave.parent
+    floor = np.loadtxt(folder / "heave.csv", delimiter=",", skiprows=1)[:, 2]
+    data = tomllib.loads((folder / "table.toml").read_text())
+    data["sensors"][1]["noise"] = share * float(np.std(floor))
+    (folder / "table.toml").write_bytes(tomli_w.dumps(data).encode())
+    heave.write_text(heave.read_text().replace('"table.mass", ', ""))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        calibrate(heave)
+    said = [str(w.message) for w in caught if "floor sensor 'f-z'" in str(w.message)]
+    assert bool(said) == warned, said
+    if warned:
+        assert "biases the H1 low" in said[0]
