@@ -15,7 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft, signal
+from scipy import fft
+
+from isolator.calibration.spectra import segment_spectra
 
 __all__ = ["EstimatorView"]
 
@@ -72,7 +74,7 @@ class EstimatorView:
         margin = MARGIN_BINS * rate / nperseg
         picks = np.flatnonzero((grid > 0) & (grid >= f[bins].min() - margin) & (grid <= f[bins].max() + margin))
         spectrum = fft.rfft(inputs, n_pad, axis=1)
-        zx = _stft(inputs[:, start:], rate, nperseg, bins)
+        zx = segment_spectra(inputs[:, start:], rate, nperseg, bins)
         gxx = np.einsum("ibs,jbs->bij", zx, zx.conj())
         return cls(grid[picks], picks, spectrum, n, start, nperseg, n_pad, rate, bins, np.linalg.inv(gxx),
                    zx.conj())
@@ -86,19 +88,7 @@ class EstimatorView:
         full = np.zeros((*lead, outputs, self.spectrum.shape[1]), dtype=complex)
         full[..., self.picks] = y_lines
         y = fft.irfft(full, self.n_pad, axis=-1)[..., self.start : self.n]
-        zy = _stft(y.reshape(-1, y.shape[-1]), self.rate, self.nperseg, self.bins)
+        zy = segment_spectra(y.reshape(-1, y.shape[-1]), self.rate, self.nperseg, self.bins)
         gyx = np.einsum("ybs,jbs->byj", zy, self.segments)
         h1 = gyx @ self.gxx_inverse  # (nb, channels, m)
         return np.moveaxis(h1.reshape(self.bins.size, *lead, outputs, -1), 0, -1)
-
-
-def _stft(z: np.ndarray, rate: float, nperseg: int, bins: np.ndarray) -> np.ndarray:
-    """Welch's segments' spectra at ``bins`` (channels, bins, segments): Hann, 50 % overlap, each segment's
-    mean removed, as :func:`isolator.calibration.spectra.h1_estimate` takes them (its scaling cancels in H1)."""
-    window = signal.get_window("hann", nperseg)
-    step = nperseg - nperseg // 2
-    segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=-1)[..., ::step, :]
-    spectra = fft.rfft(segments * window, axis=-1, workers=-1)[..., bins]  # (channels, segments, bins)
-    # removing a segment's mean removes mean * (the window's spectrum) at each bin
-    spectra -= segments.mean(axis=-1)[..., None] * fft.rfft(window)[bins]
-    return np.swapaxes(spectra, -1, -2)

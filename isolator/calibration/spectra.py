@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
+from scipy import fft, signal
 
 from isolator.errors import ParameterError
 
@@ -160,7 +160,7 @@ def h1_estimate(inputs: np.ndarray, outputs: np.ndarray, rate: float, segment: f
                              f"estimate needs more averages than inputs: give a shorter segment or a longer record")
     _check_constant(x, "inputs")
     _check_constant(y, "outputs")
-    f, G = _spectral_matrix(np.vstack([x, y]), rate, nperseg, noverlap)
+    f, G = _spectral_matrix(np.vstack([x, y]), rate, nperseg)
     Gxx, Gyx = G[:, :q, :q], G[:, q:, :q]
     Gyy = G[:, q:, q:].diagonal(axis1=1, axis2=2).real
     valid = _valid_bins(Gxx, f)
@@ -210,15 +210,29 @@ def _check_constant(a: np.ndarray, name: str) -> None:
                              "removed")
 
 
-def _spectral_matrix(z: np.ndarray, rate: float, nperseg: int, noverlap: int) -> tuple[np.ndarray, np.ndarray]:
+def segment_spectra(z: np.ndarray, rate: float, nperseg: int, bins: np.ndarray | None = None) -> np.ndarray:
+    """Welch's segments' spectra (channels, bins, segments) of ``z`` (channels, N): Hann, 50 % overlap, each
+    segment's mean removed, scaled as ``scipy.signal.spectrogram`` (complex, density); all bins, or ``bins``
+    (indices) only. One definition for the records' H1 and the model's (:mod:`.estimator_view`)."""
+    window = signal.get_window("hann", nperseg)
+    step = nperseg - nperseg // 2
+    segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=-1)[..., ::step, :]
+    spectra = fft.rfft(segments * window, axis=-1, workers=-1)  # (channels, segments, nperseg // 2 + 1)
+    # removing a segment's mean removes mean * (the window's spectrum) at each bin
+    spectra -= segments.mean(axis=-1)[..., None] * fft.rfft(window)
+    if bins is not None:
+        spectra = spectra[..., bins]
+    return np.swapaxes(spectra, -1, -2) * np.sqrt(1.0 / (rate * float(np.sum(window**2))))
+
+
+def _spectral_matrix(z: np.ndarray, rate: float, nperseg: int) -> tuple[np.ndarray, np.ndarray]:
     """Bin frequencies [Hz] and the one-sided Welch cross-spectral matrix ``G[f, a, b] = E[Z_a conj(Z_b)]``.
 
-    One STFT of every channel (``scipy.signal.spectrogram``, complex, Hann, ``detrend='constant'``),
-    then the average of the segments' outer products, scaled as ``scipy.signal.csd``.
+    The segments' spectra (:func:`segment_spectra`, half a segment's overlap), then the average of
+    their outer products, scaled as ``scipy.signal.csd``.
     """
-    f, _, S = signal.spectrogram(z, fs=rate, window="hann", nperseg=nperseg, noverlap=noverlap,
-                                 detrend="constant", return_onesided=True, scaling="density", mode="complex")
-    Z = S.transpose(1, 0, 2)  # (nf, channels, segments)
+    f = np.fft.rfftfreq(nperseg, 1.0 / rate)
+    Z = segment_spectra(z, rate, nperseg).transpose(1, 0, 2)  # (nf, channels, segments)
     G = (Z @ Z.conj().transpose(0, 2, 1)) / Z.shape[2]
     one_sided = np.full(f.size, 2.0)
     one_sided[0] = 1.0
