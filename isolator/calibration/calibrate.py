@@ -108,8 +108,7 @@ def calibrate(
         experiments={e.name: {"kind": e.kind, "residual_before": outcome.residuals_before[e.name],
                               "residual_after": outcome.residuals_after[e.name],
                               "points": int(_points(e))} for e in experiments},
-        modes={"nominal": _modes(calibration.scenario), "fitted": _modes(replace(scenario, sensors=
-                                                                                  calibration.scenario.sensors))},
+        modes={"nominal": _modes(calibration.scenario), "fitted": _modes(scenario)},
         fit=outcome,
         curves={e.name: _curves(e, p0, p1) for e in experiments},
         fitted_data=data,

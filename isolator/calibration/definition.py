@@ -6,7 +6,6 @@ Every problem is one :class:`~isolator.errors.ScenarioError` naming the file and
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -281,7 +280,5 @@ def _experiment(r: KeyReader, base: Path, scenario: Scenario) -> Experiment:
             hint = f"; did you mean '{near}'?" if near else f" (carriages: {', '.join(carriages) or 'none'})"
             raise ScenarioError(f"{r.key('positions')}.{carriage}: no such carriage{hint}")
         positions[carriage] = number(value, f"{r.key('positions')}.{carriage}")
-        if not math.isfinite(positions[carriage]):
-            raise ScenarioError(f"{r.key('positions')}.{carriage}: must be finite")
     r.finish()
     return Experiment(name, file, kind, band, segment, positions)

@@ -109,7 +109,7 @@ def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperime
         if known is None or (derivatives and any(r.J is None for r in known)):
             values = np.exp(x)
             p = calibration.vector(values)
-            tangents = _tangents(calibration, values) if derivatives and jacobian == "model" else None
+            tangents = _tangents(calibration, values) if derivatives else None
             try:
                 known = [e.residuals(p, tangents) for e in experiments]
             except (UnstableTableError, SimulationError) as exc:
@@ -135,8 +135,7 @@ def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperime
                              x_scale=1.0, xtol=1e-10,
                              ftol=1e-12, gtol=1e-12, max_nfev=200)
     x = solution.x
-    jacobian = "model"  # the covariance from the model's Jacobian, whichever the solver used
-    final = evaluate(x, True)
+    final = evaluate(x, True)  # the covariance from the model's Jacobian, whichever the solver used
     after = {e.name: _rms(r.r) for e, r in zip(experiments, final, strict=True)}
     r = np.concatenate([f.r for f in final])
     J = np.vstack([f.J for f in final if f.J is not None])

@@ -47,7 +47,7 @@ def write_response_csv(response: Any, path: str | Path) -> Path:
     return path
 
 
-def response_dict(self: Any) -> dict[str, Any]:
+def response_dict(response: Any) -> dict[str, Any]:
     """A :class:`~isolator.simulation.response.Response`'s summary as plain JSON-ready types (the ``isolator
     simulate --json`` object)."""
 
@@ -55,20 +55,20 @@ def response_dict(self: Any) -> dict[str, Any]:
         return None if v is None or not math.isfinite(v) else float(v)
 
     return {
-        "name": self.name,
-        "model": self.model,
-        "move_start": num(clean_time(self.move_start)),  # as the inputs give them (not 7.8999999999999995)
-        "stop_time": num(clean_time(self.stop_time)),
-        "move_time": num(clean_time(self.stop_time - self.move_start)),
+        "name": response.name,
+        "model": response.model,
+        "move_start": num(clean_time(response.move_start)),  # as the inputs give them (not 7.8999999999999995)
+        "stop_time": num(clean_time(response.stop_time)),
+        "move_time": num(clean_time(response.stop_time - response.move_start)),
         "signals": list(SIGNALS),
-        "peak": {k: num(v) for k, v in self.peak.items()},
-        "final": {k: (None if self.final is None else float(self.final[i])) for i, k in enumerate(SIGNALS)},
-        "settling_time": {k: num(v) for k, v in self.settling_time.items()},
-        "settling_time_max": num(self.settling_time_max),
-        "notes": {k: r.reason for k, r in self.settling.items() if r.reason},
-        "band": self.band.to_dict(),
-        "point_peak": {n: {a: num(float(np.max(np.abs(self.point_signals[i, j])))) for j, a in enumerate("xyz")}
-                       for i, n in enumerate(self.point_names)},
-        **({} if self.windows is None else self.windows.to_dict()),
-        **({} if self.pneumatic is None else self.pneumatic.to_dict()),
+        "peak": {k: num(v) for k, v in response.peak.items()},
+        "final": {k: (None if response.final is None else float(response.final[i])) for i, k in enumerate(SIGNALS)},
+        "settling_time": {k: num(v) for k, v in response.settling_time.items()},
+        "settling_time_max": num(response.settling_time_max),
+        "notes": {k: r.reason for k, r in response.settling.items() if r.reason},
+        "band": response.band.to_dict(),
+        "point_peak": {n: {a: num(float(np.max(np.abs(response.point_signals[i, j])))) for j, a in enumerate("xyz")}
+                       for i, n in enumerate(response.point_names)},
+        **({} if response.windows is None else response.windows.to_dict()),
+        **({} if response.pneumatic is None else response.pneumatic.to_dict()),
     }
