@@ -25,7 +25,7 @@ anti-windup: an integrator keeps integrating while its actuator saturates.
 from __future__ import annotations
 
 from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, hinf, lead, lqr, pid, skyhook
-from .export import DiscreteController, ScheduleEntry, from_statespace
+from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
 from .laws import DiscreteLaw, feedback_law
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
 
@@ -49,4 +49,5 @@ __all__ = [
     "lqr",
     "pid",
     "skyhook",
+    "write_c",
 ]

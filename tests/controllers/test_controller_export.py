@@ -12,7 +12,7 @@ import control
 import numpy as np
 import pytest
 
-from controllers.feedback import DiscreteController, ScheduleEntry, from_statespace
+from controllers.feedback import DiscreteController, ScheduleEntry, from_statespace, write_c
 from isolator import ParameterError
 
 COMPILER = shutil.which("cc") or shutil.which("gcc")
@@ -39,7 +39,7 @@ def random_design(rng, n, p, m):
 
 def build(controller, folder):
     """Write and compile the controller (with the probe) with -Werror; its library through ctypes."""
-    controller.write_c(folder)
+    write_c(controller, folder)
     (folder / "probe.c").write_text(PROBE)
     lib = folder / "libcontroller.so"
     subprocess.run([COMPILER, "-std=c99", "-Wall", "-Wextra", "-Werror", "-pedantic", "-shared", "-fPIC",

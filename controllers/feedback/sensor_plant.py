@@ -1,0 +1,149 @@
+"""The plant an output-feedback controller sees: actuator commands in, the scenario's sensors out.
+
+:func:`sensor_plant` takes the linear model at one rest configuration (with any parameter changes
+already in it) and appends each lagged actuator's first-order lag, so that the plant's input is the
+*command* (before the lag) as the controller issues it. Its outputs are the ``[[sensors]]`` in file
+order, each in its own quantity (m, m/s or m/s^2; an accelerometer's row is its velocity row times the
+state equation, so it reads the lag states and any direct actuator force). :meth:`SensorPlant.discrete`
+samples it as the controller runs (commands held by a zero-order hold, readings at the samples), with
+optionally one sample of computation delay.
+
+The disturbance inputs ``ground:x .. ground:rz`` [m, rad] and ``force:x .. torque:z`` [N, N m] are kept
+for the designs' noise models and the closed-loop responses. An acceleration output from a floor
+input lacks the instantaneous floor-velocity term (see :mod:`isolator.analysis.sensor_outputs`); the
+designs use floor inputs only as a disturbance model, where that term is immaterial.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import control
+import numpy as np
+from scipy.linalg import expm
+
+from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
+from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.arguments import check_public
+
+__all__ = ["DISTURBANCES", "SensorPlant", "sensor_plant"]
+
+#: the disturbance inputs of the plant, after the actuators
+DISTURBANCES = (*GROUND_INPUTS, *FORCE_INPUTS)
+
+
+@dataclass(frozen=True)
+class SensorPlant:
+    """The table from actuator commands (and disturbances) to the sensors' readings, continuous time.
+
+    Attributes
+    ----------
+    lin : LinearModel
+        The rest configuration it comes from.
+    system : control.StateSpace
+        States: the linear model's (12 table states, then chamber pressures of pneumatic tables), then
+        one lag state per actuator with a ``bandwidth`` [N]. Inputs ``actuator:<name>`` [N] in file order,
+        then :data:`DISTURBANCES`; outputs ``s:<sensor>`` in file order [m, m/s or m/s^2].
+    """
+
+    lin: LinearModel
+    system: control.StateSpace
+
+    @property
+    def n_actuators(self) -> int:
+        """Number of actuators (the first inputs)."""
+        return len(self.lin.scenario.actuators)
+
+    @property
+    def n_sensors(self) -> int:
+        """Number of sensors (the outputs)."""
+        return int(self.system.noutputs)
+
+    def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(A, B, C, D)`` of :attr:`system` as float arrays."""
+        s = self.system
+        return tuple(np.asarray(m, dtype=float) for m in (s.A, s.B, s.C, s.D))  # type: ignore[return-value]
+
+    def discrete(self, sample_rate: float, delay: bool = False) -> control.StateSpace:
+        """The plant sampled at ``sample_rate`` [Hz] as the controller runs it.
+
+        Every input is held over each sample (zero-order hold, exact for the held commands; the
+        disturbance columns are held too, a model only). With ``delay``, ``m`` extra states hold the
+        command of the previous sample: the input ``u_k`` computed at ``t_k`` acts from ``t_{k+1}``, and
+        the readings at ``t_k`` see the command acting then.
+
+        Returns
+        -------
+        control.StateSpace
+            Discrete (``dt = 1 / sample_rate``), inputs and outputs named as :attr:`system`'s.
+        """
+        if not (isinstance(sample_rate, int | float) and math.isfinite(sample_rate) and sample_rate > 0):
+            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {sample_rate!r}")
+        a, b, c, d = self.matrices()
+        n, nu = a.shape[0], b.shape[1]
+        block = np.zeros((n + nu, n + nu))
+        block[:n, :n], block[:n, n:] = a, b
+        phi = expm(block / sample_rate)
+        ad, bd = phi[:n, :n], phi[:n, n:]
+        inputs, outputs = list(self.system.input_labels), list(self.system.output_labels)
+        if not delay:
+            return control.ss(ad, bd, c, d, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
+        m = self.n_actuators
+        # z = (x, u_prev): x+ = Ad x + Bd_u u_prev + Bd_w w, u_prev+ = u; y = C x + D_u u_prev + D_w w
+        az = np.block([[ad, bd[:, :m]], [np.zeros((m, n)), np.zeros((m, m))]])
+        bz = np.block([[np.zeros((n, m)), bd[:, m:]], [np.eye(m), np.zeros((m, nu - m))]])
+        cz = np.hstack([c, d[:, :m]])
+        dz = np.hstack([np.zeros((c.shape[0], m)), d[:, m:]])
+        return control.ss(az, bz, cz, dz, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
+
+
+def sensor_plant(lin: LinearModel) -> SensorPlant:
+    """The plant from the actuators' commands to the scenario's sensors at ``lin``'s rest configuration.
+
+    Raises
+    ------
+    ScenarioError
+        The scenario has no ``[[actuators]]`` or no ``[[sensors]]``.
+    """
+    if not isinstance(lin, LinearModel):
+        raise ParameterError(f"lin: must be a LinearModel, got {type(lin).__name__}")
+    scenario = lin.scenario
+    if not scenario.actuators:
+        raise ScenarioError("actuators: the scenario has no [[actuators]] to control with")
+    if not scenario.sensors:
+        raise ScenarioError("sensors: the scenario has no [[sensors]] to feed back (add [[sensors]] entries)")
+    sys = lin.system
+    a, b = np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)
+    c, d = np.asarray(sys.C, dtype=float), np.asarray(sys.D, dtype=float)
+    in_labels, out_labels = list(sys.input_labels), list(sys.output_labels)
+    iu = [in_labels.index(f"actuator:{act.name}") for act in scenario.actuators]
+    iw = [in_labels.index(name) for name in DISTURBANCES]
+    rows = [out_labels.index(f"s:{s.name}") for s in scenario.sensors]
+    acts = scenario.actuators
+    lagged = [k for k, act in enumerate(acts) if act.bandwidth is not None]
+    direct = [k for k in range(len(acts)) if k not in lagged]
+    tau = np.array([1.0 / (2 * math.pi * float(acts[k].bandwidth)) for k in lagged])  # type: ignore[arg-type]
+    n, nl, m = a.shape[0], len(lagged), len(acts)
+    bu = b[:, iu]
+    # lag states f_k' = (u_k - f_k) / tau_k push the table through the actuator's column
+    a_full = np.zeros((n + nl, n + nl))
+    a_full[:n, :n] = a
+    a_full[:n, n:] = bu[:, lagged]
+    a_full[n:, n:] = -np.diag(1.0 / tau) if nl else np.zeros((0, 0))
+    b_full = np.zeros((n + nl, m + len(iw)))
+    b_full[:n, direct] = bu[:, direct]
+    b_full[n + np.arange(nl), lagged] = 1.0 / tau
+    b_full[:n, m:] = b[:, iw]
+    du = d[np.ix_(rows, iu)]  # accelerometers: the force acts on the acceleration at once
+    c_full = np.hstack([c[rows], du[:, lagged]])
+    d_full = np.zeros((len(rows), m + len(iw)))
+    d_full[:, direct] = du[:, direct]
+    d_full[:, m:] = d[np.ix_(rows, iw)]
+    system = control.ss(a_full, b_full, c_full, d_full,
+                        inputs=[f"actuator:{act.name}" for act in acts] + list(DISTURBANCES),
+                        outputs=[f"s:{s.name}" for s in scenario.sensors], name="sensor-plant")
+    return SensorPlant(lin, system)
+
+
+check_public(globals())

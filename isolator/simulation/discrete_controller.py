@@ -1,0 +1,265 @@
+"""The discrete controller the simulation runs and ``controller.json`` holds: sensors in, forces out.
+
+The contract is ``docs/scenario-format.md``, section "Sensors in the scenario, output feedback and
+exported controllers". At each sample ``t_k = k / sample_rate`` the controller receives every sensor's
+reading minus its reading at the initial equilibrium (``y``, SI units) and the carriages' raw positions
+(``q``, m) and returns the actuators' force commands (``u``, N)::
+
+    u_k     = C x_k + D y_k        (from the readings at t_k; held until t_{k+1})
+    x_{k+1} = A x_k + B y_k
+
+Gain scheduling: a schedule holds design points, each with the carriages' positions ``q`` and its
+``(A, B, C, D)`` (the same state dimension, in corresponding state coordinates). One carriage
+(``schedule_carriage``) schedules: with ``q_i <= q < q_{i+1}`` its positions at two neighbouring points and
+``w = (q - q_i) / (q_{i+1} - q_i)``, every matrix is ``(1 - w) M_i + w M_{i+1}`` entry by entry, and that
+interpolated ``(A, B, C, D)`` is applied as above. Below the first point (or a NaN position) the first
+point's matrices apply, above the last the last's (clamped). The other carriages' positions are recorded
+in the points but not used.
+
+:meth:`DiscreteController.step` is the reference the generated C (:func:`controllers.feedback.export.write_c`)
+equals to rounding.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import math
+import numbers
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
+
+__all__ = ["DiscreteController", "ScheduleEntry"]
+
+_MATRICES = ("A", "B", "C", "D")
+
+
+def _matrix(value: object, shape: tuple[int, int], what: str, dims: str) -> np.ndarray:
+    """``value`` as a read-only float matrix of ``shape``, or a ParameterError naming ``what``."""
+    try:
+        m = np.array(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{what}: must be a matrix of numbers, got {type(value).__name__}") from None
+    m = m.reshape(shape) if m.size == 0 and 0 in shape else m
+    if m.shape != shape:
+        raise ParameterError(f"{what}: must be {shape[0]} x {shape[1]} ({dims}), got shape {m.shape}")
+    if not np.all(np.isfinite(m)):
+        raise ParameterError(f"{what}: every entry must be finite")
+    m.setflags(write=False)
+    return m
+
+
+@dataclass(frozen=True, eq=False)
+class ScheduleEntry:
+    """One design point of a scheduled controller.
+
+    Attributes
+    ----------
+    q : tuple of float
+        Every carriage's position along its axis at this design [m], carriages in file order.
+    A, B, C, D : numpy.ndarray
+        The discrete state-space matrices designed there (see :class:`DiscreteController`).
+    """
+
+    q: Sequence[float]
+    A: np.ndarray
+    B: np.ndarray
+    C: np.ndarray
+    D: np.ndarray
+
+
+@dataclass(frozen=True, eq=False)
+class DiscreteController:
+    """A discrete-time controller from the sensors' readings to the actuators' force commands.
+
+    Attributes
+    ----------
+    sample_rate : float
+        [Hz] at which :meth:`step` is called (``> 0``).
+    sensors, actuators, carriages : tuple of str
+        Names in file order: the inputs ``y`` (sensor units: m, m/s or m/s^2), the outputs ``u`` [N], and
+        the positions ``q`` [m]. At least one sensor and one actuator.
+    method : str
+        The design's name (e.g. ``"lqg"``).
+    A, B, C, D : numpy.ndarray, optional
+        ``x+ = A x + B y``, ``u = C x + D y``: shapes ``n x n``, ``n x sensors``, ``actuators x n``,
+        ``actuators x sensors`` (``n`` may be 0: a static gain ``D``). Not given with a schedule.
+    schedule : tuple of ScheduleEntry
+        Design points instead of ``A .. D`` (see the module's description), ``schedule_carriage``'s
+        positions strictly increasing.
+    schedule_carriage : int
+        Index of the carriage that schedules (file order).
+    settings : dict
+        The design's settings (JSON values), recorded as given.
+    delay : bool
+        Whether the design includes one sample of computation delay (``u_k`` acting from ``t_{k+1}``):
+        such a design is just another ``(A, B, C, D)``; the flag is recorded only.
+    """
+
+    sample_rate: float
+    sensors: Sequence[str]
+    actuators: Sequence[str]
+    carriages: Sequence[str] = ()
+    method: str = "custom"
+    A: np.ndarray | None = None
+    B: np.ndarray | None = None
+    C: np.ndarray | None = None
+    D: np.ndarray | None = None
+    schedule: Sequence[ScheduleEntry] = ()
+    schedule_carriage: int = 0
+    settings: Mapping[str, Any] = field(default_factory=dict)
+    delay: bool = False
+
+    def __post_init__(self) -> None:
+        put = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731
+        if not (isinstance(rate := self.sample_rate, numbers.Real) and math.isfinite(rate) and rate > 0):
+            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {rate!r}")
+        put("sample_rate", float(rate))
+        for key in ("sensors", "actuators", "carriages"):
+            names = getattr(self, key)
+            if isinstance(names, str) or not all(isinstance(n, str) for n in names):
+                raise ParameterError(f"{key}: must be a sequence of names (strings)")
+            put(key, tuple(names))
+            if key != "carriages" and not names:
+                raise ParameterError(f"{key}: at least one is needed")
+        try:
+            put("settings", json.loads(json.dumps(dict(self.settings), allow_nan=False)))
+        except (TypeError, ValueError) as error:
+            raise ParameterError(f"settings: must hold JSON values ({error})") from None
+        p, m = len(self.sensors), len(self.actuators)
+        given = [k for k in _MATRICES if getattr(self, k) is not None]
+        if self.schedule:
+            if given:
+                raise ParameterError(f"{given[0]}: give either the matrices or a schedule, not both")
+            put("schedule", self._check_schedule(p, m))
+            return
+        if missing := [k for k in _MATRICES if getattr(self, k) is None]:
+            raise ParameterError(f"{missing[0]}: missing (the matrices A, B, C, D, or a schedule)")
+        for k, v in zip(_MATRICES, self._check_matrices(self.A, self.B, self.C, self.D, p, m, ""), strict=True):
+            put(k, v)
+
+    @staticmethod
+    def _check_matrices(A: Any, B: Any, C: Any, D: Any, p: int, m: int, where: str
+                        ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        shape = np.shape(A)
+        n = shape[0] if len(shape) == 2 else (0 if np.size(A) == 0 else -1)
+        if n < 0:
+            raise ParameterError(f"{where}A: must be a square matrix (states x states), got shape {shape}")
+        return (_matrix(A, (n, n), where + "A", "states x states"),
+                _matrix(B, (n, p), where + "B", "states x sensors"),
+                _matrix(C, (m, n), where + "C", "actuators x states"),
+                _matrix(D, (m, p), where + "D", "actuators x sensors"))
+
+    def _check_schedule(self, p: int, m: int) -> tuple[ScheduleEntry, ...]:
+        nc = len(self.carriages)
+        if not (isinstance(self.schedule_carriage, int) and 0 <= self.schedule_carriage < nc):
+            raise ParameterError(f"schedule_carriage: must index one of the {nc} carriages (a schedule needs "
+                                 f"one), got {self.schedule_carriage!r}")
+        entries: list[ScheduleEntry] = []
+        for i, e in enumerate(self.schedule):
+            where = f"schedule[{i}]."
+            if not isinstance(e, ScheduleEntry):
+                raise ParameterError(f"schedule[{i}]: must be a ScheduleEntry, got {type(e).__name__}")
+            q = np.array(e.q, dtype=float).ravel()
+            if q.shape != (nc,) or not np.all(np.isfinite(q)):
+                raise ParameterError(f"{where}q: must be {nc} finite positions (one per carriage), got {e.q!r}")
+            mats = self._check_matrices(e.A, e.B, e.C, e.D, p, m, where)
+            if entries and mats[0].shape != entries[0].A.shape:
+                raise ParameterError(f"{where}A: must have the first point's {entries[0].A.shape[0]} states, "
+                                     f"got {mats[0].shape[0]}")
+            entries.append(ScheduleEntry(tuple(float(v) for v in q), *mats))
+        qs = [e.q[self.schedule_carriage] for e in entries]
+        if any(b <= a for a, b in itertools.pairwise(qs)):
+            raise ParameterError(f"schedule: q of carriage {self.schedule_carriage} must increase strictly "
+                                 f"from point to point, got {qs}")
+        return tuple(entries)
+
+    @property
+    def states(self) -> int:
+        """Number of controller states ``n``."""
+        return int(self.schedule[0].A.shape[0] if self.schedule else self.A.shape[0])  # type: ignore[union-attr]
+
+    def matrices(self, q: Sequence[float] | np.ndarray | None = None
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """``(A, B, C, D)`` at the carriages' positions ``q`` [m] (interpolated and clamped when scheduled)."""
+        if not self.schedule:
+            return self.A, self.B, self.C, self.D  # type: ignore[return-value]
+        s, c = self.schedule, self.schedule_carriage
+        if len(s) == 1:
+            return s[0].A, s[0].B, s[0].C, s[0].D
+        qs = float(np.asarray(q, dtype=float).ravel()[c]) if q is not None else math.nan
+        k, w = 0, 0.0
+        if qs > s[0].q[c]:  # else below the range, or NaN: the first point
+            k, w = len(s) - 2, 1.0
+            for i in range(len(s) - 1):
+                if qs < s[i + 1].q[c]:
+                    k, w = i, (qs - s[i].q[c]) / (s[i + 1].q[c] - s[i].q[c])
+                    break
+        a, b = s[k], s[k + 1]
+        mix = lambda x, y: (1.0 - w) * x + w * y  # noqa: E731
+        return mix(a.A, b.A), mix(a.B, b.B), mix(a.C, b.C), mix(a.D, b.D)
+
+    def reset(self) -> np.ndarray:
+        """The state at rest: zeros (``n``,)."""
+        return np.zeros(self.states)
+
+    def step(self, x: np.ndarray, y: np.ndarray, q: Sequence[float] | np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray]:
+        """One sample: ``(x_next, u)`` from the state ``x``, the readings ``y`` and positions ``q`` [m] at ``t_k``.
+
+        ``u = C x + D y`` [N] is the command from ``t_k``; ``x_next = A x + B y``.
+        """
+        A, B, C, D = self.matrices(q)
+        x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        return A @ x + B @ y, C @ x + D @ y
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON data of ``controller.json``."""
+        out: dict[str, Any] = {"sample_rate": self.sample_rate, "sensors": list(self.sensors),
+                               "actuators": list(self.actuators), "carriages": list(self.carriages),
+                               "method": self.method, "delay": bool(self.delay), "settings": self.settings}
+        if self.schedule:
+            mid = self.schedule[(len(self.schedule) - 1) // 2]  # nominal design, for readers of A .. D only
+            out.update({k: getattr(mid, k).tolist() for k in _MATRICES})
+            out["schedule_carriage"] = self.schedule_carriage
+            out["schedule"] = [{"q": list(e.q), **{k: getattr(e, k).tolist() for k in _MATRICES}}
+                               for e in self.schedule]
+        else:
+            out.update({k: getattr(self, k).tolist() for k in _MATRICES})
+        return out
+
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> DiscreteController:
+        """The controller of :meth:`to_dict`'s data (with a ``schedule``, its top-level ``A .. D`` are ignored)."""
+        if missing := [key for key in ("sample_rate", "sensors", "actuators") if key not in data]:
+            raise ParameterError(f"{missing[0]}: missing from the controller's JSON")
+        common: dict[str, Any] = {k: data[k] for k in ("sample_rate", "sensors", "actuators")}
+        common.update(carriages=data.get("carriages", []), method=data.get("method", "custom"),
+                      settings=data.get("settings", {}), delay=bool(data.get("delay", False)))
+        if data.get("schedule"):
+            entries = [ScheduleEntry(e["q"], *(e[k] for k in _MATRICES)) for e in data["schedule"]]
+            return cls(**common, schedule=entries, schedule_carriage=data.get("schedule_carriage", 0))
+        common.update({k: data.get(k) for k in _MATRICES})
+        return cls(**common)
+
+    def to_json(self, path: str | Path) -> Path:
+        """Write ``controller.json`` (``path`` a file, or a folder to write it in); returns the file."""
+        target = Path(path) / "controller.json" if Path(path).is_dir() else Path(path)
+        target.write_text(json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        return target
+
+    @classmethod
+    def from_json(cls, path: str | Path) -> DiscreteController:
+        """Read ``controller.json`` (``path`` the file or its folder)."""
+        source = Path(path) / "controller.json" if Path(path).is_dir() else Path(path)
+        return cls.from_dict(json.loads(source.read_text(encoding="utf-8")))
+
+
+check_public(globals())
