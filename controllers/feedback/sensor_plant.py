@@ -24,10 +24,10 @@ import numpy as np
 from scipy.linalg import expm
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
-from isolator.errors import ParameterError, ScenarioError
+from isolator.errors import ParameterError, ScenarioError, UnstableClosedLoopError
 from isolator.scenario.arguments import check_public
 
-__all__ = ["DISTURBANCES", "SensorPlant", "sensor_plant"]
+__all__ = ["DISTURBANCES", "SensorPlant", "loop_matrix", "sensor_plant"]
 
 #: the disturbance inputs of the plant, after the actuators
 DISTURBANCES = (*GROUND_INPUTS, *FORCE_INPUTS)
@@ -96,6 +96,33 @@ class SensorPlant:
         cz = np.hstack([c, d[:, :m]])
         dz = np.hstack([np.zeros((c.shape[0], m)), d[:, m:]])
         return control.ss(az, bz, cz, dz, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
+
+
+def loop_matrix(plant: control.StateSpace, controller: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+                ) -> np.ndarray:
+    """The state matrix of the sampled loop: ``plant`` (discrete, its first ``m`` inputs the commands) with
+    the controller ``(A, B, C, D)`` from its outputs to those inputs (``u = C x_c + D y``, the command itself).
+
+    Returns
+    -------
+    ndarray (plant states + controller states, same)
+        States ``(x, x_c)``; the loop is stable when every eigenvalue is inside the unit circle.
+
+    Raises
+    ------
+    UnstableClosedLoopError
+        The loop is algebraically singular (``I - D D_p`` not invertible: no command satisfies it).
+    """
+    ac, bc, cc, dc = (np.asarray(m, dtype=float) for m in controller)
+    m = cc.shape[0]
+    ap, bp = np.asarray(plant.A, dtype=float), np.asarray(plant.B, dtype=float)[:, :m]
+    cp, dp = np.asarray(plant.C, dtype=float), np.asarray(plant.D, dtype=float)[:, :m]
+    try:
+        e = np.linalg.inv(np.eye(m) - dc @ dp)
+    except np.linalg.LinAlgError:
+        raise UnstableClosedLoopError("the loop is algebraically singular: I - D D_plant has no inverse") from None
+    u_x, u_c = e @ dc @ cp, e @ cc  # u = u_x x + u_c x_c
+    return np.block([[ap + bp @ u_x, bp @ u_c], [bc @ (cp + dp @ u_x), ac + bc @ dp @ u_c]])
 
 
 def sensor_plant(lin: LinearModel) -> SensorPlant:
