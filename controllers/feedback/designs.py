@@ -191,8 +191,8 @@ def pid(
     actuators control (the six rigid-body directions when ``J`` has full
     rank): the table's displacement and rotation ``J^+ y`` (the allocation's
     pseudo-inverse) integrated, the integral distributed back over the
-    actuators by ``J``: ``u_I = -ki J \int J^+ y dt``. Its wrench
-    ``-ki J^T J \int x dt`` is that of ``ki / s`` at every actuator, but
+    actuators by ``J``: ``u_I = -ki J integral(J^+ y)``. Its wrench
+    ``-ki J^T J integral(x)`` is that of ``ki / s`` at every actuator, but
     redundant actuators (12 for 6 directions) add no integrators the table
     cannot tell apart: one per actuator would leave ``n_actuators - rank J``
     closed-loop eigenvalues at zero (marginal modes, their integrators
