@@ -28,8 +28,8 @@ from __future__ import annotations
 from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, lead, pid, skyhook
 from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
 from .laws import DiscreteLaw, feedback_law
-from .state_designs import hinf, lqr
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
+from .state_designs import hinf, lqr
 
 __all__ = [
     "MEASUREMENTS",

@@ -23,7 +23,16 @@ from isolator.analysis.linear import FORCE_INPUTS, LinearModel
 from isolator.errors import OptimisationError, ParameterError
 from isolator.scenario.arguments import check_public
 
-from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, _measured_state, _positive, _scales, actuated, actuator_labels
+from .designs import (
+    MEASUREMENTS,
+    SAMPLE_RATE,
+    Controller,
+    _measured_state,
+    _positive,
+    _scales,
+    actuated,
+    actuator_labels,
+)
 
 __all__ = ["hinf", "lqr"]
 
