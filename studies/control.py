@@ -14,9 +14,11 @@ Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
   feedforward.csv --band ...`` reproduces the feedforward run's numbers;
 * ``report.md``: the numbers, the band, the controller and its loop's stability.
 
-With feedback alone the controller regulates to the initial equilibrium;
-with both, to the feedforward's quasi-static path, so the two do not fight
-over the quasi-static tilt.
+With feedback alone the controller regulates to the initial equilibrium
+(the state-feedback designs lqr and hinf, which would fight the carriages'
+quasi-static tilt with saturating forces, to the planned move's quasi-static
+path: :attr:`~controllers.feedback.Controller.follows_path`); with both, to
+the feedforward's quasi-static path, so the two do not fight over the tilt.
 """
 
 from __future__ import annotations
@@ -62,6 +64,10 @@ __all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
 
 CONTROLLERS = ("skyhook", "lead", "lqr", "hinf")
 RUNS = ("passive", "feedforward", "feedback", "both")
+#: what the feedback-alone run regulates to, by the controller's follows_path
+_ALONE = {False: "the initial equilibrium",
+          True: "the planned move's quasi-static path (a state-feedback design: about the initial equilibrium its "
+          "micrometre weights would fight the carriages' quasi-static tilt)"}
 _COLORS = {"passive": "0.35", "feedforward": "tab:blue", "feedback": "tab:orange", "both": "tab:green"}
 
 
@@ -323,8 +329,8 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
         f"(Tustin), sampled-loop spectral radius {study.stability.spectral_radius:.4f} "
         f"({'stable' if study.stability.stable else 'UNSTABLE'}), slowest continuous decay "
         f"{study.stability.margin:.3g} 1/s.",
-        "With feedback alone the controller regulates to the initial equilibrium; with both, to the "
-        "feedforward's quasi-static path.",
+        "With feedback alone the controller regulates to "
+        f"{_ALONE[ctrl.follows_path]}; with both, to the feedforward's quasi-static path.",
         "",
         *band_lines(study.band, "One band for all four runs, about each run's final value: the question is how "
                     "fast each controller brings the table back to within what the passive table calls settled, "

@@ -8,8 +8,9 @@ Every controller here maps the table's measured motion to actuator commands:
 * outputs: one commanded force per actuator [N] (``actuator:<name>``).
 
 Modules: :mod:`.designs` (:func:`skyhook`, :func:`pid`, :func:`lead`,
-:func:`lqr`, :func:`hinf`, :func:`decentralised`; the :class:`Controller`
-they return), :mod:`.loops` (:func:`closed_loop` on the linear plant with the
+:func:`decentralised`; the :class:`Controller` every design returns),
+:mod:`.state_designs` (:func:`lqr`, :func:`hinf`: state feedback, run about
+the carriages' quasi-static path), :mod:`.loops` (:func:`closed_loop` on the linear plant with the
 actuators' lag, for transmissibility and compliance with control;
 :func:`check_stability` continuous and as sampled: Tustin controller around
 the plant held by a zero-order hold) and :mod:`.laws` (:func:`feedback_law`:
@@ -24,10 +25,11 @@ anti-windup: an integrator keeps integrating while its actuator saturates.
 
 from __future__ import annotations
 
-from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, hinf, lead, lqr, pid, skyhook
+from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, lead, pid, skyhook
 from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
 from .laws import DiscreteLaw, feedback_law
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
+from .state_designs import hinf, lqr
 
 __all__ = [
     "MEASUREMENTS",

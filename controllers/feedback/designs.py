@@ -4,11 +4,17 @@
   the table's velocity at its own point along its own line (collocated, so
   passive: it cannot destabilise the continuous-time loop);
 * :func:`pid` and :func:`lead`: the same collocated structure with a PID
-  (filtered derivative) or a lead compensator on the absolute displacement
-  (:func:`decentralised`: any SISO law that way);
-* :func:`lqr`: full-state LQR by ``control.lqr`` with Bryson's rule weights;
-* :func:`hinf`: H-infinity state-feedback-with-noise design by
-  ``control.hinfsyn`` (needs slycot).
+  (filtered derivative; its integral action one integrator per controlled
+  direction of the table, not per actuator) or a lead compensator on the
+  absolute displacement (:func:`decentralised`: any SISO law that way);
+* the state-feedback designs :func:`~controllers.feedback.state_designs.lqr` and
+  :func:`~controllers.feedback.state_designs.hinf` are in
+  :mod:`controllers.feedback.state_designs`, on :func:`actuated` and the
+  Bryson scales here.
+
+The two state-feedback designs regulate the table's absolute position, so
+they run about the quasi-static path of the carriages' weight
+(:attr:`Controller.follows_path`), not about the initial equilibrium.
 
 The designs ignore the actuators' lag and saturation; the checks
 (:mod:`controllers.feedback.loops`) and the simulation include them.
@@ -23,14 +29,14 @@ import control
 import numpy as np
 
 from controllers.feedforward.wrench import allocation_matrix
-from isolator.analysis.linear import FORCE_INPUTS, STATE_NAMES, LinearModel
-from isolator.errors import OptimisationError, ParameterError, ScenarioError
+from isolator.analysis.linear import STATE_NAMES, LinearModel
+from isolator.errors import ParameterError, ScenarioError
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.rules import check_value
 
-__all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "decentralised", "hinf", "lead", "lqr", "pid", "skyhook"]
+__all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "decentralised", "lead", "pid", "skyhook"]
 
 MEASUREMENTS = STATE_NAMES
 #: default controller sample rate [Hz]
@@ -53,12 +59,23 @@ class Controller:
         [Hz] at which it is run (discretised by Tustin's method).
     description : str
         The design's parameters, in words.
+    follows_path : bool
+        The design regulates the table's absolute position states (its weights
+        allow micrometres), so regulated about the initial equilibrium it
+        fights the quasi-static tilt of a carriage's weight crossing the table
+        with large standing forces. True: run it about the carriages'
+        quasi-static path (:func:`~controllers.feedback.feedback_law` then
+        defaults its ``reference`` to ``quasi_static_path(scenario)``; the
+        static tilt is left to the isolators, as with feedforward).
+        ``dataclasses.replace(controller, follows_path=False)`` restores the
+        initial equilibrium as the default reference.
     """
 
     name: str
     system: control.StateSpace
     sample_rate: float = SAMPLE_RATE
     description: str = ""
+    follows_path: bool = False
 
     def __post_init__(self) -> None:
         rate = check_value("sample_rate", self.sample_rate, "sample_rate", ParameterError)
@@ -165,15 +182,32 @@ def pid(
     derivative_filter_hz: float = 100.0,
     sample_rate: float = SAMPLE_RATE,
 ) -> Controller:
-    """Collocated PID on the absolute displacement: ``kp + ki/s + kd s / (1 + s/w_f)``.
+    """Collocated PID on the absolute displacement: ``kp + kd s / (1 + s/w_f)`` per actuator, ``ki / s`` per
+    controlled direction.
+
+    The proportional and derivative parts act at each actuator on its
+    collocated displacement ``y = J x`` (``J`` = the allocation matrix's
+    transpose). The integral action has one integrator per direction the
+    actuators control (the six rigid-body directions when ``J`` has full
+    rank): the table's displacement and rotation ``J^+ y`` (the allocation's
+    pseudo-inverse) integrated, the integral distributed back over the
+    actuators by ``J``: ``u_I = -ki J integral(J^+ y)``. Its wrench
+    ``-ki J^T J integral(x)`` is that of ``ki / s`` at every actuator, but
+    redundant actuators (12 for 6 directions) add no integrators the table
+    cannot tell apart: one per actuator would leave ``n_actuators - rank J``
+    closed-loop eigenvalues at zero (marginal modes, their integrators
+    pushing the actuators against each other).
 
     Parameters
     ----------
     kp : float
-        [N/m] (added stiffness).
+        [N/m] (added stiffness per actuator).
     ki : float
-        [N/(m s)]; > 0 holds the table at the reference (also against the
-        quasi-static tilt of a move: large standing forces).
+        [N/(m s)] per actuator along each controlled direction (the wrench
+        ``ki J^T J`` per unit of the integrated displacement [m s] and
+        rotation [rad s]); > 0 holds the table at the reference (also
+        against the quasi-static tilt of a move: large standing forces) and
+        rejects a constant disturbance force along every controlled direction.
     kd : float
         [N s/m] (added damping).
     derivative_filter_hz : float
@@ -182,12 +216,29 @@ def pid(
     kp, ki, kd = (_positive(v, k, allow_zero=True) for v, k in ((kp, "kp"), (ki, "ki"), (kd, "kd")))
     wf = 2 * math.pi * _positive(derivative_filter_hz, "derivative_filter_hz")
     s = control.tf("s")
-    g = kp + kd * s / (1 + s / wf)
-    if ki > 0:
-        g = g + ki / s
-    return decentralised(lin, control.tf(g), "displacement", "pid", sample_rate,
-                         f"PID kp {kp:.4g} N/m, ki {ki:.4g} N/(m s), kd {kd:.4g} N s/m, "
-                         f"derivative filter {derivative_filter_hz:.4g} Hz")
+    description = (f"PID kp {kp:.4g} N/m, ki {ki:.4g} N/(m s), kd {kd:.4g} N s/m, "
+                   f"derivative filter {derivative_filter_hz:.4g} Hz")
+    local = decentralised(lin, control.tf(kp + kd * s / (1 + s / wf)), "displacement", "pid", sample_rate,
+                          description)
+    if ki == 0:
+        return local
+    j = _collocation(lin)
+    u_, sv, vt = np.linalg.svd(j, full_matrices=False)
+    rank = int(np.sum(sv > 1e-9 * sv[0]))
+    # integrated coordinates: the table's displacement and rotation when J has full rank, else its
+    # controlled directions (orthonormal combinations of them)
+    basis = np.eye(6) if rank == 6 else vt[:rank].T
+    to_dirs = basis.T @ vt[:rank].T @ np.diag(1 / sv[:rank]) @ u_[:, :rank].T  # basis^T J^+ (rank, n_a)
+    k = local.system
+    a, b, c, d = (np.asarray(m, dtype=float) for m in (k.A, k.B, k.C, k.D))
+    n = a.shape[0]
+    pick = np.hstack([j, np.zeros_like(j)])  # y = J x from the 12 measured states
+    system = control.ss(
+        np.block([[a, np.zeros((n, rank))], [np.zeros((rank, n)), np.zeros((rank, rank))]]),
+        np.vstack([b, to_dirs @ pick]), np.hstack([c, -ki * j @ basis]), d,
+        inputs=list(MEASUREMENTS), outputs=actuator_labels(lin.scenario), name="pid",
+    )
+    return Controller("pid", system, sample_rate, description)
 
 
 def lead(
@@ -240,109 +291,6 @@ def _measured_state(lin: LinearModel, name: str) -> None:
             f"controller: {name} feeds back the whole state, and a pneumatic table's chamber pressures are not "
             "measured (use skyhook, pid or lead)"
         )
-
-
-def lqr(
-    lin: LinearModel,
-    max_displacement: float = 1e-4,
-    max_rotation: float = 1e-4,
-    max_velocity: float = 1e-3,
-    max_rate: float = 1e-3,
-    sample_rate: float = SAMPLE_RATE,
-) -> Controller:
-    """Full-state LQR (``control.lqr``) with Bryson's rule weights.
-
-    ``Q = diag(1 / max_i^2)`` on the 12 states, ``R = diag(1 / max_force^2)``
-    per actuator; ``u = -K x``. The Riccati equation is solved in states and
-    forces scaled by those sizes (the same gain, well conditioned).
-
-    Parameters
-    ----------
-    max_displacement, max_rotation, max_velocity, max_rate : float
-        Acceptable table displacement [m], rotation [rad], velocity [m/s] and
-        angular velocity [rad/s].
-    """
-    _measured_state(lin, "lqr")
-    a, b = actuated(lin)
-    sx, su = _scales(lin, max_displacement, max_rotation, max_velocity, max_rate)
-    gain_scaled, _, _ = control.lqr(a * sx[None, :] / sx[:, None], b * su[None, :] / sx[:, None],
-                                    np.eye(sx.size), np.eye(su.size))
-    gain = su[:, None] * np.asarray(gain_scaled, dtype=float) / sx[None, :]
-    system = control.ss(np.zeros((0, 0)), np.zeros((0, 12)), np.zeros((b.shape[1], 0)), -gain,
-                        inputs=list(MEASUREMENTS), outputs=actuator_labels(lin.scenario), name="lqr")
-    return Controller("lqr", system, sample_rate,
-                      f"LQR, Bryson weights: {max_displacement:.3g} m, {max_rotation:.3g} rad, "
-                      f"{max_velocity:.3g} m/s, {max_rate:.3g} rad/s, max_force per actuator")
-
-
-def hinf(
-    lin: LinearModel,
-    max_displacement: float = 1e-3,
-    max_rotation: float = 1e-3,
-    max_velocity: float = 1e-2,
-    max_rate: float = 1e-2,
-    disturbance: float = 100.0,
-    noise: float = 0.1,
-    relax: float = 1.5,
-    sample_rate: float = SAMPLE_RATE,
-) -> Controller:
-    """H-infinity output feedback (``control.hinfsyn``, needs slycot).
-
-    Generalised plant, in states and forces scaled as in :func:`lqr`: a
-    wrench disturbance at the mass centre (``disturbance`` N and N m per
-    axis) and sensor noise (``noise``, a fraction of each state's acceptable
-    size) in; the scaled states and forces out; the noisy states measured.
-    ``control.hinfsyn`` finds the optimal norm ``gamma``; the controller is
-    the central suboptimal one at ``relax * gamma`` (slycot ``sb10ad``): the
-    optimal one has poles far beyond any sample rate.
-
-    Raises
-    ------
-    ParameterError
-        slycot is missing, or a weight is not a finite positive number.
-    OptimisationError
-        No controller achieves a finite norm.
-    """
-    try:
-        import slycot
-    except ImportError:
-        raise ParameterError('controller: hinf needs slycot: pip install ".[hinf]" (the extra "hinf"; or pip '
-                             "install slycot)") from None
-    _measured_state(lin, "hinf")
-    a, b2 = actuated(lin)
-    labels = list(lin.system.input_labels)
-    bw = np.asarray(lin.system.B, dtype=float)[:, [labels.index(n) for n in FORCE_INPUTS]]
-    d = _positive(disturbance, "disturbance")
-    eps = _positive(noise, "noise")
-    sx, su = _scales(lin, max_displacement, max_rotation, max_velocity, max_rate)
-    n, m = a.shape[0], b2.shape[1]
-    a_s = a * sx[None, :] / sx[:, None]
-    b1 = np.hstack([bw * d / sx[:, None], np.zeros((n, n))])
-    b2_s = b2 * su[None, :] / sx[:, None]
-    c1 = np.vstack([np.eye(n), np.zeros((m, n))])
-    d12 = np.vstack([np.zeros((n, m)), np.eye(m)])
-    d21 = np.hstack([np.zeros((n, 6)), eps * np.eye(n)])
-    plant = control.ss(a_s, np.hstack([b1, b2_s]), np.vstack([c1, np.eye(n)]),
-                       np.block([[np.zeros((n + m, 6 + n)), d12], [d21, np.zeros((n, m))]]))
-    factor = _positive(relax, "relax")
-    if factor < 1:
-        raise ParameterError(f"relax: must be >= 1 (a factor on the optimal norm), got {relax}")
-    try:
-        _, _, optimal, _ = control.hinfsyn(plant, n, m)
-        out = slycot.sb10ad(n, 6 + n + m, 2 * n + m, m, n, factor * optimal, plant.A, plant.B, plant.C,
-                            plant.D, job=4)
-    except Exception as exc:  # slycot reports failures as its own exception types
-        raise OptimisationError(f"hinf: no H-infinity controller for these weights ({exc})") from None
-    gamma = factor * optimal
-    k = control.ss(*out[1:5])
-    # scaled measurement x / sx in, scaled force u / su out
-    system = control.ss(k.A, np.asarray(k.B) / sx[None, :], su[:, None] * np.asarray(k.C),
-                        su[:, None] * np.asarray(k.D) / sx[None, :], inputs=list(MEASUREMENTS),
-                        outputs=actuator_labels(lin.scenario), name="hinf")
-    return Controller("hinf", system, sample_rate,
-                      f"H-infinity, gamma {float(gamma):.3g}: Bryson weights {max_displacement:.3g} m, "
-                      f"{max_rotation:.3g} rad, {max_velocity:.3g} m/s, {max_rate:.3g} rad/s; "
-                      f"disturbance {d:.3g} N, noise {eps:.3g}")
 
 
 check_public(globals())

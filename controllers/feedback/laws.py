@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from controllers.feedforward.path import QuasiStaticPath
+from controllers.feedforward.path import QuasiStaticPath, quasi_static_path
 from isolator.analysis.linear import linearise
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -80,6 +80,8 @@ def feedback_law(
     reference : QuasiStaticPath, optional
         Regulate to this path (e.g. the feedforward's) instead of the initial
         equilibrium, so that feedback does not fight the quasi-static tilt.
+        Default: the initial equilibrium, or ``quasi_static_path(scenario)``
+        for a controller with ``follows_path`` (:func:`lqr`, :func:`hinf`).
     check : bool
         Raise :class:`UnstableClosedLoopError` when the sampled loop is unstable
         with the carriages at their start or their final positions.
@@ -90,6 +92,8 @@ def feedback_law(
     if check:
         check_stability(lin_start, controller, "with the carriages at their start").raise_if_unstable()
         check_stability(lin_end, controller, "with the carriages at their final positions").raise_if_unstable()
+    if reference is None and controller.follows_path:
+        reference = quasi_static_path(scenario)
     return DiscreteLaw(controller, reference, closed_loop(lin_end, controller, check=False))
 
 

@@ -15,7 +15,7 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from conftest import active_dict, base_dict, make
-from controllers.feedback import designs
+from controllers import feedback as fb
 from controllers.profiles.move_design import move_designs
 from controllers.profiles.problem import ProfileSettings
 from isolator import ParameterError, Simulator, linearise, samples, scurve, trapezoid
@@ -97,14 +97,14 @@ def test_feedback_designers(active_plant, design, value):
     name, argument = design
     kwargs = {"lead": {"zero_hz": 5.0, "pole_hz": 50.0}}.get(name, {})
     with pytest.raises(ParameterError) as caught:
-        getattr(designs, name)(active_plant, **{argument: value, **kwargs})
+        getattr(fb, name)(active_plant, **{argument: value, **kwargs})
     _names(caught, argument)
 
 
 @given(st.sampled_from([math.nan, "fast", None, -5.0]))
 def test_controller_sample_rate(active_plant, value):
     with pytest.raises(ParameterError) as caught:
-        designs.skyhook(active_plant, 1e3, sample_rate=value)
+        fb.skyhook(active_plant, 1e3, sample_rate=value)
     _names(caught, "sample_rate")
 
 
