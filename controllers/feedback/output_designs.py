@@ -32,7 +32,17 @@ from isolator.scenario.arguments import check_public
 
 from .sensor_plant import DISTURBANCES, SensorPlant, loop_matrix
 
-__all__ = ["DiscreteDesign", "disturbance_scale", "loop_damping", "lqg_design", "positive", "skyhook_design"]
+__all__ = [
+    "DiscreteDesign",
+    "NoiseModel",
+    "disturbance_scale",
+    "loop_damping",
+    "lowest_mode_hz",
+    "lqg_design",
+    "noise_model",
+    "positive",
+    "skyhook_design",
+]
 
 #: how close a sensor must sit to an actuator to count as collocated [m]
 COLLOCATED = 1e-3
@@ -118,7 +128,7 @@ def _filter(quantity: str, corner_hz: float, sample_rate: float) -> control.Stat
     return control.ss(control.sample_system(tf, 1.0 / sample_rate, method="tustin", prewarp_frequency=w))
 
 
-def _lowest_mode_hz(plant: SensorPlant) -> float:
+def lowest_mode_hz(plant: SensorPlant) -> float:
     """The table's lowest natural frequency [Hz] (its linear model's smallest eigenvalue magnitude)."""
     return float(np.min(np.abs(plant.lin.eigenvalues))) / (2 * math.pi)
 
@@ -152,7 +162,7 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
         No gain on the grid gives a stable loop.
     """
     pairs = _collocated(plant)
-    corner = _lowest_mode_hz(plant) / 5 if highpass_hz is None else positive(highpass_hz, "highpass_hz")
+    corner = lowest_mode_hz(plant) / 5 if highpass_hz is None else positive(highpass_hz, "highpass_hz")
     if corner >= sample_rate / 2:
         raise ParameterError(f"highpass_hz: the corner {corner:.4g} Hz must be below the Nyquist frequency "
                              f"{sample_rate / 2:.4g} Hz")
@@ -210,11 +220,64 @@ def disturbance_scale(plant: SensorPlant) -> np.ndarray:
     return np.array([force] * 3 + [force * arm] * 3)
 
 
-def _washed_out_filter(ad: np.ndarray, cy: np.ndarray, qn: np.ndarray, rn: np.ndarray, rate: float
-                       ) -> tuple[np.ndarray, float]:
-    """The Kalman gain ``M`` (current estimator) with a random walk of the six position states sized so that
-    the filter's slowest pole decays at ``rate`` per sample (or faster); returns ``M`` and the walk's RMS
-    per sample [m, rad]. The slowest pole's rate grows in proportion to the walk; two corrections suffice."""
+@dataclass(frozen=True)
+class NoiseModel:
+    """The disturbances an output-feedback design assumes (see :func:`noise_model`).
+
+    Attributes
+    ----------
+    wrench : ndarray (6,)
+        RMS per sample of the wrench at the mass centre [N, N m].
+    walk : float
+        RMS per sample of the random walk of each position state [m, rad].
+    noise : ndarray (sensors,)
+        Each sensor's noise RMS assumed [SI units].
+    washout_hz : float
+        The slowest rate of the filter's estimate [Hz].
+    gain : ndarray (states, sensors)
+        The Kalman filter's measurement-update gain ``M`` (current estimator).
+    """
+
+    wrench: np.ndarray
+    walk: float
+    noise: np.ndarray
+    washout_hz: float
+    gain: np.ndarray
+
+
+def noise_model(plant: SensorPlant, sampled: control.StateSpace, noise_floor: float = NOISE_FLOOR,
+                washout_hz: float | None = None) -> NoiseModel:
+    """The process and measurement noise of the output-feedback designs, and the Kalman filter they give.
+
+    Process noise: a white wrench at the mass centre whose RMS is the carriages' largest reaction force
+    (:func:`disturbance_scale`), held over each sample, and a random walk of the six position states sized
+    so that the filter forgets a position estimate at ``washout_hz`` [Hz] or faster (geophones do not see a
+    static position: without it the estimate integrates their noise with a pole at ``z = 1``). The walk is
+    found by scaling: the slowest filter pole's rate grows in proportion to it. Measurement noise: each
+    sensor's ``noise``, at least ``noise_floor``.
+
+    Parameters
+    ----------
+    plant : SensorPlant
+    sampled : control.StateSpace
+        ``plant.discrete(...)`` at the design's rate and delay.
+    noise_floor : float
+        [SI units].
+    washout_hz : float, optional
+        Default a fifth of the table's lowest mode.
+    """
+    ad, cy = np.asarray(sampled.A), np.asarray(sampled.C)
+    bw = np.asarray(sampled.B)[:, plant.n_actuators:]
+    n = ad.shape[0]
+    wrench = disturbance_scale(plant)
+    sw = np.zeros(len(DISTURBANCES))
+    sw[6:] = wrench  # the force and torque inputs; the floor is left to the measurement update
+    noise = np.array([max(s.noise, noise_floor) for s in plant.lin.scenario.sensors])
+    rn = np.diag(noise**2)
+    qn = bw @ np.diag(sw**2) @ bw.T
+    qn += 1e-12 * np.trace(qn) / n * np.eye(n)  # every state slightly excited: a well-posed filter
+    corner = lowest_mode_hz(plant) / 5 if washout_hz is None else positive(washout_hz, "washout_hz")
+    rate = 2 * math.pi * corner / float(1.0 / sampled.dt)
 
     def gain(walk: float) -> tuple[np.ndarray, float]:
         qw = qn.copy()
@@ -231,7 +294,7 @@ def _washed_out_filter(ad: np.ndarray, cy: np.ndarray, qn: np.ndarray, rn: np.nd
             break
         walk *= rate / max(slowest, 1e-12)
         mk, slowest = gain(walk)
-    return mk, walk
+    return NoiseModel(wrench, walk, noise, corner, mk)
 
 
 def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_velocity: float = 1e-2,
@@ -270,30 +333,23 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
     v_max, w_max = positive(max_velocity, "max_velocity"), positive(max_rate, "max_rate")
     floor = positive(noise_floor, "noise_floor")
     sampled = plant.discrete(sample_rate, delay)
-    m, n_w = plant.n_actuators, len(DISTURBANCES)
+    m = plant.n_actuators
     ad, b = np.asarray(sampled.A), np.asarray(sampled.B)
     cy, d = np.asarray(sampled.C), np.asarray(sampled.D)
-    bu, bw, du = b[:, :m], b[:, m:], d[:, :m]
+    bu, du = b[:, :m], d[:, :m]
     n = ad.shape[0]
     cz = np.zeros((6, n))
     cz[np.arange(6), 6 + np.arange(6)] = 1.0 / np.array([v_max] * 3 + [w_max] * 3)
     limits = np.array([a.max_force for a in plant.lin.scenario.actuators])
     q = cz.T @ cz
     r = np.diag(1.0 / limits**2)
-    wrench = disturbance_scale(plant)
-    sw = np.zeros(n_w)
-    sw[6:] = wrench  # the force and torque inputs; the floor is left to the measurement update
-    noise = np.array([max(s.noise, floor) for s in plant.lin.scenario.sensors])
-    rn = np.diag(noise**2)
-    qn = bw @ np.diag(sw**2) @ bw.T
-    qn += 1e-12 * np.trace(qn) / n * np.eye(n)  # every state slightly excited: a well-posed filter
-    corner = _lowest_mode_hz(plant) / 5 if washout_hz is None else positive(washout_hz, "washout_hz")
     try:
         s = solve_discrete_are(ad, bu, q, r)
         k = np.linalg.solve(r + bu.T @ s @ bu, bu.T @ s @ ad)
-        mk, walk = _washed_out_filter(ad, cy, qn, rn, 2 * math.pi * corner / sample_rate)
+        model = noise_model(plant, sampled, floor, washout_hz)
     except (np.linalg.LinAlgError, ValueError) as exc:
         raise OptimisationError(f"lqg: no stabilising Riccati solution for these weights ({exc})") from None
+    mk, wrench, walk, corner = model.gain, model.wrench, model.walk, model.washout_hz
     # current estimator: xh = xb + M (y - C xb - D u), u = -K xh, xb+ = A xh + B u
     eye = np.eye(n)
     w = np.linalg.inv(np.eye(m) - k @ mk @ du)
