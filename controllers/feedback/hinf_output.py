@@ -157,10 +157,10 @@ def hinf_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max
     if not math.isfinite(radius) or radius >= 1.0:
         raise OptimisationError(f"hinf: the synthesised loop is not stable at the sample rate (spectral radius "
                                 f"{radius:.6g}); try a larger relax or lower weights")
-    settings = {"gamma": gamma, "optimal_gamma": optimal, "relax": factor, "max_velocity": v_max,
-                "max_rate": w_max, "noise_floor": floor, "noise_weight": float(noise_weight),
-                "process_force": float(model.wrench[0]), "position_walk": model.walk, "least_damping": zeta,
-                "spectral_radius": radius}
+    settings: dict[str, float | str | bool] = {
+        "gamma": gamma, "optimal_gamma": optimal, "relax": factor, "max_velocity": v_max, "max_rate": w_max,
+        "noise_floor": floor, "noise_weight": float(noise_weight), "process_force": float(model.wrench[0]),
+        "position_walk": model.walk, "least_damping": zeta, "spectral_radius": radius}
     return DiscreteDesign(a_c, b_c, c_c, d_c, settings)
 
 

@@ -208,7 +208,7 @@ def positive(value: float, key: str) -> float:
 
 def disturbance_scale(plant: SensorPlant) -> np.ndarray:
     """RMS per sample of the process-noise model's wrench (6,) [N, N m]: the carriages' reaction at their
-    largest acceleration, with the table's half-diagonal as lever arm."""
+    largest acceleration, with the farthest isolator's horizontal distance as lever arm."""
     scenario = plant.lin.scenario
     force = 0.0
     for carriage in scenario.carriages:
@@ -216,7 +216,7 @@ def disturbance_scale(plant: SensorPlant) -> np.ndarray:
         acc = np.asarray(carriage.profile.evaluate(t)[2])
         force += carriage.mass * float(np.max(np.abs(acc)))
     force = max(force, 0.01 * scenario.table.mass)  # still carriages: 0.01 N per kg of table
-    arm = 0.5 * float(np.hypot(*scenario.table.size[:2]))
+    arm = max(float(np.hypot(*iso.position[:2])) for iso in scenario.isolators)
     return np.array([force] * 3 + [force * arm] * 3)
 
 
@@ -304,8 +304,8 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
 
     Cost ``sum (v / max_velocity)^2 + (w / max_rate)^2 + (u_i / max_force_i)^2`` over the table's
     absolute velocity ``v`` and angular velocity ``w`` and the commands. Process noise: a white wrench at
-    the mass centre whose RMS is the carriages' largest reaction force (and that times the table's
-    half-diagonal as moment), held over each sample, and a random walk of the table's position whose
+    the mass centre whose RMS is the carriages' largest reaction force (and that times the farthest
+    isolator's horizontal distance as moment), held over each sample, and a random walk of the table's position whose
     size makes the filter forget a position estimate no faster than ``washout_hz`` (geophones do not
     see a static position: without it the estimate integrates their noise and drift with a pole at
     ``z = 1``, and the regulator acts on that); measurement noise: each sensor's ``noise`` (at least
