@@ -1,4 +1,4 @@
-"""The controllers' subcommands: feedforward and optimise-profile (registered with the ``isolator`` command)."""
+"""The controllers' subcommands: feedforward, optimise-profile and controller (for the ``isolator`` command)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from controllers import controller_command
 from isolator.cli.helpers import check_run_memory, output_path, report, scenario_argument, use_agg
 from isolator.errors import OptimisationError, ParameterError
 from isolator.scenario.definitions import Scenario
@@ -19,7 +20,7 @@ __all__ = ["register"]
 
 
 def register(sub: Any) -> None:
-    """Add ``feedforward`` and ``optimise-profile`` to the ``isolator`` command's subparsers."""
+    """Add ``feedforward``, ``optimise-profile`` and ``controller`` to the ``isolator`` command's subparsers."""
     ff = sub.add_parser(
         "feedforward", help="actuator forces that cancel the carriages' reaction, and what they buy",
         description="Compute feedforward actuator forces from the planned carriage motion and compare "
@@ -61,6 +62,7 @@ def register(sub: Any) -> None:
                      "round (default 32)")
 
     ff.set_defaults(handler=_feedforward)
+    controller_command.register(sub)
     opt.set_defaults(handler=_optimise_profile,  # the parser's own defaults: a sequence refuses anything else
                      single_move_defaults={name: opt.get_default(name) for name in _SINGLE_MOVE_OPTIONS})
 

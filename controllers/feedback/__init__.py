@@ -1,55 +1,68 @@
-"""Feedback controllers for the active table, designed on the linearised plant (python-control).
+"""Feedback controllers for the active table: state feedback to prototype, output feedback to export.
 
-Every controller here maps the table's measured motion to actuator commands:
+**State feedback on ideal sensors** (python-control, continuous designs run at a sample rate): the
+measurements are the 12 states of :mod:`isolator.analysis.linear` (``x, y, z`` [m], ``rx, ry, rz`` [rad],
+``vx .. wz`` [m/s, rad/s]; world axes, from the reference the controller regulates to), the outputs one
+commanded force per actuator [N] (``actuator:<name>``). Modules: :mod:`.designs` (:func:`skyhook`,
+:func:`pid`, :func:`lead`, :func:`decentralised`; the :class:`Controller` they return),
+:mod:`.state_designs` (:func:`lqr`, :func:`hinf`, regulating about the carriages' quasi-static path),
+:mod:`.loops` (:func:`closed_loop` with the actuators' lag; :func:`check_stability` continuous and sampled)
+and :mod:`.laws` (:func:`feedback_law`: the controller as the simulation runs it).
 
-* measurements: the 12 states of :mod:`isolator.analysis.linear` (``x, y, z`` [m],
-  ``rx, ry, rz`` [rad], ``vx .. wz`` [m/s, rad/s]; world axes, from the
-  reference the controller regulates to), as ideal inertial sensors give them;
-* outputs: one commanded force per actuator [N] (``actuator:<name>``).
+**Output feedback from the scenario's** ``[[sensors]]`` (what ``isolator controller`` designs and exports):
+:mod:`.sensor_plant` (:func:`sensor_plant`: commands to sensors with the actuators' lag, sampled with an
+optional delay), :mod:`.output_designs` (:func:`skyhook_design` from collocated geophones,
+:func:`lqg_design`), :mod:`.hinf_output` (:func:`hinf_design`), :mod:`.output_feedback`
+(:func:`design_controller`: design points, gain scheduling over the travel, the sample-rate check),
+:mod:`.robustness` (:func:`check_robustness` over the travel and the isolators' uncertainty) and
+:mod:`.export` (:func:`write_c`: the :class:`DiscreteController` as C99; :func:`from_statespace`
+discretises any python-control design into one).
 
-Modules: :mod:`.designs` (:func:`skyhook`, :func:`pid`, :func:`lead`,
-:func:`decentralised`; the :class:`Controller` every design returns),
-:mod:`.state_designs` (:func:`lqr`, :func:`hinf`: state feedback, run about
-the carriages' quasi-static path), :mod:`.loops` (:func:`closed_loop` on the linear plant with the
-actuators' lag, for transmissibility and compliance with control;
-:func:`check_stability` continuous and as sampled: Tustin controller around
-the plant held by a zero-order hold) and :mod:`.laws` (:func:`feedback_law`:
-the controller as the simulation runs it) and :mod:`.export`
-(:class:`DiscreteController`: a discrete controller from the scenario's
-sensors to its actuators, optionally gain-scheduled over a carriage's
-travel, as ``controller.json`` and as C99 code; :func:`from_statespace`
-discretises a python-control design into one). The designs ignore the actuators'
-lag and saturation; the checks and the simulation include them. No
-anti-windup: an integrator keeps integrating while its actuator saturates.
+The designs ignore saturation; the checks and the simulation include it. No anti-windup: an integrator
+keeps integrating while its actuator saturates.
 """
 
 from __future__ import annotations
 
 from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, lead, pid, skyhook
 from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
+from .hinf_output import hinf_design
 from .laws import DiscreteLaw, feedback_law
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
+from .output_designs import DiscreteDesign, lqg_design, skyhook_design
+from .output_feedback import METHODS, design_controller, design_positions
+from .sensor_plant import SensorPlant, loop_matrix, sensor_plant
 from .state_designs import hinf, lqr
 
 __all__ = [
     "MEASUREMENTS",
+    "METHODS",
     "REFERENCE_INPUTS",
     "SAMPLE_RATE",
     "ClosedLoop",
     "Controller",
     "DiscreteController",
+    "DiscreteDesign",
     "DiscreteLaw",
     "LoopStability",
     "ScheduleEntry",
+    "SensorPlant",
     "check_stability",
     "closed_loop",
     "decentralised",
+    "design_controller",
+    "design_positions",
     "feedback_law",
     "from_statespace",
     "hinf",
+    "hinf_design",
     "lead",
+    "loop_matrix",
+    "lqg_design",
     "lqr",
     "pid",
+    "sensor_plant",
     "skyhook",
+    "skyhook_design",
     "write_c",
 ]
