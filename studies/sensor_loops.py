@@ -150,7 +150,7 @@ def noise_motion(plant: SensorPlant, controller: DiscreteController, q: np.ndarr
     big = loop_matrix(sampled, ctrl)
     if np.max(np.abs(np.linalg.eigvals(big))) >= 1:
         raise ValueError("noise_motion: the sampled loop is unstable; it has no stationary motion")
-    ac, bc, cc, dc = ctrl
+    _, bc, cc, dc = ctrl
     m = plant.n_actuators
     dp = np.asarray(sampled.D)[:, :m]
     bp, cp = np.asarray(sampled.B)[:, :m], np.asarray(sampled.C)
