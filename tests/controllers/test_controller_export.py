@@ -9,8 +9,8 @@ import math
 import control
 import numpy as np
 import pytest
-from c_controllers import build, compare, needs_compiler
 
+from c_controllers import build, compare, needs_compiler
 from controllers.feedback import DiscreteController, ScheduleEntry, from_statespace
 from isolator import ParameterError
 
