@@ -27,7 +27,10 @@ from __future__ import annotations
 from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, hinf, lead, lqr, pid, skyhook
 from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
 from .laws import DiscreteLaw, feedback_law
+from .loop_margins import LoopMargins
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
+from .robustness import RobustnessCase, RobustnessReport, check_robustness
+from .uncertainty import Uncertainty, parse_uncertainty, uncertainty_from_calibration
 
 __all__ = [
     "MEASUREMENTS",
@@ -37,8 +40,13 @@ __all__ = [
     "Controller",
     "DiscreteController",
     "DiscreteLaw",
+    "LoopMargins",
     "LoopStability",
+    "RobustnessCase",
+    "RobustnessReport",
     "ScheduleEntry",
+    "Uncertainty",
+    "check_robustness",
     "check_stability",
     "closed_loop",
     "decentralised",
@@ -47,7 +55,9 @@ __all__ = [
     "hinf",
     "lead",
     "lqr",
+    "parse_uncertainty",
     "pid",
     "skyhook",
+    "uncertainty_from_calibration",
     "write_c",
 ]
