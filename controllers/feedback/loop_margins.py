@@ -79,7 +79,8 @@ class LoopMargins:
 
     @property
     def disk_gain_margin(self) -> float:
-        """The gain factor [-] every actuator may take at once by the multiloop disk margin: ``(1 + a/2) / (1 - a/2)``."""
+        """The gain factor [-] all actuators may take at once by the multiloop disk margin ``a``:
+        ``(1 + a/2) / (1 - a/2)``."""
         a = self.disk_margin
         return math.inf if a >= 2.0 else (1.0 + a / 2.0) / (1.0 - a / 2.0)
 
@@ -165,12 +166,12 @@ def _crossings(values: np.ndarray) -> np.ndarray:
     return np.flatnonzero((values[:-1] == 0) | (np.sign(values[:-1]) * np.sign(values[1:]) < 0))
 
 
-def _measure(l: np.ndarray, kind: np.ndarray) -> np.ndarray:
+def _measure(ret: np.ndarray, kind: np.ndarray) -> np.ndarray:
     """``Im l`` (kinds 0, 1: gain margins) or ``|l| - 1`` (kind 2: phase margin), elementwise."""
-    return np.where(kind < 2, l.imag, np.abs(l) - 1.0)
+    return np.where(kind < 2, ret.imag, np.abs(ret) - 1.0)
 
 
-def _refine(loop: _Loop, f: np.ndarray, l: np.ndarray, jobs: list[tuple[int, int, int]]
+def _refine(loop: _Loop, f: np.ndarray, ret: np.ndarray, jobs: list[tuple[int, int, int]]
             ) -> tuple[np.ndarray, np.ndarray]:
     """Where ``Im l_i`` (kinds 0, 1) or ``|l_i| - 1`` (kind 2) changes sign in ``f[k] .. f[k + 1]``, for every
     job ``(i, k, kind)`` at once: :data:`_BISECTIONS` bisections of the exact response, then linear
@@ -180,7 +181,7 @@ def _refine(loop: _Loop, f: np.ndarray, l: np.ndarray, jobs: list[tuple[int, int
     i, k, kind = (np.array(c) for c in zip(*jobs, strict=True))
     rows = np.arange(len(jobs))
     lo, hi = f[k].astype(float), f[k + 1].astype(float)
-    g_lo, g_hi = _measure(l[k, i], kind), _measure(l[k + 1, i], kind)
+    g_lo, g_hi = _measure(ret[k, i], kind), _measure(ret[k + 1, i], kind)
     for _ in range(_BISECTIONS):
         mid = 0.5 * (lo + hi)
         g = _measure(loop.returns(mid)[rows, i], kind)
@@ -193,13 +194,13 @@ def _refine(loop: _Loop, f: np.ndarray, l: np.ndarray, jobs: list[tuple[int, int
     return where, loop.returns(where)[rows, i]
 
 
-def _gain_candidates(f: np.ndarray, l: np.ndarray) -> list[tuple[float, float, int]]:
+def _gain_candidates(f: np.ndarray, ret: np.ndarray) -> list[tuple[float, float, int]]:
     """The upper and lower critical gain factors of one loop's ``l`` on the grid: ``(g, frequency [Hz],
     grid interval to refine in or -1)``, ``(inf, nan, -1)`` and ``(0, nan, -1)`` when there is none."""
     # both ends (where l is real) and every crossing of the real axis
-    cands = [(float(f[0]), float(l[0].real), -1), (float(f[-1]), float(l[-1].real), -1)]
-    for k in _crossings(l.imag):
-        a, b = l[k], l[k + 1]
+    cands = [(float(f[0]), float(ret[0].real), -1), (float(f[-1]), float(ret[-1].real), -1)]
+    for k in _crossings(ret.imag):
+        a, b = ret[k], ret[k + 1]
         t = a.imag / (a.imag - b.imag) if a.imag != b.imag else 0.0
         cands.append((float(f[k] + t * (f[k + 1] - f[k])), float(a.real + t * (b.real - a.real)), int(k)))
     up, low = (math.inf, math.nan, -1), (0.0, math.nan, -1)
@@ -213,14 +214,14 @@ def _gain_candidates(f: np.ndarray, l: np.ndarray) -> list[tuple[float, float, i
     return [up, low]
 
 
-def _phase_candidate(f: np.ndarray, l: np.ndarray) -> tuple[float, float, int]:
+def _phase_candidate(f: np.ndarray, ret: np.ndarray) -> tuple[float, float, int]:
     """One loop's smallest ``|arg l|`` [deg] where ``|l|`` crosses 1 on the grid, its frequency and interval
     (``(inf, nan, -1)`` without a crossover)."""
-    mag = np.abs(l) - 1.0
+    mag = np.abs(ret) - 1.0
     best = (math.inf, math.nan, -1)
     for k in _crossings(mag):
         t = mag[k] / (mag[k] - mag[k + 1]) if mag[k] != mag[k + 1] else 0.0
-        pm = math.degrees(abs(np.angle(l[k] + t * (l[k + 1] - l[k]))))
+        pm = math.degrees(abs(np.angle(ret[k] + t * (ret[k + 1] - ret[k]))))
         if pm < best[0]:
             best = (pm, float(f[k] + t * (f[k + 1] - f[k])), int(k))
     return best
@@ -230,13 +231,11 @@ def _grid(sample_rate: float, poles: np.ndarray) -> np.ndarray:
     """0, :data:`_POINTS` frequencies [Hz] logarithmically spaced from ``1e-5`` of the sample rate to the
     Nyquist frequency, and each pole's frequency and its half-power edges (where narrow peaks are)."""
     nyquist = sample_rate / 2.0
-    f = [np.logspace(math.log10(sample_rate * 1e-5), math.log10(nyquist), _POINTS)]
     z = poles[np.abs(poles) > 0.5]
-    if z.size:
-        centre = np.abs(np.angle(z)) * sample_rate / (2 * math.pi)
-        width = np.abs(np.log(np.abs(z))) * sample_rate / (2 * math.pi)
-        f.append(np.concatenate([centre, centre - width, centre + width]))
-    f = np.unique(np.concatenate(f))
+    centre = np.abs(np.angle(z)) * sample_rate / (2 * math.pi)
+    width = np.abs(np.log(np.abs(z))) * sample_rate / (2 * math.pi)
+    f = np.unique(np.concatenate([np.logspace(math.log10(sample_rate * 1e-5), math.log10(nyquist), _POINTS),
+                                  centre, centre - width, centre + width]))
     return np.concatenate([[0.0], f[(f > sample_rate * 1e-5) & (f < nyquist)], [nyquist]])
 
 
@@ -285,13 +284,13 @@ def loop_margins(plant: tuple[np.ndarray, ...], controller: tuple[np.ndarray, ..
             s = loop.sensitivity(f)
     diag = np.diagonal(s, axis1=1, axis2=2)
     with np.errstate(divide="ignore", invalid="ignore"):
-        l = 1.0 - 1.0 / diag
+        ret = 1.0 - 1.0 / diag
     m = loop.m
-    gains = [_gain_candidates(f, l[:, i]) for i in range(m)]
-    phases = [_phase_candidate(f, l[:, i]) for i in range(m)]
+    gains = [_gain_candidates(f, ret[:, i]) for i in range(m)]
+    phases = [_phase_candidate(f, ret[:, i]) for i in range(m)]
     jobs = [(i, c[2], j) for i in range(m) for j, c in enumerate(gains[i]) if c[2] >= 0]
     jobs += [(i, phases[i][2], 2) for i in range(m) if phases[i][2] >= 0]
-    where, values = _refine(loop, f, l, jobs)
+    where, values = _refine(loop, f, ret, jobs)
     for (i, k, kind), freq, value in zip(jobs, where, values, strict=True):
         if kind == 2:
             phases[i] = (math.degrees(abs(np.angle(value))), float(freq), k)

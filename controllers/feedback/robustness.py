@@ -44,14 +44,14 @@ MARGINS = {"gain_margin": True, "gain_margin_low": False, "phase_margin": True, 
            "disk_margin": True}
 
 
-def describe_values(values: Sequence[tuple[str, float]]) -> str:
+def _describe_values(values: Sequence[tuple[str, float]]) -> str:
     """``stiffness x0.8, damping x1.3, isolators[*].damping.z = 4560`` (``nominal parameters`` when empty)."""
     if not values:
         return "nominal parameters"
     return ", ".join(f"{n} x{v:.4g}" if n in SCALED else f"{n} = {v:.6g}" for n, v in values)
 
 
-def describe_positions(carriages: Sequence[str], q: Sequence[float]) -> str:
+def _describe_positions(carriages: Sequence[str], q: Sequence[float] | np.ndarray) -> str:
     """``x-stage at 0.7 m, y-stage at -0.3 m`` (``no carriages`` without)."""
     return ", ".join(f"{n} at {v:.4g} m" for n, v in zip(carriages, q, strict=True)) or "no carriages"
 
@@ -89,7 +89,7 @@ class RobustnessCase:
     @property
     def where(self) -> str:
         """``x-stage at 0.7 m, y-stage at -0.3 m, stiffness x0.8, damping x1.3``."""
-        return f"{describe_positions(self.carriages, self.positions)}, {describe_values(self.values)}"
+        return f"{_describe_positions(self.carriages, self.positions)}, {_describe_values(self.values)}"
 
     def margin(self, name: str) -> float:
         """One margin by name (:data:`MARGINS`): the actuators' smallest (or largest, ``gain_margin_low``);
@@ -283,8 +283,8 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
                 lin = linearise(scenario, positions=q, parameters=p)
             except UnstableTableError as error:
                 raise ParameterError(
-                    f"uncertainty: {describe_values(values)} tips the passive table with "
-                    f"{describe_positions(names, q)} (no stable equilibrium: {error})".replace("\n", " ")) from None
+                    f"uncertainty: {_describe_values(values)} tips the passive table with "
+                    f"{_describe_positions(names, q)} (no stable equilibrium: {error})".replace("\n", " ")) from None
             sys = sensor_plant(lin).discrete(controller.sample_rate, controller.delay)
             a, b, c, d = (np.asarray(x, dtype=float) for x in (sys.A, sys.B, sys.C, sys.D))
             plant = (a, b[:, :m], c, d[:, :m])

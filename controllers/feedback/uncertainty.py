@@ -68,8 +68,8 @@ class Uncertainty:
         for key, top in (("stiffness", 1.0), ("damping", 1.0 + 1e-12)):
             value = getattr(self, key)
             if not (math.isfinite(value) and 0.0 <= value < top):
-                raise ParameterError(f"{key}: must be a relative bound >= 0 and {'< 1' if key == 'stiffness' else '<= 1'}"
-                                     f" (0.2 is +-20 %), got {value!r}")
+                limit = "< 1" if key == "stiffness" else "<= 1"
+                raise ParameterError(f"{key}: must be a relative bound >= 0 and {limit} (0.2 is +-20 %), got {value!r}")
             object.__setattr__(self, key, float(value))
         checked: dict[str, tuple[float, float]] = {}
         for name, bounds in dict(self.intervals).items():
@@ -174,11 +174,10 @@ def parse_uncertainty(text: str) -> Uncertainty:
                                  "(the percent sign is needed)")
         percent = float(match.group(1))
         if not (percent < 100.0 or (key == "damping" and percent == 100.0)):
-            raise ParameterError(f"--uncertainty: {key}=+-{percent:g}% must be below 100 % "
-                                 f"({'up to' if key == 'damping' else 'a stiffness'} 100 % would "
-                                 f"{'be allowed' if key == 'damping' else 'vanish'})")
+            limit = "at most 100 %" if key == "damping" else "below 100 % (the isolators would hold nothing)"
+            raise ParameterError(f"--uncertainty: {key}=+-{percent:g}% must be {limit}")
         bounds[key] = percent / 100.0
-    return Uncertainty(**bounds)
+    return Uncertainty(stiffness=bounds.get("stiffness", 0.0), damping=bounds.get("damping", 0.0))
 
 
 def uncertainty_from_calibration(path: str | Path, unidentified: bool = False) -> Uncertainty:
