@@ -158,6 +158,23 @@ def test_the_loop_at_a_time_gain_margin_is_the_critical_gain(scenario, gain):
     assert report.cases[0].margins.gain_margin_low[Z1] == 0.0  # the open loop is stable: no lower limit
 
 
+def test_the_phase_margin_is_where_the_loop_gain_crosses_one(scenario):
+    """A single stiff velocity loop (5e4 N s/m at z1): its return crosses |l| = 1 twice; the phase margin is
+    the smaller |arg l| of the two, found here on python-control's frequency response of that loop on a
+    grid 50 times finer than the check's."""
+    gain = -5.0e4
+    mg = check_robustness(scenario, static(scenario, single(gain)), positions=[END]).cases[0].margins
+    sys = sensor_plant(linearise(scenario, positions=END)).discrete(RATE, False)
+    f = np.logspace(-2, np.log10(RATE / 2), 20000)
+    ret = gain * control.ss(sys.A, sys.B[:, Z1], sys.C[Z1], sys.D[Z1, Z1], 1.0 / RATE)(
+        np.exp(2j * np.pi * f / RATE))
+    cross = np.flatnonzero(np.diff(np.sign(np.abs(ret) - 1.0)))
+    assert len(cross) == 2
+    assert mg.phase_margin[Z1] == pytest.approx(np.degrees(np.abs(np.angle(ret[cross]))).min(), abs=0.1)
+    assert f[cross[np.argmin(np.abs(np.angle(ret[cross])))]] == pytest.approx(mg.phase_frequency[Z1], rel=1e-3)
+    assert 0.0 < mg.phase_margin[Z1] < 180.0
+
+
 def test_the_multiloop_disk_margin_against_python_control(scenario):
     """python-control's disk_margins (SLICOT's mu) on a fine grid about the reported peak: the margin
     reported is a lower bound of it and close to it."""
