@@ -19,9 +19,10 @@ the positive-feedback sense (``L = -M`` in the usual negative-feedback conventio
 * The multiloop disk margin at the plant's input (simultaneous independent complex perturbations of all
   actuators, skew 0): ``1 / max mu(S - I/2)`` as :func:`control.disk_margins` defines it. That function
   calls SLICOT's ``ab13md`` at every frequency (about 20 ms each for 12 loops, too slow for a check over
-  many cases), so ``mu`` is bounded here by ``min over D of sigma_max(D X D^-1)`` with the diagonal
-  ``D`` of Osborne's scaling: an upper bound of ``mu``, so the disk margin given is a
-  lower bound (conservative); the tests compare it with :func:`control.disk_margins`.
+  many cases), so ``mu(X)``, ``X = S - I/2``, is bounded here by ``sigma_max(D X D^-1)`` with the
+  diagonal ``D`` of Osborne's scaling (the standard upper bound of ``mu``, at one ``D`` rather than the
+  best): the disk margin given is a lower bound (conservative), within a few per cent of
+  :func:`control.disk_margins`'s in the tests.
 
 The frequency grid: 0, 400 points logarithmically spaced from ``1e-5`` of the sample rate to the Nyquist
 frequency, and the frequency of each closed-loop pole and its half-power edges (where the narrow peaks

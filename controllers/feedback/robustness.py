@@ -104,7 +104,7 @@ class RobustnessCase:
         """JSON-ready (infinite margins as null), per-actuator margins by name when ``actuators`` are given."""
         out: dict[str, Any] = {"positions": dict(zip(self.carriages, self.positions, strict=True)),
                                "parameters": dict(self.values), "spectral_radius": self.spectral_radius,
-                               "stable": self.stable}
+                               "stability_margin": 1.0 - self.spectral_radius, "stable": self.stable}
         for name in MARGINS:
             out[name] = _json(self.margin(name))
         if self.margins is not None:
@@ -293,9 +293,10 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
             try:
                 lin = linearise(scenario, positions=q, parameters=p)
             except UnstableTableError as error:
+                key = "uncertainty" if values else "scenario"
                 raise ParameterError(
-                    f"uncertainty: {_describe_values(values)} tips the passive table with "
-                    f"{_describe_positions(names, q)} (no stable equilibrium: {error})".replace("\n", " ")) from None
+                    f"{key}: {_describe_values(values)} tips the passive table with {_describe_positions(names, q)} "
+                    f"(no stable equilibrium: {error})".replace("\n", " ")) from None
             sys = sensor_plant(lin).discrete(controller.sample_rate, controller.delay)
             a, b, c, d = (np.asarray(x, dtype=float) for x in (sys.A, sys.B, sys.C, sys.D))
             plant = (a, b[:, :m], c, d[:, :m])
