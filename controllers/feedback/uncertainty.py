@@ -194,7 +194,8 @@ def uncertainty_from_calibration(path: str | Path, unidentified: bool = False) -
     Raises
     ------
     ParameterError
-        One line naming the file: unreadable, not JSON, or without valid ``parameters``.
+        One line naming the file: unreadable, not JSON, without valid ``parameters``, or (without
+        ``unidentified``) none with a finite ``std``.
     """
     try:
         data = json.loads(Path(path).read_text(encoding="utf-8"))
@@ -217,6 +218,9 @@ def uncertainty_from_calibration(path: str | Path, unidentified: bool = False) -
         if entry.get("std") is None and not unidentified:
             continue
         intervals[str(name)] = (float(ci[0]), float(ci[1]))  # type: ignore[index]
+    if not intervals:
+        raise ParameterError(f"{path}: no parameter the records fix (every std is null; unidentified=True takes "
+                             "their bounds as intervals)")
     return Uncertainty(intervals=intervals)
 
 

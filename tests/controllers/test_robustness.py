@@ -271,7 +271,8 @@ def test_the_calibration_reader_and_a_check_over_its_intervals(scenario, tmp_pat
 @pytest.mark.parametrize(("content", "reason"), [
     (None, "cannot read"), ("{", "not a calibration JSON"), ("[]", "no 'parameters'"),
     ('{"parameters": {"a": {"value": 1, "std": 1}}}', "ci95"),
-    ('{"parameters": {"a": {"value": 1, "std": 1, "ci95": [2, 1]}}}', "ci95")])
+    ('{"parameters": {"a": {"value": 1, "std": 1, "ci95": [2, 1]}}}', "ci95"),
+    ('{"parameters": {"a": {"value": 1, "std": null, "ci95": [1, 2]}}}', "no parameter the records fix")])
 def test_a_bad_calibration_json_is_one_line_naming_the_file(tmp_path, content, reason):
     path = tmp_path / "bad.json"
     if content is not None:
