@@ -134,7 +134,7 @@ class _Response:
     def __call__(self, z: np.ndarray) -> np.ndarray:
         n = self.a.shape[0]
         if n == 0:
-            return np.broadcast_to(self.d.astype(complex), (z.size, *self.d.shape)).copy()
+            return np.broadcast_to(self.d.astype(complex), (z.size, *self.d.shape))
         if self.modal is not None:
             lam, cv, vb = self.modal
             with np.errstate(divide="ignore", invalid="ignore"):

@@ -77,6 +77,8 @@ class Uncertainty:
                 low, high = (float(v) for v in bounds)
             except (TypeError, ValueError):
                 raise ParameterError(f"intervals[{name!r}]: must be (low, high), got {bounds!r}") from None
+            if name in SCALED:
+                raise ParameterError(f"intervals[{name!r}]: is the relative bound {name}=, not a parameter's name")
             if not (isinstance(name, str) and math.isfinite(low) and math.isfinite(high) and low <= high):
                 raise ParameterError(f"intervals[{name!r}]: must be finite with low <= high, got {bounds!r}")
             checked[name] = (low, high)
