@@ -102,6 +102,12 @@ def _options(args: argparse.Namespace) -> dict[str, float]:
     return options
 
 
+def _progress(done: int, total: int) -> None:
+    """The robustness check's progress on stderr, one line per tenth."""
+    if done == total or done % max(total // 10, 1) == 0:
+        print(f"  robustness: {done}/{total} cases", file=sys.stderr, flush=True)
+
+
 def _controller(args: argparse.Namespace) -> int:
     from controllers.feedback import (
         check_robustness,
@@ -119,8 +125,7 @@ def _controller(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
     controller = design_controller(scenario, args.method, args.sample_rate, delay=args.delay, schedule=args.schedule,
                                    schedule_carriage=args.schedule_carriage, options=_options(args))
-    progress = None if args.json else (lambda text: print(text, file=sys.stderr, flush=True))
-    robustness = check_robustness(scenario, controller, uncertainty, progress=progress)
+    robustness = check_robustness(scenario, controller, uncertainty, progress=None if args.json else _progress)
     robustness.raise_if_unstable()
     folder = output_folder(args.out, "--out")
     data = {**controller.to_dict(), "robustness": robustness.to_dict()}

@@ -28,11 +28,14 @@ from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, lead,
 from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
 from .hinf_output import hinf_design
 from .laws import DiscreteLaw, feedback_law
+from .loop_margins import LoopMargins
 from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability, closed_loop
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
 from .output_feedback import METHODS, design_controller, design_positions
+from .robustness import RobustnessCase, RobustnessReport, check_robustness
 from .sensor_plant import SensorPlant, loop_matrix, sensor_plant
 from .state_designs import hinf, lqr
+from .uncertainty import Uncertainty, parse_uncertainty, uncertainty_from_calibration
 
 __all__ = [
     "MEASUREMENTS",
@@ -44,9 +47,14 @@ __all__ = [
     "DiscreteController",
     "DiscreteDesign",
     "DiscreteLaw",
+    "LoopMargins",
     "LoopStability",
+    "RobustnessCase",
+    "RobustnessReport",
     "ScheduleEntry",
     "SensorPlant",
+    "Uncertainty",
+    "check_robustness",
     "check_stability",
     "closed_loop",
     "decentralised",
@@ -60,9 +68,11 @@ __all__ = [
     "loop_matrix",
     "lqg_design",
     "lqr",
+    "parse_uncertainty",
     "pid",
     "sensor_plant",
     "skyhook",
     "skyhook_design",
+    "uncertainty_from_calibration",
     "write_c",
 ]

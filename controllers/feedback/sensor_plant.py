@@ -24,8 +24,10 @@ import numpy as np
 from scipy.linalg import expm
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
-from isolator.errors import ParameterError, ScenarioError, UnstableClosedLoopError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
+
+from .loop_margins import closed_loop_matrix
 
 __all__ = ["DISTURBANCES", "SensorPlant", "loop_matrix", "sensor_plant"]
 
@@ -110,19 +112,13 @@ def loop_matrix(plant: control.StateSpace, controller: tuple[np.ndarray, np.ndar
 
     Raises
     ------
-    UnstableClosedLoopError
+    ParameterError
         The loop is algebraically singular (``I - D D_p`` not invertible: no command satisfies it).
     """
-    ac, bc, cc, dc = (np.asarray(m, dtype=float) for m in controller)
-    m = cc.shape[0]
-    ap, bp = np.asarray(plant.A, dtype=float), np.asarray(plant.B, dtype=float)[:, :m]
-    cp, dp = np.asarray(plant.C, dtype=float), np.asarray(plant.D, dtype=float)[:, :m]
-    try:
-        e = np.linalg.inv(np.eye(m) - dc @ dp)
-    except np.linalg.LinAlgError:
-        raise UnstableClosedLoopError("the loop is algebraically singular: I - D D_plant has no inverse") from None
-    u_x, u_c = e @ dc @ cp, e @ cc  # u = u_x x + u_c x_c
-    return np.block([[ap + bp @ u_x, bp @ u_c], [bc @ (cp + dp @ u_x), ac + bc @ dp @ u_c]])
+    m = np.asarray(controller[2]).shape[0]
+    parts = (plant.A, np.asarray(plant.B)[:, :m], plant.C, np.asarray(plant.D)[:, :m])
+    return closed_loop_matrix(tuple(np.asarray(x, dtype=float) for x in parts),
+                              tuple(np.asarray(x, dtype=float) for x in controller))
 
 
 def sensor_plant(lin: LinearModel) -> SensorPlant:
