@@ -19,7 +19,7 @@ __all__ = ["CONTROL_SCENARIO", "PNEUMATIC_SCENARIO", "register"]
 #: the pneumatic study's default scenario
 PNEUMATIC_SCENARIO = "paper-table-3-2-pneumatic"
 #: the control study's default scenario
-CONTROL_SCENARIO = "paper-table-3-2-active"
+CONTROL_SCENARIO = "paper-table-3-2-geophones"
 
 
 def register(sub: Any) -> None:
@@ -38,6 +38,8 @@ def register(sub: Any) -> None:
                          help="the feedback design in the time runs (default skyhook)")
     control.add_argument("--feedforward", choices=["allocation", "optimal"], default="allocation",
                          help="the feedforward method (default allocation)")
+    control.add_argument("--sample-rate", type=float, default=2000.0, metavar="HZ",
+                         help="with [[sensors]]: the output-feedback designs' rate (default 2000)")
     control.set_defaults(handler=_control)
 
     profiles = _study(studies, "profiles", "the scenario's profile, input shapers, time-optimal and optimised "
@@ -135,7 +137,8 @@ def _paper(args: argparse.Namespace) -> int:
 def _control(args: argparse.Namespace) -> int:
     from studies.control import run_control_study
 
-    control = run_control_study(args.out, _scenario(args, CONTROL_SCENARIO), args.controller, args.feedforward)
+    control = run_control_study(args.out, _scenario(args, CONTROL_SCENARIO), args.controller, args.feedforward,
+                                sample_rate=args.sample_rate)
     for run in ("passive", "feedforward", "feedback", "both"):
         value = control.settling_time_max(run)
         settle, rate = control.window_cycle(run)
@@ -144,6 +147,10 @@ def _control(args: argparse.Namespace) -> int:
             f"{'' if rate is None else f', {rate:.0f} moves per hour'}")
         why = control.unsettled_reason(run)
         print(f"{run:>12}: settling {f'n/a ({why})' if value is None else f'{value:.3g} s'}{window}")
+    for design in control.sensors:
+        value = design.settling_time_max
+        print(f"{design.method + ' (sensors)':>12}: settling {'n/a' if value is None else f'{value:.3g} s'}, "
+              f"peak force {design.peak_force:.3g} N")
     print(f"report: {args.out / 'report.md'}")
     return 0
 

@@ -12,7 +12,9 @@ Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
   measured in (six half-widths, m and rad), and ``feedforward.csv``, the
   feedforward forces, so that ``isolator simulate SCENARIO --forces
   feedforward.csv --band ...`` reproduces the feedforward run's numbers;
-* ``report.md``: the numbers, the band, the controller and its loop's stability.
+* ``report.md``: the numbers, the band, the controller and its loop's stability;
+* with ``[[sensors]]``, the output-feedback designs the machine can run (:mod:`studies.control_sensors`):
+  ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png`` and their section of the report.
 
 With feedback alone the controller regulates to the initial equilibrium
 (the state-feedback designs lqr and hinf, which would fight the carriages'
@@ -45,6 +47,7 @@ from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
 from isolator.scenario.arguments import check_public
 
+from .control_sensors import SensorDesign, loops_figure, margins_figure, run_sensor_designs, sensor_report, time_figure
 from .figures import nan_if_none, save_figure
 from .reporting import (
     band_lines,
@@ -113,6 +116,8 @@ class ControlStudy:
         5 % of the passive run's peaks (kind ``baseline``): every run is judged in it.
     max_force : tuple of float
         Each actuator's saturation [N], as the runs' actuator forces are ordered.
+    sensors : tuple of SensorDesign
+        The output-feedback designs from the scenario's ``[[sensors]]`` (none without sensors).
     """
 
     runs: dict[str, Response]
@@ -124,6 +129,7 @@ class ControlStudy:
     folder: Path
     band: Band
     max_force: tuple[float, ...] = ()
+    sensors: tuple[SensorDesign, ...] = ()
 
     def settling_time_max(self, run: str) -> float | None:
         return largest(self.settling[run].values())
@@ -165,6 +171,8 @@ class ControlStudy:
             if self.runs[run].windows is not None:
                 settle, rate = self.window_cycle(run)
                 out[run].update(window_settling_time_max=settle, moves_per_hour=rate)
+        if self.sensors:
+            out["sensor_feedback"] = {d.method: d.to_dict() for d in self.sensors}
         return out
 
 
@@ -174,6 +182,7 @@ def run_control_study(
     controller: str = "skyhook",
     feedforward: str = "allocation",
     progress: bool = True,
+    sample_rate: float = 2000.0,
 ) -> ControlStudy:
     """Run the study and write its figures and report into ``out``.
 
@@ -186,6 +195,8 @@ def run_control_study(
     controller : {"skyhook", "lead", "lqr", "hinf"}
         The feedback design for the time runs (all are shown in the transmissibility).
     feedforward : {"allocation", "optimal"}
+    sample_rate : float
+        The sensor-based designs' rate [Hz] (with ``[[sensors]]``: :mod:`studies.control_sensors`).
     """
     if not scenario.actuators:
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
@@ -213,8 +224,10 @@ def run_control_study(
     qs = ff.path(runs["passive"].t).T  # pneumatic tables: each run's own leveling path (as compare_feedforward)
     deviation = {name: path_deviation(r, run_quasi_static(sim, r) if scenario.is_pneumatic else qs)
                  for name, r in runs.items()}
+    sensors = tuple(run_sensor_designs(scenario, band, settling_in_band, sample_rate, say=say)) if scenario.sensors \
+        else ()
     study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band,
-                         tuple(a.max_force for a in scenario.actuators))
+                         tuple(a.max_force for a in scenario.actuators), sensors)
     write_json(folder, study.to_dict())
     ff.forces.to_csv(folder / "feedforward.csv")
     say("figures and report")
@@ -222,6 +235,10 @@ def run_control_study(
     loops = _transmissibility_figure(scenario, lin, folder / "transmissibility.png")
     _settling_figure(study, folder / "settling.png")
     _forces_figure(study, folder / "forces.png")
+    if sensors:
+        loops_figure(sensors, scenario, folder / "sensors-loops.png")
+        margins_figure(sensors, folder / "sensors-margins.png")
+        time_figure(sensors, runs["passive"], band, folder / "sensors-time.png")
     _report(study, scenario, loops)
     return study
 
@@ -367,7 +384,9 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
               *table_header(["design", *SIGNALS])]
     for name, resp in loops.items():
         lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
-    lines += ["", "Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`."]
+    extra = ", `sensors-loops.png`, `sensors-margins.png`, `sensors-time.png`" if study.sensors else ""
+    lines += ["", *sensor_report(study.sensors),
+              f"Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`{extra}."]
     write_report(study.folder, lines)
 
 
