@@ -125,36 +125,35 @@ def _readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.
     return ca.vertcat(*out)
 
 
-def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, int, int, int],
-              sensors: tuple[Sensor, ...] | None) -> ca.Function:
-    """One grid interval of the closed loop (SX, see the module's description)."""
+def _tick(shape: tuple[int, int, int, int]) -> ca.Function:
+    """``(xc, hold, pending, y, tick, w, M, delay) -> (xc, hold, pending)``: the controller at a tick (SX)."""
     n, ny, m, k = shape
-    nx, nc, npar = model.n_states, model.layout.input_size, model.layout.size
-    stages = 2 * substeps + 1
     sym = ca.SX.sym
-    x, xc, hold, pending, lag, cprev = sym("x", nx), sym("xc", n), sym("hold", m), sym("pending", m), \
-        sym("lag", m), sym("cprev", nc)
-    cin, h, p, ref = sym("c", nc, stages), sym("h"), sym("p", npar), sym("ref", nx)
-    tick, offset, weights, ff = sym("tick"), sym("offset", ny), sym("w", k), sym("ff", m, stages)
-    packed = sym("M", k * (n * n + n * ny + m * n + m * ny))
-    delay, limits, tau, lagged = sym("delay"), sym("limits", m), sym("tau", m), sym("lagged", m)
-    # the controller at the tick
+    xc, hold, pending, y, tick, weights, delay = sym("xc", n), sym("hold", m), sym("pending", m), sym("y", ny), \
+        sym("tick"), sym("w", k), sym("delay")
     sizes = [(n, n), (n, ny), (m, n), (m, ny)]
     per = sum(r * c for r, c in sizes)
-    mixed = sum((weights[j] * packed[j * per:(j + 1) * per] for j in range(k)), ca.SX.zeros(per))
+    packed = sym("M", k * per)
+    mixed = packed if k == 1 else sum((weights[j] * packed[j * per:(j + 1) * per] for j in range(k)), ca.SX(per, 1))
     mats, at = [], 0
     for r, c in sizes:
         mats.append(ca.reshape(mixed[at:at + r * c], r, c))
         at += r * c
     a, b, cm, d = mats
-    y = _readings(model, sensors, x, cprev, p, ref) + offset
     command = cm @ xc + d @ y
-    xc_next = ca.if_else(tick, a @ xc + b @ y, xc)
-    hold_next = ca.if_else(tick, ca.if_else(delay, pending, command), hold)
-    pending_next = ca.if_else(tick, command, pending)
-    # the actuators: clipped, lagged exactly for a command linear between stage times
-    u = [ca.fmin(ca.fmax(hold_next + ff[:, j], -limits), limits) for j in range(stages)]
-    hs = h / (2 * substeps)
+    outs = [ca.if_else(tick, a @ xc + b @ y, xc), ca.if_else(tick, ca.if_else(delay, pending, command), hold),
+            ca.if_else(tick, command, pending)]
+    return ca.Function("tick", [xc, hold, pending, y, tick, weights, packed, delay], outs)
+
+
+def _actuators(m: int, stages: int) -> ca.Function:
+    """``(hold, ff, h, lag, limits, tau, lagged) -> (applied (m, stages), lag)``: the command plus feedforward
+    at the stage times, clipped, then lagged exactly (linear between stage times) where ``lagged`` (SX)."""
+    sym = ca.SX.sym
+    hold, ff, h, lag = sym("hold", m), sym("ff", m, stages), sym("h"), sym("lag", m)
+    limits, tau, lagged = sym("limits", m), sym("tau", m), sym("lagged", m)
+    u = [ca.fmin(ca.fmax(hold + ff[:, j], -limits), limits) for j in range(stages)]
+    hs = h / (stages - 1)
     decay = ca.exp(-hs / tau)
     lags, applied = lag, []
     for j in range(stages):
@@ -162,19 +161,41 @@ def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, i
             slope = (u[j] - u[j - 1]) / ca.fmax(hs, 1e-300)
             lags = u[j] + (lags - u[j - 1] + slope * tau) * decay - slope * tau
         applied.append(ca.if_else(lagged, lags, u[j]))
-    inputs = [ca.vertcat(cin[: actuators.start, j], applied[j], cin[actuators.stop:, j]) for j in range(stages)]
+    return ca.Function("actuators", [hold, ff, h, lag, limits, tau, lagged], [ca.horzcat(*applied), lags])
+
+
+def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, int, int, int],
+              sensors: tuple[Sensor, ...] | None) -> ca.Function:
+    """One grid interval of the closed loop (see the module's description): MX calling small SX functions,
+    so that the compiled code stays small (the right-hand side's code is shared by every RK4 stage)."""
+    n, ny, m, k = shape
+    nx, nc, npar = model.n_states, model.layout.input_size, model.layout.size
+    stages = 2 * substeps + 1
+    xs, cs, ps, rs = ca.SX.sym("x", nx), ca.SX.sym("c", nc), ca.SX.sym("p", npar), ca.SX.sym("ref", nx)
+    reading = ca.Function("readings", [xs, cs, ps, rs], [_readings(model, sensors, xs, cs, ps, rs)])
+    sym = ca.MX.sym
+    x, xc, hold, pending, lag, cprev = sym("x", nx), sym("xc", n), sym("hold", m), sym("pending", m), \
+        sym("lag", m), sym("cprev", nc)
+    cin, h, p, ref = sym("c", nc, stages), sym("h"), sym("p", npar), sym("ref", nx)
+    tick, offset, weights, ff = sym("tick"), sym("offset", ny), sym("w", k), sym("ff", m, stages)
+    packed = sym("M", k * (n * n + n * ny + m * n + m * ny))
+    delay, limits, tau, lagged = sym("delay"), sym("limits", m), sym("tau", m), sym("lagged", m)
+    y = reading(x, cprev, p, ref) + offset
+    xc_next, hold_next, pending_next = _tick(shape)(xc, hold, pending, y, tick, weights, packed, delay)
+    applied, lags = _actuators(m, stages)(hold_next, ff, h, lag, limits, tau, lagged)
+    inputs = [ca.vertcat(cin[: actuators.start, j], applied[:, j], cin[actuators.stop:, j]) for j in range(stages)]
     dt = h / substeps
     xk = x
     for s in range(substeps):
         at3 = (inputs[2 * s], inputs[2 * s + 1], inputs[2 * s + 2])
 
-        def rates(xs: ca.SX, stage: int, at3: tuple[ca.SX, ca.SX, ca.SX] = at3) -> ca.SX:
+        def rates(xs: ca.MX, stage: int, at3: tuple[ca.MX, ca.MX, ca.MX] = at3) -> ca.MX:
             return model.rhs(xs, at3[stage], p)
 
         xk = rk4_step(rates, xk, dt)
     ins = [x, xc, hold, pending, lag, cprev, cin, h, p, ref, tick, offset, weights, ff, packed, delay, limits, tau,
            lagged]
-    outs = [xk, xc_next, hold_next, pending_next, lags, inputs[-1], ca.horzcat(*applied)]
+    outs = [xk, xc_next, hold_next, pending_next, lags, inputs[-1], applied]
     return ca.Function("interval", ins, outs)
 
 
