@@ -293,6 +293,7 @@ class SampledLoop:
         carry = [np.asarray(x0, dtype=float), np.zeros(n), np.zeros(m), np.zeros(m), np.zeros(m), c0]
         ff = np.zeros((total, stages, m)) if feedforward is None else feedforward
         states, applied = np.empty((total, x0.size)), np.empty((total, stages, m))
+        call = self.chunk.bound()  # buffers allocated once for the run's calls
         for lo in range(0, total, CHUNK):
             hi = min(lo + CHUNK, total)
             part = [inputs[lo:hi], steps[lo:hi], ticks[lo:hi].astype(float), offsets[lo:hi], weights[lo:hi],
@@ -300,10 +301,10 @@ class SampledLoop:
             if hi - lo < CHUNK:  # padded with empty intervals, dropped
                 part = [np.concatenate([a, np.zeros((CHUNK - (hi - lo), *a.shape[1:]))]) for a in part]
             cin, h, tick, offset, weight, force = part
-            xs, forces, *rest = self.chunk(*carry, cin, h, p, x0, tick, offset, weight, force, *consts)
+            xs, forces, *rest = call(*carry, cin, h, p, x0, tick, offset, weight, force, *consts)
             states[lo:hi] = xs[: hi - lo]
             applied[lo:hi] = forces[: hi - lo].reshape(hi - lo, stages, m)
-            carry = [xs[hi - lo - 1], *(r.ravel() for r in rest)]
+            carry = [xs[hi - lo - 1].copy(), *(r.ravel().copy() for r in rest)]
         bad = ~np.all(np.isfinite(states), axis=1)
         if bad.any():
             states[int(np.argmax(bad)):] = np.nan
