@@ -190,7 +190,7 @@ def run_closed_loop(scenario: Scenario, model: Model, grid: TimeGrid, grid_input
     regular = grid.regular
     ticks = regular[:-1] & ((np.cumsum(regular[:-1]) - 1) % period == 0)
     at = grid.nodes[:-1][ticks]
-    n, ny, _, k = law.shape
+    _, ny, _, k = law.shape
     offsets, weights = np.zeros((ticks.size, ny)), np.zeros((ticks.size, k))
     weights[:, 0] = 1.0
     if law.offsets is not None:

@@ -245,9 +245,9 @@ class SampledLoop:
         consts = [ca.MX.sym(step.name_in(i), *step.size_in(i)) for i in range(14, 19)]
         state, xs, forces = list(carried), [], []
         for j in range(CHUNK):
-            out = step(*state, cin[:, j * stages:(j + 1) * stages], h[j], *shared, tick[j], offset[:, j],
-                       weights[:, j], ca.reshape(ff[:, j], m, stages), *consts)
-            state = out[:6]
+            out = step.call([*state, cin[:, j * stages:(j + 1) * stages], h[j], *shared, tick[j], offset[:, j],
+                             weights[:, j], ca.reshape(ff[:, j], m, stages), *consts])
+            state = list(out[:6])
             xs.append(out[0])
             forces.append(ca.vec(out[6]))
         fn = ca.Function(f"isolator_loop_{model.tag}_s{substeps}_{'_'.join(map(str, shape))}_{len(sensors or ())}",
@@ -280,7 +280,7 @@ class SampledLoop:
         feedforward : ndarray (intervals, stages, actuators), optional
             Commanded forces [N] added to the controller's before clipping and lag.
         """
-        n, ny, m, k = self.shape
+        n, _, m, _ = self.shape
         stages = 2 * self.substeps + 1
         total = steps.size
         acts = scenario.actuators

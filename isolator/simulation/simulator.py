@@ -44,9 +44,8 @@ from isolator.simulation.stepping import (
     check_turn,
     dense_stepper,
     hold_time,
+    plan_stage_inputs,
     rk4_stepper,
-    staged_map,
-    staged_parameters,
     with_start,
 )
 from isolator.simulation.tail_check import run_tail
@@ -54,10 +53,6 @@ from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at,
 from isolator.simulation.window_settling import run_points
 
 __all__ = ["FeedbackLaw", "Method", "Simulator", "get_model", "simulate"]
-
-
-#: the staged inputs a simulator keeps for reuse, at most this many bytes (and 16 plans)
-STAGED_BYTES = 512 * 2**20
 
 
 class Simulator:
@@ -186,23 +181,8 @@ class Simulator:
 
     def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray:
         """The DOP853 stepper's inputs at every stage of the plan: the model's inputs, or their
-        staged form (time-only moments; cached per carriage and table inertia)."""
-        staged = self.model.staged_inputs
-        uses = staged_parameters(self.model)
-        key = (method.plan_key, np.asarray(p, dtype=float)[uses].tobytes())
-        if key not in self._staged:
-            plan = method.plan
-            if plan is None:
-                raise ValueError("plan_inputs: the method steps RK4 on the sample grid, it has no step plan")
-            inputs = inputs_at(self.scenario, *plan.stage_times())
-            if staged is not None:
-                flat = inputs.reshape(inputs.shape[0] * inputs.shape[1], inputs.shape[2])
-                inputs = staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
-            self._staged[key] = np.ascontiguousarray(inputs)
-            while len(self._staged) > 1 and (len(self._staged) > 16 or sum(
-                    a.nbytes for a in self._staged.values()) > STAGED_BYTES):  # oldest first
-                self._staged.pop(next(iter(self._staged)))
-        return self._staged[key]
+        staged form (time-only moments; cached per carriage and table inertia, :func:`plan_stage_inputs`)."""
+        return plan_stage_inputs(self.scenario, self.model, method, p, self._staged)
 
     def _at_samples(self) -> np.ndarray:
         """The model's inputs at the output samples (carriage positions, floor motion)."""

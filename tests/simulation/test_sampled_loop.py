@@ -145,7 +145,8 @@ def test_a_delayed_command_acts_one_sample_later():
             Simulator(s).run(controller=DiscreteController(RATE, *names(s), **static, delay=delay), forces=pulse(s))
         applied[delay] = captured["out"][1][:, 0, Simulator(s).layout.actuator_slice][:, 1]  # y1: feedback alone
     now, later = applied[False], applied[True]
-    assert later[0] == 0.0 and np.abs(now).max() > 1e-9
+    assert later[0] == 0.0
+    assert np.abs(now).max() > 1e-9
     np.testing.assert_allclose(later[1:], now[:-1], rtol=1e-4, atol=1e-6 * np.abs(now).max())
     assert np.abs(later - now).max() > 100 * np.abs(later[1:] - now[:-1]).max()
 
@@ -178,7 +179,8 @@ def test_noise_is_seeded_reproducible_and_off_by_default(parked):
     ctrl = dynamic(parked)
     t = np.arange(4000) / RATE
     quiet = controller_law(parked, sim.model, p, start, ctrl).offsets(t)
-    assert np.all(quiet == quiet[0]) and np.abs(quiet).max() < 1e-12  # the geophones read zero at rest
+    assert np.all(quiet == quiet[0])
+    assert np.abs(quiet).max() < 1e-12  # the geophones read zero at rest
     one = controller_law(parked, sim.model, p, start, ctrl, noise=True, seed=1).offsets(t)
     again = controller_law(parked, sim.model, p, start, ctrl, noise=True, seed=1).offsets(t)
     other = controller_law(parked, sim.model, p, start, ctrl, noise=True, seed=2).offsets(t)
@@ -240,10 +242,12 @@ def test_command_line(tmp_path, capsys, parked):
         status, _, lines = run_command(["simulate", str(scenario), "--out", str(out_csv), "--plot", str(plot),
                                         *extra], capsys)
         assert status == 2, (extra, lines)
-        assert len(lines) == 1 and lines[0].startswith("isolator: error: "), lines
+        assert len(lines) == 1, lines
+        assert lines[0].startswith("isolator: error: "), lines
         for word in words:
             assert word in lines[0], (word, lines[0])
-        assert not out_csv.exists() and not plot.exists()
+        assert not out_csv.exists()
+        assert not plot.exists()
 
 
 def python_loop(law):
