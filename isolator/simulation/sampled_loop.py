@@ -291,13 +291,14 @@ class SampledLoop:
         c0 = inputs[0, 0].copy()
         c0[self.model.layout.actuator_slice] = 0.0
         carry = [np.asarray(x0, dtype=float), np.zeros(n), np.zeros(m), np.zeros(m), np.zeros(m), c0]
-        ff = np.zeros((total, stages, m)) if feedforward is None else feedforward
+        none = np.zeros((CHUNK, stages, m))
+        flags = ticks.astype(float)
         states, applied = np.empty((total, x0.size)), np.empty((total, stages, m))
         call = self.chunk.bound()  # buffers allocated once for the run's calls
         for lo in range(0, total, CHUNK):
             hi = min(lo + CHUNK, total)
-            part = [inputs[lo:hi], steps[lo:hi], ticks[lo:hi].astype(float), offsets[lo:hi], weights[lo:hi],
-                    ff[lo:hi]]
+            part = [inputs[lo:hi], steps[lo:hi], flags[lo:hi], offsets[lo:hi], weights[lo:hi],
+                    none[: hi - lo] if feedforward is None else feedforward[lo:hi]]
             if hi - lo < CHUNK:  # padded with empty intervals, dropped
                 part = [np.concatenate([a, np.zeros((CHUNK - (hi - lo), *a.shape[1:]))]) for a in part]
             cin, h, tick, offset, weight, force = part
