@@ -1,7 +1,7 @@
 """Transient simulation of a scenario: from the initial equilibrium through the moves. Plain carriage transients
 are integrated with DOP853 steps between the breakpoints and read at the samples from its dense output
-(:mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step RK4 on the sample grid, the
-controller ticking between intervals."""
+(:mod:`isolator.numerics.dop853`); runs with actuator forces or a controller step RK4 on the sample grid, a
+controller ticking in the compiled loop (:mod:`isolator.simulation.closed_loop`)."""
 
 from __future__ import annotations
 
