@@ -224,6 +224,12 @@ def closed_loop_run(scenario: Scenario, model: Model,
         The initial and the final equilibrium (None when a carriage never stops).
     substeps : int
         RK4 steps per interval of the simulator's grid (the loop's own grid gets its own by the rule).
+    forces : ForceHistory, optional
+        The feedforward command [N], added to the controller's before saturation and lag.
+    feedback, controller
+        The state-feedback law, or the controller of the scenario's sensors (one of them).
+    noise, seed
+        As for :func:`controller_law` (a controller only).
 
     Returns
     -------
@@ -238,6 +244,8 @@ def closed_loop_run(scenario: Scenario, model: Model,
     internal = internal_rate(scenario.simulation)[1]
     if controller is not None and feedback is not None:
         raise ParameterError("controller: give either a controller or a feedback law, not both")
+    if controller is None and noise:
+        raise ParameterError("noise: adds sensor noise to a controller's readings; give a controller")
     if controller is None:
         law, factor, period = state_feedback(feedback), internal, controller_period(scenario, feedback)  # type: ignore
     else:

@@ -99,8 +99,9 @@ class DiscreteController:
     settings : dict
         The design's settings (JSON values), recorded as given.
     delay : bool
-        Whether the design includes one sample of computation delay (``u_k`` acting from ``t_{k+1}``):
-        such a design is just another ``(A, B, C, D)``; the flag is recorded only.
+        Whether the design includes one sample of computation delay: :meth:`step` (and the C code) still
+        returns ``u_k`` at ``t_k``, and the simulation applies it from ``t_{k+1}`` to ``t_{k+2}`` (the latency
+        the design assumed).
     """
 
     sample_rate: float
