@@ -39,13 +39,13 @@ from isolator.simulation.time_grid import (
     time_grid,
 )
 
-__all__ = ["MAX_FACTOR", "FeedbackLaw", "LoopGrids", "closed_loop_run", "controller_factor", "controller_law",
+__all__ = ["MAX_STEPPING_RATE", "FeedbackLaw", "LoopGrids", "closed_loop_run", "controller_factor", "controller_law",
            "controller_period", "run_closed_loop", "state_feedback"]
 
 #: a simulator's closed-loop grids and their inputs, by (output rate's factor, substeps)
 LoopGrids = dict[tuple[int, int], tuple[TimeGrid, np.ndarray]]
-#: the most the output rate is multiplied by to find a grid for a controller's rate
-MAX_FACTOR = 1000
+#: the fastest grid [Hz] a controller's run steps on (a grid for its rate is searched up to it)
+MAX_STEPPING_RATE = 100e3
 
 
 class FeedbackLaw(Protocol):
@@ -91,17 +91,18 @@ def controller_period(scenario: Scenario, feedback: FeedbackLaw) -> int:
 def controller_factor(settings: SimulationSettings, rate: float) -> tuple[int, int]:
     """The output rate's factor for a controller ticking at ``rate`` [Hz], and the grid nodes per tick.
 
-    The least whole ``f`` with ``f * sample_rate >= 1 kHz`` a whole multiple of ``rate`` (to 1e-9), ``f <=``
-    :data:`MAX_FACTOR`; a ParameterError naming both rates when there is none.
+    The least whole ``f`` with ``f * sample_rate >= 1 kHz`` a whole multiple of ``rate`` (to 1e-9), ``f *
+    sample_rate <=`` :data:`MAX_STEPPING_RATE`; a ParameterError naming both rates when there is none.
     """
     output = settings.sample_rate
-    for factor in range(max(1, math.ceil(INTERNAL_RATE / output * (1 - 1e-12))), MAX_FACTOR + 1):
+    most = max(1, math.floor(MAX_STEPPING_RATE / output * (1 + 1e-12)))
+    for factor in range(max(1, math.ceil(INTERNAL_RATE / output * (1 - 1e-12))), most + 1):
         ratio = output * factor / rate
         if abs(ratio - round(ratio)) <= 1e-9 * ratio and round(ratio) >= 1:
             return factor, round(ratio)
     raise ParameterError(f"controller: its sample rate {rate:.6g} Hz fits no stepping grid of simulation.sample_rate "
                          f"{output:.6g} Hz (a whole multiple of both, >= {INTERNAL_RATE:g} Hz, at most "
-                         f"{MAX_FACTOR} x the output rate)")
+                         f"{MAX_STEPPING_RATE:g} Hz)")
 
 
 def state_feedback(feedback: FeedbackLaw) -> SampledLaw:
