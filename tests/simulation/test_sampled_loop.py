@@ -312,3 +312,16 @@ def test_state_feedback_laws_run_as_the_python_loop_ran_them(bandwidth, monkeypa
         assert (np.abs(compiled.signals - reference.signals) / scale).max() < 1e-9
         np.testing.assert_allclose(compiled.actuator_forces, reference.actuator_forces, rtol=0, atol=1e-8)
         assert compiled.settling_time_max == pytest.approx(reference.settling_time_max, abs=1e-9)
+
+
+def test_another_controller_of_the_same_shape_reuses_the_compiled_loop(parked):
+    from isolator.simulation import sampled_loop
+
+    sim, forces = Simulator(parked), pulse(parked)
+    first = dynamic(parked)
+    run = sim.run(controller=first, forces=forces)
+    built = dict(sampled_loop._LOOPS)
+    twice = DiscreteController(RATE, *names(parked), A=first.A, B=first.B, C=2 * first.C, D=2 * first.D)
+    other = sim.run(controller=twice, forces=forces)
+    assert built == sampled_loop._LOOPS  # the matrices are arguments of the compiled function
+    assert not np.allclose(run.signals, other.signals, rtol=1e-3)
