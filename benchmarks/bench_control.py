@@ -3,9 +3,9 @@
 Prints each figure and its ratio to a baseline measured in the same run:
 
 * optimal feedforward against the allocation it improves on;
-* the time-varying simulation with a sampled feedback controller (stepped
-  interval by interval, the controller in Python) against the same
-  simulation with the allocation's forces precomputed (compiled chunks).
+* the time-varying simulation with a sampled feedback controller (the
+  compiled closed loop, :mod:`isolator.simulation.sampled_loop`) against the
+  same simulation with the allocation's forces precomputed (compiled chunks).
 
 Run:  python benchmarks/bench_control.py
 """

@@ -49,11 +49,20 @@ class DiscreteLaw:
     def reset(self) -> None:
         self.state = np.zeros(self.ad.shape[0])
 
-    def _reference(self, t: float) -> np.ndarray:
+    def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """The Tustin-discretised ``(A, B, C, D)`` from the 12 measured deviations to the commands [N]."""
+        return self.ad, self.bd, self.cd, self.dd
+
+    def references(self, t: np.ndarray) -> np.ndarray:
+        """What the law regulates to at times ``t`` [s]: (len(t), 12), the quasi-static path and its rate
+        (zero without one)."""
+        t = np.atleast_1d(np.asarray(t, dtype=float))
         if self.reference is None:
-            return np.zeros(12)
-        tt = np.array([t])
-        return np.concatenate([self.reference(tt)[0], self.reference(tt, None, 1)[0]])
+            return np.zeros((t.size, 12))
+        return np.hstack([self.reference(t), self.reference(t, None, 1)])
+
+    def _reference(self, t: float) -> np.ndarray:
+        return self.references(np.array([t]))[0]
 
     def __call__(self, t: float, measurement: np.ndarray) -> np.ndarray:
         """Command [N] per actuator at a tick from the measured state (12,) relative to the start."""

@@ -26,6 +26,7 @@ from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import bundled_scenarios, load_scenario
 from isolator.simulation.band import Band, parse_half_widths
+from isolator.simulation.discrete_controller import DiscreteController
 
 __all__ = ["register"]
 
@@ -47,6 +48,12 @@ def register(sub: Any) -> None:
     sim.add_argument("--json", action="store_true", help="print a JSON summary instead of the table")
     sim.add_argument("--forces", type=Path, metavar="FILE.csv",
                      help="actuator forces file (t and one column per actuator, N)")
+    sim.add_argument("--controller", type=Path, metavar="DIR",
+                     help="run the discrete controller of DIR/controller.json (isolator controller's output) on the "
+                     "scenario's sensors and actuators")
+    sim.add_argument("--noise", action="store_true",
+                     help="with --controller: add each sensor's noise (its 'noise' RMS per sample) to its readings")
+    sim.add_argument("--seed", type=int, default=0, metavar="N", help="seed of --noise (default 0)")
     band = sim.add_mutually_exclusive_group()
     band.add_argument("--band", metavar="x=M,y=M,z=M,rx=RAD,ry=RAD,rz=RAD",
                       help="settling band: six absolute half-widths [m, rad], e.g. a study's 'band' column "
@@ -213,6 +220,25 @@ def _band_option(args: argparse.Namespace) -> Band | None:
     return Band.from_dict(data, "--band-json")
 
 
+def _controller_option(args: argparse.Namespace) -> DiscreteController | None:
+    """The controller of ``--controller DIR`` (None without it); ``--noise`` only with one."""
+    if args.controller is None:
+        if args.noise:
+            raise ParameterError("--noise: adds sensor noise to a controller's readings; give --controller DIR")
+        return None
+    source = args.controller if args.controller.is_file() else args.controller / "controller.json"
+    try:
+        return DiscreteController.from_json(source)
+    except ParameterError as exc:
+        raise ParameterError(f"--controller: '{source}': {exc}") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else f"{type(exc).__name__}: {exc}"
+        raise ParameterError(f"--controller: cannot read '{source}': {reason}") from None
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise ParameterError(f"--controller: '{source}' is not a controller.json ({type(exc).__name__}: {exc})"
+                             ) from None
+
+
 def _simulate(args: argparse.Namespace) -> int:
     from isolator.simulation.simulator import Simulator
 
@@ -232,7 +258,9 @@ def _simulate(args: argparse.Namespace) -> int:
             leveling = figure_path(plot.with_name(f"{plot.stem}-leveling{plot.suffix}"), "--plot")
         if scenario.windows:
             windows = figure_path(plot.with_name(f"{plot.stem}-windows{plot.suffix}"), "--plot")
-    response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args))
+    controller = _controller_option(args)
+    response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args), controller=controller,
+                                                   noise=args.noise, seed=args.seed)
     if out:
         response.to_csv(out)
     if plot is not None:

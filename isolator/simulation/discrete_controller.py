@@ -99,8 +99,9 @@ class DiscreteController:
     settings : dict
         The design's settings (JSON values), recorded as given.
     delay : bool
-        Whether the design includes one sample of computation delay (``u_k`` acting from ``t_{k+1}``):
-        such a design is just another ``(A, B, C, D)``; the flag is recorded only.
+        Whether the design includes one sample of computation delay: :meth:`step` (and the C code) still
+        returns ``u_k`` at ``t_k``, and the simulation applies it from ``t_{k+1}`` to ``t_{k+2}`` (the latency
+        the design assumed).
     """
 
     sample_rate: float
@@ -205,6 +206,27 @@ class DiscreteController:
         a, b = s[k], s[k + 1]
         mix = lambda x, y: (1.0 - w) * x + w * y  # noqa: E731
         return mix(a.A, b.A), mix(a.B, b.B), mix(a.C, b.C), mix(a.D, b.D)
+
+    def schedule_weights(self, q: np.ndarray) -> np.ndarray:
+        """Each design point's weight (N, points) at the carriages' positions ``q`` (N, carriages) [m]:
+        :meth:`matrices` at ``q[i]`` is ``sum_j w[i, j] M_j`` (ones (N, 1) without a schedule)."""
+        q = np.asarray(q, dtype=float).reshape(-1, max(len(self.carriages), 1))
+        if len(self.schedule) < 2:
+            return np.ones((q.shape[0], 1))
+        c = self.schedule_carriage
+        points = np.array([e.q[c] for e in self.schedule])
+        qs = q[:, c]
+        k = np.clip(np.searchsorted(points, qs, side="right") - 1, 0, points.size - 2)
+        w = (qs - points[k]) / (points[k + 1] - points[k])
+        above = qs >= points[-1]
+        k, w = np.where(above, points.size - 2, k), np.where(above, 1.0, w)
+        below = ~(qs > points[0])  # below the range, or NaN: the first point
+        k, w = np.where(below, 0, k), np.where(below, 0.0, w)
+        out = np.zeros((qs.size, points.size))
+        rows = np.arange(qs.size)
+        out[rows, k] = 1.0 - w
+        out[rows, k + 1] += w
+        return out
 
     def reset(self) -> np.ndarray:
         """The state at rest: zeros (``n``,)."""

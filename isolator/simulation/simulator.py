@@ -1,7 +1,7 @@
 """Transient simulation of a scenario: from the initial equilibrium through the moves. Plain carriage transients
 are integrated with DOP853 steps between the breakpoints and read at the samples from its dense output
-(:mod:`isolator.numerics.dop853`); runs with actuator forces or feedback step RK4 on the sample grid, the
-controller ticking between intervals."""
+(:mod:`isolator.numerics.dop853`); runs with actuator forces or a controller step RK4 on the sample grid, a
+controller ticking in the compiled loop (:mod:`isolator.simulation.closed_loop`)."""
 
 from __future__ import annotations
 
@@ -26,8 +26,9 @@ from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
 from isolator.simulation.actuation import ForceHistory, with_forces
 from isolator.simulation.batch import BatchResult, run_batch, scale_label
-from isolator.simulation.closed_loop import FeedbackLaw, run_closed_loop
+from isolator.simulation.closed_loop import FeedbackLaw, LoopGrids, closed_loop_run
 from isolator.simulation.dense_metrics import DenseRuns, run_metrics
+from isolator.simulation.discrete_controller import DiscreteController
 from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic_result
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
@@ -43,9 +44,8 @@ from isolator.simulation.stepping import (
     check_turn,
     dense_stepper,
     hold_time,
+    plan_stage_inputs,
     rk4_stepper,
-    staged_map,
-    staged_parameters,
     with_start,
 )
 from isolator.simulation.tail_check import run_tail
@@ -53,10 +53,6 @@ from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at,
 from isolator.simulation.window_settling import run_points
 
 __all__ = ["FeedbackLaw", "Method", "Simulator", "get_model", "simulate"]
-
-
-#: the staged inputs a simulator keeps for reuse, at most this many bytes (and 16 plans)
-STAGED_BYTES = 512 * 2**20
 
 
 class Simulator:
@@ -90,6 +86,7 @@ class Simulator:
         self._longest_interval = float(np.max(np.diff(self.grid.nodes))) if self.grid.nodes.size > 1 else 0.0
         self._positions = (scenario.initial_positions(), scenario.final_positions())
         self._inputs: dict[int, np.ndarray] = {}
+        self._loops: LoopGrids = {}  # the closed loops' grids and inputs
         self._plans: dict[int, StepPlan] = {}
         self._staged: dict[tuple[int, bytes], np.ndarray] = {}
         self._sample_inputs: np.ndarray | None = None
@@ -141,10 +138,11 @@ class Simulator:
         where = "with the carriages at their final positions"
         return start, list(static_equilibria(self.model, params, last, where, air=air))
 
-    def substeps_for(self, omega_max: float) -> int:
-        """RK4 steps per grid interval for a fastest eigenvalue ``omega_max`` [rad/s]."""
+    def substeps_for(self, omega_max: float, grid: TimeGrid | None = None) -> int:
+        """RK4 steps per interval of ``grid`` (default the run's) for a fastest eigenvalue ``omega_max`` [rad/s]."""
         omega = max(omega_max, self._forcing)
-        return max(1, math.ceil(omega * self._longest_interval / STEP_ANGLE))
+        longest = self._longest_interval if grid is None else float(np.max(np.diff(grid.nodes), initial=0.0))
+        return max(1, math.ceil(omega * longest / STEP_ANGLE))
 
     def method_for(self, omega_max: float) -> Method:
         """The cheaper integration for a fastest eigenvalue ``omega_max`` [rad/s].
@@ -183,23 +181,8 @@ class Simulator:
 
     def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray:
         """The DOP853 stepper's inputs at every stage of the plan: the model's inputs, or their
-        staged form (time-only moments; cached per carriage and table inertia)."""
-        staged = self.model.staged_inputs
-        uses = staged_parameters(self.model)
-        key = (method.plan_key, np.asarray(p, dtype=float)[uses].tobytes())
-        if key not in self._staged:
-            plan = method.plan
-            if plan is None:
-                raise ValueError("plan_inputs: the method steps RK4 on the sample grid, it has no step plan")
-            inputs = inputs_at(self.scenario, *plan.stage_times())
-            if staged is not None:
-                flat = inputs.reshape(inputs.shape[0] * inputs.shape[1], inputs.shape[2])
-                inputs = staged_map(self.model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
-            self._staged[key] = np.ascontiguousarray(inputs)
-            while len(self._staged) > 1 and (len(self._staged) > 16 or sum(
-                    a.nbytes for a in self._staged.values()) > STAGED_BYTES):  # oldest first
-                self._staged.pop(next(iter(self._staged)))
-        return self._staged[key]
+        staged form (time-only moments; cached per carriage and table inertia, :func:`plan_stage_inputs`)."""
+        return plan_stage_inputs(self.scenario, self.model, method, p, self._staged)
 
     def _at_samples(self) -> np.ndarray:
         """The model's inputs at the output samples (carriage positions, floor motion)."""
@@ -216,6 +199,9 @@ class Simulator:
         forces: ForceHistory | None = None,
         feedback: FeedbackLaw | None = None,
         band: Band | None = None,
+        controller: DiscreteController | None = None,
+        noise: bool = False,
+        seed: int = 0,
     ) -> Response:
         """Simulate once.
 
@@ -229,11 +215,18 @@ class Simulator:
             Commanded actuator forces (clipped at ``max_force`` and lagged by
             each actuator's bandwidth, see :mod:`isolator.simulation.actuation`).
         feedback : FeedbackLaw, optional
-            A sampled controller: its command, held between ticks, is added to
+            A sampled state-feedback law: its command, held between ticks, is added to
             ``forces`` before saturation and lag.
         band : Band, optional
             The settling band (default: the scenario's ``[settling]`` rule, :meth:`Band.from_settling`);
             ``Response.with_band`` measures the same run in another.
+        controller : DiscreteController, optional
+            A controller of the scenario's sensors (``controller.json``), run as ``docs/scenario-format.md``
+            says (:mod:`isolator.simulation.closed_loop`); not with ``feedback``.
+        noise : bool
+            Add each sensor's white noise (``noise`` RMS per sample [SI]) to the controller's readings.
+        seed : int
+            Seed of that noise.
 
         Returns
         -------
@@ -250,7 +243,7 @@ class Simulator:
         self.check_tipping(p)
         start, end = self.equilibria(p)
         method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
-        return self.run_method(p, start, end, method, forces, feedback, band)
+        return self.run_method(p, start, end, method, forces, feedback, band, controller, noise, seed)
 
     def run_method(
         self,
@@ -261,6 +254,9 @@ class Simulator:
         forces: ForceHistory | None = None,
         feedback: FeedbackLaw | None = None,
         band: Band | None = None,
+        controller: DiscreteController | None = None,
+        noise: bool = False,
+        seed: int = 0,
     ) -> Response:
         """One run from the equilibria ``start`` (and ``end``, None if a carriage never stops) with
         ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
@@ -269,7 +265,7 @@ class Simulator:
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
-        if forces is None and feedback is None and method.plan is not None:
+        if forces is None and feedback is None and controller is None and method.plan is not None:
             plan = method.plan
             raw, step_peaks, deviations, polynomials = dense_stepper(self.model).run_slots(
                 start.state, plan, self.plan_inputs(method, p), p, start.state, with_states=True, final=final
@@ -302,15 +298,14 @@ class Simulator:
             at_samples = self._at_samples()
         else:
             substeps = method.substeps
-            if feedback is None:
+            if feedback is None and controller is None:
                 inputs = with_forces(self.scenario, self.layout.actuator_slice, self.grid, self.grid_inputs(substeps),
                                      substeps, forces)
                 stepped = rk4_stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
             else:
-                stepped, inputs = run_closed_loop(
-                    self.scenario, self.layout, self.model, grid, self.grid_inputs(substeps), p, start, substeps,
-                    forces, feedback,
-                )
+                grid, stepped, inputs = closed_loop_run(
+                    self.scenario, self.model, (self.grid, self.grid_inputs, self.substeps_for, self._loops), p,
+                    (start, end), substeps, forces, feedback, controller, noise, seed)
             every = np.vstack([start.state, stepped])
             at_samples = np.vstack([inputs[:, 0, :], inputs[-1:, -1, :]])[grid.is_sample]
             bad = ~np.all(np.isfinite(every), axis=1)
@@ -321,7 +316,7 @@ class Simulator:
             on_grid = self.signals(every, start)  # the metrics are taken on the whole internal grid
             signals = np.ascontiguousarray(on_grid[:, grid.is_sample])
             # forces or feedback act to the end: no free motion after it, the run must show the signal settled
-            free = (None, "") if forces is not None or feedback is not None else run_tail(
+            free = (None, "") if forces is not None or feedback is not None or controller is not None else run_tail(
                 self.scenario, self.model, p, start, end, every[-1], float(grid.nodes[-1]))
 
             peaks = signal_peaks(on_grid)  # the metrics on every node, the entry into a band interpolated

@@ -19,6 +19,8 @@ from isolator.numerics.dop853 import DenseStepper, StepPlan
 from isolator.numerics.native import MappedFunction
 from isolator.numerics.rk4 import Stepper
 from isolator.numerics.systems import Unstaged
+from isolator.scenario.definitions import Scenario
+from isolator.simulation.time_grid import inputs_at
 
 __all__ = [
     "DENSE_STEP_ANGLE",
@@ -32,6 +34,7 @@ __all__ = [
     "clear_caches",
     "dense_stepper",
     "hold_time",
+    "plan_stage_inputs",
     "rk4_stepper",
     "staged_map",
     "staged_parameters",
@@ -132,6 +135,31 @@ def hold_time(end: Equilibrium | None) -> float:
     im = np.abs(np.imag(end.eigenvalues))
     im = im[im > 1e-6]
     return float(2 * math.pi / im.min()) if im.size else 0.0
+
+
+#: the staged inputs a simulator keeps for reuse, at most this many bytes (and 16 plans)
+STAGED_BYTES = 512 * 2**20
+
+
+def plan_stage_inputs(scenario: Scenario, model: Model, method: Method, p: np.ndarray,
+                      cache: dict[tuple[int, bytes], np.ndarray]) -> np.ndarray:
+    """The DOP853 stepper's inputs at every stage of ``method``'s plan: the model's inputs, or their staged form
+    (time-only moments), kept in ``cache`` per plan and the parameters they depend on (carriage and table
+    inertia; the oldest dropped past 16 entries or :data:`STAGED_BYTES`)."""
+    staged = model.staged_inputs
+    key = (method.plan_key, np.asarray(p, dtype=float)[staged_parameters(model)].tobytes())
+    if key not in cache:
+        plan = method.plan
+        if plan is None:
+            raise ValueError("plan_inputs: the method steps RK4 on the sample grid, it has no step plan")
+        inputs = inputs_at(scenario, *plan.stage_times())
+        if staged is not None:
+            flat = inputs.reshape(inputs.shape[0] * inputs.shape[1], inputs.shape[2])
+            inputs = staged_map(model)(flat, p)[0].reshape(*inputs.shape[:2], -1)
+        cache[key] = np.ascontiguousarray(inputs)
+        while len(cache) > 1 and (len(cache) > 16 or sum(a.nbytes for a in cache.values()) > STAGED_BYTES):
+            cache.pop(next(iter(cache)))  # oldest first
+    return cache[key]
 
 
 #: the most integration steps one run may take

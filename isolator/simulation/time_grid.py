@@ -96,11 +96,11 @@ def internal_rate(settings: SimulationSettings) -> tuple[float, int]:
     return settings.sample_rate * factor, factor
 
 
-def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...]) -> TimeGrid:
+def time_grid(settings: SimulationSettings, breakpoints: tuple[float, ...], factor: int | None = None) -> TimeGrid:
     """The regular grid at the internal rate (holding the output samples) merged with the
-    breakpoints and the run's end [s]."""
+    breakpoints and the run's end [s]; ``factor``: the output rate times this whole number instead."""
     samples = settings.sample_times()
-    rate, factor = internal_rate(settings)
+    rate, factor = internal_rate(settings) if factor is None else (settings.sample_rate * factor, factor)
     count = int(np.floor(settings.duration * rate * (1 + 1e-12))) + 1
     regular = np.arange(count) / rate
     regular[::factor][: samples.size] = samples[: regular[::factor].size]  # the samples' own times
