@@ -146,7 +146,8 @@ def _along_travel(scenario: Scenario, points: int = 9) -> np.ndarray:
 
 
 def margins_figure(designs: Sequence[SensorDesign], path: Path) -> None:
-    """Multiloop disk margin, smallest phase margin and spectral radius along the travel, per design."""
+    """Multiloop disk margin and the smallest loop-at-a-time phase and gain margins along the travel, per
+    design (a gain margin unlimited everywhere is not drawn)."""
     if not designs:
         return
     cases = designs[0].travel
@@ -157,13 +158,13 @@ def margins_figure(designs: Sequence[SensorDesign], path: Path) -> None:
         x = [c.positions[index] for c in d.travel]
         axes[0].plot(x, [c.margin("disk_margin") for c in d.travel], marker="o", label=d.method)
         axes[1].plot(x, [c.margin("phase_margin") for c in d.travel], marker="o", label=d.method)
-        axes[2].plot(x, [c.spectral_radius for c in d.travel], marker="o", label=d.method)
+        axes[2].plot(x, [c.margin("gain_margin") for c in d.travel], marker="o", label=d.method)
     for ax, title, unit in zip(axes, ("multiloop disk margin at the actuators", "smallest loop-at-a-time phase "
-                                      "margin", "spectral radius of the sampled loop"), ("[-]", "[deg]", "[-]"),
+                                      "margin", "smallest loop-at-a-time gain margin"), ("[-]", "[deg]", "[x]"),
                                strict=True):
         ax.set_title(title)
         ax.set_xlabel(f"{name} position [m]")
-        ax.set_ylabel(f"{title.split(' at ')[0].split(' of ')[0]} {unit}")
+        ax.set_ylabel(f"{title.split(' at ')[0]} {unit}")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
     fig.suptitle("Margins of the sensor-based designs along the travel (nominal isolators, actuator lag and "
@@ -183,7 +184,7 @@ def loops_figure(designs: Sequence[SensorDesign], scenario: Scenario, path: Path
     axes[0].loglog(f, designs[0].loops.passive[:, j], color="0.2", lw=1.8, label="passive")
     for d in designs:
         axes[0].loglog(f, d.loops.transmissibility[:, j], label=d.method)
-        axes[1].loglog(f, d.loops.sensitivity, label=d.method)
+        axes[1].semilogx(f, d.loops.sensitivity, label=d.method)
         axes[2].loglog(f, d.loops.complementary, label=d.method)
     axes[0].set_title(f"floor to sensor {sensors[j].name} ({sensors[j].quantity})")
     axes[0].set_ylabel("|T| [-] (floor motion along the sensor, same quantity)")
