@@ -1,20 +1,8 @@
 """A discrete controller from sensors to actuators as C99 code (:func:`write_c`), and from python-control.
 
 The contract is ``docs/scenario-format.md``, section "Sensors in the scenario, output feedback and
-exported controllers". At each sample ``t_k = k / sample_rate`` the controller receives every sensor's
-reading minus its reading at the initial equilibrium (``y``, SI units) and the carriages' raw positions
-(``q``, m) and returns the actuators' force commands (``u``, N)::
-
-    u_k     = C x_k + D y_k        (from the readings at t_k; held until t_{k+1})
-    x_{k+1} = A x_k + B y_k
-
-Gain scheduling: a schedule holds design points, each with the carriages' positions ``q`` and its
-``(A, B, C, D)`` (the same state dimension, in corresponding state coordinates). One carriage
-(``schedule_carriage``) schedules: with ``q_i <= q < q_{i+1}`` its positions at two neighbouring points and
-``w = (q - q_i) / (q_{i+1} - q_i)``, every matrix is ``(1 - w) M_i + w M_{i+1}`` entry by entry, and that
-interpolated ``(A, B, C, D)`` is applied as above. Below the first point (or a NaN position) the first
-point's matrices apply, above the last the last's (clamped). The other carriages' positions are recorded
-in the points but not used.
+exported controllers"; what the controller computes, and how a schedule interpolates, is
+:mod:`isolator.simulation.discrete_controller`.
 
 :meth:`DiscreteController.step` is the reference the generated C equals (to rounding). Names enter the C
 only as string literals (and comments showing those literals): every byte outside letters, digits, space

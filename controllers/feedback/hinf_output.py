@@ -26,6 +26,7 @@ common coordinates to interpolate, so an H-infinity design is not gain-scheduled
 from __future__ import annotations
 
 import math
+from types import ModuleType
 
 import numpy as np
 from scipy.linalg import matrix_balance
@@ -37,11 +38,21 @@ from isolator.scenario.arguments import check_public
 from .output_designs import NOISE_FLOOR, DiscreteDesign, loop_damping, lowest_mode_hz, noise_model, positive
 from .sensor_plant import SensorPlant, loop_matrix
 
-__all__ = ["hinf_design"]
+__all__ = ["hinf_design", "import_slycot"]
 
 #: slycot's bound on the real part of the w-plane loop's poles [1/s]: the loop is judged afterwards, sampled
 #: (a pole at -1e-9 from a near-uncontrollable static position must not fail the search)
 ACTOL = 1e-6
+
+
+def import_slycot() -> ModuleType:
+    """slycot, or a :class:`ParameterError` saying how to install it (the H-infinity designs need it)."""
+    try:
+        import slycot
+    except ImportError:
+        raise ParameterError('controller: hinf needs slycot: pip install ".[hinf]" (the extra "hinf"; or pip '
+                             "install slycot)") from None
+    return slycot
 
 
 def _to_w_plane(a: np.ndarray, b: np.ndarray, c: np.ndarray, d: np.ndarray, period: float
@@ -81,11 +92,7 @@ def hinf_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max
     OptimisationError
         No controller achieves a finite norm.
     """
-    try:
-        import slycot
-    except ImportError:
-        raise ParameterError('controller: hinf needs slycot: pip install ".[hinf]" (the extra "hinf"; or pip '
-                             "install slycot)") from None
+    slycot = import_slycot()
     v_max, w_max = positive(max_velocity, "max_velocity"), positive(max_rate, "max_rate")
     floor, factor = positive(noise_floor, "noise_floor"), positive(relax, "relax")
     if factor < 1:

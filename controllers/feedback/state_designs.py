@@ -33,6 +33,7 @@ from .designs import (
     actuated,
     actuator_labels,
 )
+from .hinf_output import import_slycot
 
 __all__ = ["hinf", "lqr"]
 
@@ -111,11 +112,7 @@ def hinf(
     OptimisationError
         No controller achieves a finite norm.
     """
-    try:
-        import slycot
-    except ImportError:
-        raise ParameterError('controller: hinf needs slycot: pip install ".[hinf]" (the extra "hinf"; or pip '
-                             "install slycot)") from None
+    slycot = import_slycot()
     _measured_state(lin, "hinf")
     a, b2 = actuated(lin)
     labels = list(lin.system.input_labels)
