@@ -78,3 +78,24 @@ def test_refusals(tmp_path, capsys) -> None:
                                   str(blocked)], capsys)
     assert status == 2
     assert "--out" in err[0]
+
+
+def test_checks_over_a_calibrations_intervals(tmp_path, capsys) -> None:
+    """--calibration-json: the check runs over the calibration's 95 % intervals (here wide ones, named as
+    `isolator calibrate --json` names them) and records them in controller.json."""
+    calibration = tmp_path / "calibration.json"
+    calibration.write_text(json.dumps({"parameters": {
+        "isolators[*].stiffness.z": {"initial": 570000.0, "value": 570000.0, "std": 30000.0,
+                                     "ci95": [510000.0, 630000.0]},
+        "isolators[*].damping.z": {"initial": 5700.0, "value": 5700.0, "std": 900.0, "ci95": [3900.0, 7500.0]}},
+        "identifiable": True}))
+    out = tmp_path / "ctl"
+    status, _, err = run_command(["controller", SCENARIO, "--method", "skyhook", "--sample-rate", "2000",
+                                  "--out", str(out), "--calibration-json", str(calibration), "--json"], capsys)
+    assert status == 0, err
+    robustness = json.loads((out / "controller.json").read_text())["robustness"]
+    assert set(robustness["uncertainty"]["intervals"]) == {"isolators[*].stiffness.z", "isolators[*].damping.z"}
+    checked = {tuple(sorted(c["parameters"].items())) for c in robustness["cases"]}
+    assert (("isolators[*].damping.z", 3900.0), ("isolators[*].stiffness.z", 630000.0)) in checked
+    _refused(capsys, tmp_path, [SCENARIO, "--method", "lqg", "--sample-rate", "2000", "--uncertainty",
+                                "stiffness=+-20%", "--calibration-json", str(calibration)], "not both")
