@@ -21,7 +21,7 @@ from isolator.cli.helpers import output_folder, report
 from isolator.errors import ParameterError
 from isolator.scenario.reader import load_scenario
 
-__all__ = ["register"]
+__all__: list[str] = []  # a command-line entry point: registered by controllers.cli, not a library name
 
 #: the scenario ``isolator controller`` designs for when none is named
 DEFAULT_SCENARIO = "paper-table-3-2-geophones"
