@@ -14,6 +14,7 @@ import tempfile
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 from isolator import load_scenario
 from studies.pneumatic import default_diameters, run_pneumatic_study
@@ -35,6 +36,11 @@ ax.plot([1e3 * o.diameter for o in study.optima], [o.ratio for o in study.optima
 ax.plot(1e3 * study.own_diameter, study.own_ratio, "r*", ms=14, label="the scenario's air springs")
 ax.set_xscale("log")
 ax.set_yscale("log", base=2)
+for axis in (ax.xaxis, ax.yaxis):
+    axis.set_major_formatter(ScalarFormatter())
+    axis.set_minor_formatter(NullFormatter())
+ax.set_xticks(1e3 * study.diameters, [f"{1e3 * d:.2f}" for d in study.diameters])
+ax.set_yticks(study.ratios, [f"{n:g}" for n in study.ratios])
 ax.set_xlabel("orifice diameter [mm]")
 ax.set_ylabel("volume ratio N = V2/V1r [-]")
 ax.set_title("Air springs of Table 3.2: heave peak over orifice and volume")

@@ -22,9 +22,9 @@ for name, run in (("paper profile", paper), ("ZVD-shaped", zvd)):
           f"cycle {move + run.settling_time_max:.2f} s")
 
 # %%
-# Heave and pitch around the stop, each run on its own clock from its stop.
+# Heave and yaw around the stop, each run on its own clock from its stop.
 fig, axes = plt.subplots(2, 1, sharex=True, figsize=(7, 5), layout="constrained")
-for ax, signal, unit, scale in ((axes[0], "z", "µm", 1e6), (axes[1], "ry", "µrad", 1e6)):
+for ax, signal, unit, scale in ((axes[0], "z", "µm", 1e6), (axes[1], "rz", "µrad", 1e6)):
     for name, run in (("paper profile", paper), ("ZVD-shaped", zvd)):
         ax.plot(run.t - run.stop_time, scale * run.signal(signal), label=name)
     ax.set_ylabel(f"{signal} [{unit}]")

@@ -14,6 +14,7 @@ import tempfile
 
 import matplotlib.pyplot as plt
 import numpy as np
+from matplotlib.ticker import NullFormatter, ScalarFormatter
 
 from isolator import load_scenario
 from studies.tradeoff import run_tradeoff_study
@@ -40,6 +41,9 @@ if (nominal := study.nominal()) is not None:
     ax.plot(*[[a[nominal]] for a in (study.transmissibility, study.settling_time)], "k*", ms=12,
             label="the scenario's isolators")
 ax.set_xscale("log")
+ax.xaxis.set_major_formatter(ScalarFormatter())
+ax.xaxis.set_minor_formatter(NullFormatter())
+ax.set_xticks([0.05, 0.1, 0.2, 0.4, 0.8], ["0.05", "0.1", "0.2", "0.4", "0.8"])
 ax.set_xlabel(f"worst floor-to-table transmissibility at {study.reference_hz:g} Hz [m/m]")
 ax.set_ylabel("largest 5 % settling time [s]")
 ax.set_title("Table 3.2: settling against isolation")
