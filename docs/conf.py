@@ -53,11 +53,24 @@ autodoc_typehints = "none"  # numpydoc: the types are in the docstrings' Paramet
 autodoc_default_options = {"member-order": "bysource"}
 numpydoc_show_class_members = False  # the class template lists the members itself
 numpydoc_class_members_toctree = False
-numpydoc_xref_param_type = False
+numpydoc_xref_param_type = True  # types in Parameters/Returns link to their pages (here, numpy's, python-control's)
+numpydoc_xref_aliases = {
+    "ndarray": "numpy.ndarray",
+    "StateSpace": "control.StateSpace",
+    "control.StateSpace": "control.StateSpace",
+    "Figure": "matplotlib.figure.Figure",
+    "Scenario": "isolator.Scenario",
+    "Response": "isolator.Response",
+    "LinearModel": "isolator.LinearModel",
+    "Band": "isolator.Band",
+}
+numpydoc_xref_ignore = {"of", "or", "optional", "default", "shape", "to", "and", "the", "a", "an", "in", "each",
+                        "per", "one", "None"}
 numpydoc_validation_checks: set[str] = set()
 
 # -- Intersphinx: vendored inventories (no network at build time; see _inventories/make_inventories.py) ----
 intersphinx_mapping = {
+    "python": ("https://docs.python.org/3/", str(HERE / "_inventories" / "python.inv")),
     "numpy": ("https://numpy.org/doc/stable/", str(HERE / "_inventories" / "numpy.inv")),
     "scipy": ("https://docs.scipy.org/doc/scipy/", str(HERE / "_inventories" / "scipy.inv")),
     "control": ("https://python-control.readthedocs.io/en/0.10.2/", str(HERE / "_inventories" / "control.inv")),

@@ -1,10 +1,12 @@
-"""Write the intersphinx inventories (``objects.inv``) of numpy, scipy, python-control and matplotlib.
+"""Write the intersphinx inventories (``objects.inv``) of numpy, scipy, python-control, matplotlib and Python.
 
 The documentation builds offline (CI reaches no documentation site), so ``docs/conf.py`` reads these
 vendored files instead of downloading the projects' own. The projects' inventories could not be
 downloaded where this was written, so this script makes equivalent ones from the installed packages:
 each public function, class and method gets the address its project's API reference gives it (the
-layouts of numpy's, scipy's, python-control's and matplotlib's Sphinx sites). Regenerate after a
+layouts of numpy's, scipy's, python-control's and matplotlib's Sphinx sites); for Python itself, the
+builtins, glossary terms and standard-library names the docstrings use (numpydoc links ``bool``,
+``sequence``, ``array_like`` to them). Regenerate after a
 major version of one of them::
 
     python docs/_inventories/make_inventories.py
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import sys
 import zlib
 from collections.abc import Callable, Iterable
 from pathlib import Path
@@ -68,7 +71,7 @@ def _module_entries(
 
 def write_inventory(path: Path, project: str, version: str, entries: Iterable[tuple[str, str, str]]) -> int:
     """Write a version-2 inventory; returns the number of entries."""
-    lines = sorted({f"{name} {role} 1 {uri} -" for name, role, uri in entries})
+    lines = sorted({f"{name} {role} {-1 if role == 'std:label' else 1} {uri} -" for name, role, uri in entries})
     header = (
         f"# Sphinx inventory version 2\n# Project: {project}\n# Version: {version}\n"
         "# The remainder of this file is compressed using zlib.\n"
@@ -94,6 +97,8 @@ def numpy_entries() -> Iterable[tuple[str, str, str]]:
                f"reference/random/generated/numpy.random.Generator.{method}.html#$")
     for name in ("ArrayLike", "NDArray", "DTypeLike"):
         yield f"numpy.typing.{name}", "py:data", "reference/typing.html#$"
+    yield "array_like", "std:term", "glossary.html#term-array_like"
+    yield "arrays.scalars", "std:label", "reference/arrays.scalars.html#arrays-scalars"
 
 
 def scipy_entries() -> Iterable[tuple[str, str, str]]:
@@ -121,6 +126,35 @@ def matplotlib_entries() -> Iterable[tuple[str, str, str]]:
         yield f"matplotlib.axes.Axes.{method}", "py:method", f"api/_as_gen/matplotlib.axes.Axes.{method}.html#$"
 
 
+#: Python's builtins and the standard-library names the docstrings use: (name, role, page)
+PYTHON_NAMES = (
+    *((n, "py:class", "library/functions.html") for n in ("int", "float", "bool", "complex", "object", "type")),
+    *((n, "py:class", "library/stdtypes.html") for n in ("str", "bytes", "list", "tuple", "dict", "set",
+                                                          "frozenset", "range")),
+    *((n, "py:data", "library/constants.html") for n in ("None", "True", "False", "Ellipsis")),
+    *((n, "py:function", "library/functions.html") for n in ("callable", "len", "open", "print", "round")),
+    *((f"collections.abc.{n}", "py:class", "library/collections.abc.html")
+      for n in ("Callable", "Iterable", "Iterator", "Mapping", "MutableMapping", "Sequence", "Generator")),
+    ("collections.namedtuple", "py:function", "library/collections.html"),
+    ("contextlib.contextmanager", "py:function", "library/contextlib.html"),
+    ("pathlib.Path", "py:class", "library/pathlib.html"),
+    ("concurrent.futures.Executor", "py:class", "library/concurrent.futures.html"),
+    ("concurrent.futures.ProcessPoolExecutor", "py:class", "library/concurrent.futures.html"),
+    ("dataclasses.dataclass", "py:function", "library/dataclasses.html"),
+    ("dataclasses.replace", "py:function", "library/dataclasses.html"),
+    ("argparse.ArgumentParser", "py:class", "library/argparse.html"),
+    ("tempfile.mkdtemp", "py:function", "library/tempfile.html"),
+)
+
+
+def python_entries() -> Iterable[tuple[str, str, str]]:
+    for name, role, page in PYTHON_NAMES:
+        yield name, role, f"{page}#$"
+    for term in ("iterable", "sequence", "generator", "mapping", "callable"):
+        yield term, "std:term", f"glossary.html#term-{term}"
+    yield "bltin-boolean-values", "std:label", "library/stdtypes.html#boolean-type"
+
+
 def _class(module: str, name: str, page: Callable[[str], str]) -> Iterable[tuple[str, str, str]]:
     full = f"{module}.{name}"
     cls = getattr(importlib.import_module(module), name)
@@ -140,6 +174,7 @@ def main() -> None:
         ("scipy.inv", "SciPy", scipy.__version__, scipy_entries()),
         ("control.inv", "Python Control Systems Library", control.__version__, control_entries()),
         ("matplotlib.inv", "Matplotlib", matplotlib.__version__, matplotlib_entries()),
+        ("python.inv", "Python", f"{sys.version_info.major}.{sys.version_info.minor}", python_entries()),
     ):
         count = write_inventory(HERE / filename, project, version, entries)
         print(f"{filename}: {count} entries ({project} {version})")
