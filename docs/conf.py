@@ -42,6 +42,7 @@ extensions = [
 
 source_suffix = {".rst": "restructuredtext", ".md": "markdown"}
 root_doc = "index"
+smartquotes = False  # options stay as typed: ``--protocol``, not an en dash
 exclude_patterns = ["_build", "_inventories", "_templates", "examples", "**/GALLERY_HEADER.rst", "auto_examples/*.md"]
 templates_path = ["_templates"]
 
@@ -109,7 +110,8 @@ html_theme_options = {
     "show_toc_level": 2,
     "header_links_before_dropdown": 6,
 }
-html_static_path: list[str] = []
+html_static_path = ["_static"]
+html_css_files = ["custom.css"]
 html_show_sourcelink = False
 
 
