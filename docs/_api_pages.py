@@ -57,7 +57,7 @@ def _heading(text: str, char: str) -> list[str]:
 def module_page(module_name: str, title: str, intro: str) -> str:
     module = importlib.import_module(module_name)
     names = list(module.__all__)
-    lines = [*_heading(title, "="), "", intro, ""]
+    lines = [*_heading(title, "="), "", intro, "", f".. automodule:: {module_name}", "   :no-members:", ""]
     if module_name == "isolator":  # a name another page documents (the sweep's result) is linked, not repeated
         sweep = importlib.import_module("isolator.sweep")
         shared = [n for n in names if n in sweep.__all__ and getattr(sweep, n) is getattr(module, n)]

@@ -21,6 +21,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 from _api_pages import write_api_pages  # noqa: E402  (docs/ is on the path only from here)
+from sphinx.errors import PycodeError  # noqa: E402
+from sphinx.pycode import ModuleAnalyzer  # noqa: E402
 
 os.environ.setdefault("MPLBACKEND", "Agg")
 os.environ.setdefault("ISOLATOR_QUIET", "1")  # no "compiling the model ..." lines in the examples' output
@@ -127,5 +129,25 @@ def _escape_bars(app: object, what: str, name: str, obj: object, options: object
                                for part in _LITERAL.split(line))
 
 
+def _constant_docs(app: object, what: str, name: str, obj: object, options: object, lines: list[str]) -> None:
+    """A constant re-exported by a package (``controllers.feedback.SAMPLE_RATE``) gets the ``#:`` comment of
+    the module that defines it, not its type's docstring ("Convert a string or number to a floating point
+    number ...")."""
+    type_doc = (type(obj).__doc__ or "").strip().splitlines()
+    if what not in ("data", "attribute") or not type_doc or type_doc[0].strip() not in [line.strip() for line in lines]:
+        return
+    package, _, attribute = name.rpartition(".")
+    lines[:] = []
+    for module in sorted(m for m in sys.modules if m == package or m.startswith(package + ".")):
+        try:
+            found = ModuleAnalyzer.for_module(module).find_attr_docs().get(("", attribute))
+        except PycodeError:
+            continue
+        if found:
+            lines[:] = list(found)
+            return
+
+
 def setup(app: Any) -> None:
     app.connect("autodoc-process-docstring", _escape_bars)
+    app.connect("autodoc-process-docstring", _constant_docs)

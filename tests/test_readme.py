@@ -77,3 +77,16 @@ def test_the_readme_links_resolve():
 def test_every_guide_page_is_linked_from_the_readme():
     for page in GUIDE:
         assert f"docs/guide/{page.name}" in README, page.name
+
+
+def test_the_gallery_has_a_dozen_titled_examples():
+    """sphinx-gallery's format: ``examples/<section>/plot_*.py``, each opening with a docstring whose first
+    line is a title underlined with ``=`` (the site's build runs them; a section needs its GALLERY_HEADER)."""
+    scripts = sorted((ROOT / "examples").glob("*/plot_*.py"))
+    assert len(scripts) >= 12
+    for script in scripts:
+        lines = script.read_text(encoding="utf-8").splitlines()
+        assert lines[0] == '"""', script.name
+        assert set(lines[2]) == {"="}, script.name
+        assert len(lines[2]) >= len(lines[1]), script.name
+        assert (script.parent / "GALLERY_HEADER.rst").exists(), script.parent.name
