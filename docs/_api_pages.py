@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import pkgutil
 from pathlib import Path
 
 #: (page, module, title, intro) of every page written from a module's ``__all__``
@@ -36,8 +37,6 @@ ISOLATOR_GROUPS = (
     ("isolator.errors", "Errors"),
 )
 
-#: the studies' modules and their entry points (``run_*_study``)
-STUDIES = ("paper", "tradeoff", "pneumatic", "profiles", "profiles_sequence", "robustness", "control", "calibration")
 
 
 def _defining_module(obj: object, fallback: str) -> str:
@@ -86,9 +85,10 @@ def studies_page() -> str:
              "Reproducible studies built on the public API; each writes figures, tables and ``report.md``",
              "into a folder (``isolator study NAME --out DIR`` runs the same).", ""]
     entries = []
-    for name in STUDIES:
-        module = importlib.import_module(f"studies.{name}")
-        entries += [f"studies.{name}.{n}" for n, f in vars(module).items()
+    package = importlib.import_module("studies")
+    for info in sorted(pkgutil.iter_modules(package.__path__), key=lambda m: m.name):  # every study, by itself
+        module = importlib.import_module(f"studies.{info.name}")
+        entries += [f"studies.{info.name}.{n}" for n, f in vars(module).items()
                     if n.startswith("run_") and n.endswith("_study") and inspect.isfunction(f)
                     and f.__module__ == module.__name__]
     lines += ["", ".. autosummary::", "   :toctree: generated/", "", *(f"   {e}" for e in entries), ""]
