@@ -6,9 +6,11 @@ the parked table for its modes, transmissibility, compliance, stability margin
 and vibration-criteria class.
 
 >>> from isolator import load_scenario, simulate, linearise, modes
->>> response = simulate(load_scenario("paper-table-3-2"))   # doctest: +SKIP
->>> response.settling_time_max                              # doctest: +SKIP
->>> modes(linearise(load_scenario())).frequencies_hz        # doctest: +SKIP
+>>> response = simulate(load_scenario("paper-table-3-2"))
+>>> round(response.settling_time_max, 2)                    # s after the carriages stop
+2.31
+>>> modes(linearise(load_scenario())).frequencies_hz.round(2).tolist()   # Hz
+[3.14, 3.36, 3.45, 5.83, 5.9, 6.3]
 """
 
 from __future__ import annotations

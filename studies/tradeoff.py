@@ -94,6 +94,18 @@ def run_tradeoff_study(
         Bad scales or frequency.
     ScenarioError
         No carriages, or carriages that never stop.
+
+    Examples
+    --------
+    >>> import tempfile
+    >>> from isolator import load_scenario
+    >>> from studies.tradeoff import run_tradeoff_study
+    >>> study = run_tradeoff_study(tempfile.mkdtemp(), load_scenario("paper-table-3-2"), stiffness=[0.5, 1.0],
+    ...                            damping=[1.0, 2.0], progress=False, workers=1)
+    >>> study.settling_time.shape
+    (2, 2)
+    >>> study.pareto()  # (stiffness index, damping index) of the designs nothing beats in both
+    [...]
     """
     k = _grid(STIFFNESS_SCALES if stiffness is None else stiffness, "stiffness")
     c = _grid(DAMPING_SCALES if damping is None else damping, "damping")

@@ -114,6 +114,14 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
     modes : int
         Shape for this many of each carriage's most excited modes (the
         shapers convolved; each adds its own duration).
+
+    Examples
+    --------
+    >>> from isolator import load_scenario, simulate
+    >>> from controllers.profiles import shaped_scenario
+    >>> zvd = shaped_scenario(load_scenario("paper-table-3-2"), "zvd")
+    >>> round(simulate(zvd).settling_time_max, 2)  # the paper's profile: 2.31 s
+    0.37
     """
     profiles = []
     for i, carriage in enumerate(scenario.carriages):

@@ -123,6 +123,15 @@ def modes(lin: LinearModel) -> Modes:
     Returns
     -------
     Modes
+
+    Examples
+    --------
+    >>> from isolator import linearise, load_scenario, modes
+    >>> m = modes(linearise(load_scenario("paper-table-3-2")))
+    >>> m.frequencies_hz.round(2).tolist()
+    [3.14, 3.36, 3.45, 5.83, 5.9, 6.3]
+    >>> m.dominant
+    ('y', 'x', 'z', 'rz', 'ry', 'rx')
     """
     a = np.asarray(lin.system.A)
     eig, vec = np.linalg.eig(a)
@@ -222,6 +231,14 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
     scenario : Scenario
     samples : int
         Positions per carriage (>= 2).
+
+    Examples
+    --------
+    >>> from isolator import load_scenario, modes_over_travel
+    >>> travel = modes_over_travel(load_scenario("paper-table-3-2"), samples=5)
+    >>> travel.carriages
+    ('x-stage', 'y-stage')
+    >>> fig = travel.plot()
     """
     if samples < 2:
         raise ValueError(f"samples: must be >= 2, got {samples}")

@@ -80,6 +80,15 @@ def stability(scenario: Scenario) -> StabilityReport:
     -------
     StabilityReport
         Never raises for an unstable table: it reports the negative margin.
+
+    Examples
+    --------
+    >>> from isolator import load_scenario, stability
+    >>> report = stability(load_scenario("paper-table-3-2"))
+    >>> report.stable
+    True
+    >>> print(report.describe())  # doctest: +ELLIPSIS
+    stable; smallest rocking stiffness about rx = 5.613e+05 N m/rad ...
     """
     layout = ParameterLayout.of(scenario)
     configs = travel_configurations(scenario)

@@ -200,6 +200,16 @@ def transmissibility(lin: LinearSystem, frequency_hz: np.ndarray | None = None) 
     lin : LinearModel or ClosedLoop
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
+
+    Examples
+    --------
+    >>> from isolator import linearise, load_scenario, transmissibility
+    >>> t = transmissibility(linearise(load_scenario("paper-table-3-2")))
+    >>> peak, frequency = t.peak("z")
+    >>> round(peak, 2), round(frequency, 2)
+    (4.69, 3.4)
+    >>> round(t.isolation_onset("z"), 2)
+    4.85
     """
     return _response(lin, "transmissibility", GROUND_INPUTS, frequency_hz)
 

@@ -107,6 +107,12 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     ------
     ScenarioError
         With the offending key path and the reason.
+
+    Examples
+    --------
+    >>> from isolator import load_scenario
+    >>> round(load_scenario("paper-table-3-2").stop_time, 3)
+    7.9
     """
     path = resolve_scenario_path(spec)
     return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=path.stem)

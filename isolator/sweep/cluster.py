@@ -167,8 +167,8 @@ def connect(address: str, security: Any = None, *, timeout: float | None = None,
                              "start the scheduler with --protocol tls and give its tls:// address")
     if protocol == "tcp" and not is_loopback(host):
         how = "--tls-ca-file, --tls-cert, --tls-key" if names["tls"].startswith("--") else "security="
-        warnings.warn(UNENCRYPTED_WARNING.format(option=option, address=address, tls=f"{how}; see the README's "
-                                                 "multi-machine recipe"), stacklevel=2)
+        warnings.warn(UNENCRYPTED_WARNING.format(option=option, address=address, tls=f"{how}; see the recipe in "
+                                                 "docs/guide/sweeps.md"), stacklevel=2)
     try:
         return distributed.Client(address, timeout=timeout, security=security, set_as_default=False)
     except Exception as exc:  # Dask raises many kinds: each is one line naming what to fix

@@ -97,7 +97,8 @@ class SweepResult:
     --------
     >>> from isolator.sweep import sweep
     >>> result = sweep("paper-table-3-2", scale={"isolators[*].damping": [0.5, 1, 2]}, workers=1)
-    >>> result["settling_time_max"]  # doctest: +SKIP
+    >>> result["settling_time_max"].round(2).tolist()  # NaN: that design does not settle within the run
+    [nan, 2.31, 1.14]
     """
 
     columns: tuple[str, ...]

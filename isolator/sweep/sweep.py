@@ -166,6 +166,15 @@ def sweep(
         The executor could no longer run the chunks (a Dask scheduler that is gone): the rows written to
         ``out`` are kept, ``resume=True`` finishes the sweep. A worker process of the default pool that dies
         is no error: the pool is renewed (one warning) and every row is kept.
+
+    Examples
+    --------
+    >>> from isolator.sweep import sweep
+    >>> result = sweep("paper-table-3-2", scale={"isolators[*].damping": [0.5, 1, 2]}, workers=1)
+    >>> result["settling_time_max"].round(2).tolist()  # the least damped design does not settle within the run
+    [nan, 2.31, 1.14]
+    >>> result.best()["isolators[*].damping"]
+    2.0
     """
     start_time = time.perf_counter()
     if scheduler is not None and executor is not None:

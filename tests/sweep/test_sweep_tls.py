@@ -31,7 +31,7 @@ def openssl(*args: str, cwd: Path) -> None:
 
 def make_ca(folder: Path, name: str) -> None:
     """A CA (``<name>-ca.pem``) and one certificate it signed (``<name>.pem``, key ``<name>-key.pem``), as
-    the README's recipe makes them."""
+    the user guide's recipe (docs/guide/sweeps.md) makes them."""
     openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj", f"/CN={name}-ca",
             "-keyout", f"{name}-ca-key.pem", "-out", f"{name}-ca.pem", cwd=folder)
     openssl("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "2", "-subj", f"/CN={name}",
