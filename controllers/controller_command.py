@@ -14,6 +14,7 @@ import argparse
 import json
 import os
 import sys
+import time
 from pathlib import Path
 from typing import Any
 
@@ -102,10 +103,15 @@ def _options(args: argparse.Namespace) -> dict[str, float]:
     return options
 
 
-def _progress(done: int, total: int) -> None:
-    """The robustness check's progress on stderr, one line per tenth."""
-    if done == total or done % max(total // 10, 1) == 0:
-        print(f"  robustness: {done}/{total} cases", file=sys.stderr, flush=True)
+class _Progress:
+    """The robustness check's progress on stderr, one line per tenth, once it has taken 2 s."""
+
+    def __init__(self) -> None:
+        self.start = time.perf_counter()
+
+    def __call__(self, done: int, total: int) -> None:
+        if time.perf_counter() - self.start > 2.0 and (done == total or done % max(total // 10, 1) == 0):
+            print(f"  robustness: {done}/{total} cases", file=sys.stderr, flush=True)
 
 
 def _controller(args: argparse.Namespace) -> int:
@@ -125,7 +131,7 @@ def _controller(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario or DEFAULT_SCENARIO)
     controller = design_controller(scenario, args.method, args.sample_rate, delay=args.delay, schedule=args.schedule,
                                    schedule_carriage=args.schedule_carriage, options=_options(args))
-    robustness = check_robustness(scenario, controller, uncertainty, progress=None if args.json else _progress)
+    robustness = check_robustness(scenario, controller, uncertainty, progress=None if args.json else _Progress())
     robustness.raise_if_unstable()
     folder = output_folder(args.out, "--out")
     data = {**controller.to_dict(), "robustness": robustness.to_dict()}
