@@ -72,31 +72,52 @@ class SensorPlant:
 
         Every input is held over each sample (zero-order hold, exact for the held commands; the
         disturbance columns are held too, a model only). With ``delay``, ``m`` extra states hold the
-        command of the previous sample: the input ``u_k`` computed at ``t_k`` acts from ``t_{k+1}``, and
-        the readings at ``t_k`` see the command acting then.
+        command of the previous sample: the input ``u_k`` computed at ``t_k`` acts from ``t_{k+1}``. The
+        readings at ``t_k`` are the left limit, as the simulation and a real sampler take them: a command
+        that reaches a reading at once (an accelerometer with an actuator without lag) is seen there as
+        the command applied just before ``t_k``, held in ``m`` more states.
 
         Returns
         -------
         control.StateSpace
-            Discrete (``dt = 1 / sample_rate``), inputs and outputs named as :attr:`system`'s.
+            Discrete (``dt = 1 / sample_rate``), inputs and outputs named as :attr:`system`'s; states the
+            continuous plant's, then the delayed command (with ``delay``), then the command applied before
+            the sample (with a direct feedthrough).
         """
         if not (isinstance(sample_rate, int | float) and math.isfinite(sample_rate) and sample_rate > 0):
             raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {sample_rate!r}")
         a, b, c, d = self.matrices()
-        n, nu = a.shape[0], b.shape[1]
+        n, nu, m = a.shape[0], b.shape[1], self.n_actuators
         block = np.zeros((n + nu, n + nu))
         block[:n, :n], block[:n, n:] = a, b
         phi = expm(block / sample_rate)
         ad, bd = phi[:n, :n], phi[:n, n:]
+        p = c.shape[0]
+        # z = (x, pending): x+ = Ad x + Bd_u applied + Bd_w w; applied = u (no delay) or the pending command
+        hold = m if delay else 0
+        az = np.zeros((n + hold, n + hold))
+        bz = np.zeros((n + hold, nu))
+        az[:n, :n], bz[:n, m:] = ad, bd[:, m:]
+        if delay:
+            az[:n, n:] = bd[:, :m]
+            bz[n:, :m] = np.eye(m)
+        else:
+            bz[:n, :m] = bd[:, :m]
+        cz = np.hstack([c, np.zeros((p, hold))])
+        dz = np.hstack([np.zeros((p, m)), d[:, m:]])
+        du = d[:, :m]
+        if np.any(du != 0):  # the reading's left limit: the command applied over the previous sample
+            k = n + hold
+            applied_a = np.zeros((m, k))
+            applied_b = np.zeros((m, nu))
+            if delay:
+                applied_a[:, n:] = np.eye(m)
+            else:
+                applied_b[:, :m] = np.eye(m)
+            az = np.block([[az, np.zeros((k, m))], [applied_a, np.zeros((m, m))]])
+            bz = np.vstack([bz, applied_b])
+            cz = np.hstack([cz, du])
         inputs, outputs = list(self.system.input_labels), list(self.system.output_labels)
-        if not delay:
-            return control.ss(ad, bd, c, d, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
-        m = self.n_actuators
-        # z = (x, u_prev): x+ = Ad x + Bd_u u_prev + Bd_w w, u_prev+ = u; y = C x + D_u u_prev + D_w w
-        az = np.block([[ad, bd[:, :m]], [np.zeros((m, n)), np.zeros((m, m))]])
-        bz = np.block([[np.zeros((n, m)), bd[:, m:]], [np.eye(m), np.zeros((m, nu - m))]])
-        cz = np.hstack([c, d[:, :m]])
-        dz = np.hstack([np.zeros((c.shape[0], m)), d[:, m:]])
         return control.ss(az, bz, cz, dz, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
 
 
