@@ -14,6 +14,7 @@ import argparse
 import json
 import os
 import sys
+import tempfile
 import time
 from pathlib import Path
 from typing import Any
@@ -135,9 +136,15 @@ def _controller(args: argparse.Namespace) -> int:
     robustness.raise_if_unstable()
     folder = output_folder(args.out, "--out")
     data = {**controller.to_dict(), "robustness": robustness.to_dict()}
-    target = folder / "controller.json"
-    target.write_text(json.dumps(data, indent=1, allow_nan=False) + "\n", encoding="utf-8")
-    header, source = write_c(controller, folder)
+    # the three files written beside each other first, then renamed: never a .json of one design beside
+    # the .c of another
+    with tempfile.TemporaryDirectory(dir=folder, prefix=".controller-") as scratch:
+        staged = Path(scratch)
+        (staged / "controller.json").write_text(json.dumps(data, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        write_c(controller, staged)
+        for name in ("controller.json", "controller.h", "controller.c"):
+            os.replace(staged / name, folder / name)
+    target, header, source = (folder / name for name in ("controller.json", "controller.h", "controller.c"))
     lines = [f"{args.method} controller: {len(controller.sensors)} sensors -> {len(controller.actuators)} actuators, "
              f"{controller.states} states, {controller.sample_rate:g} Hz"
              + (", one sample of delay" if controller.delay else "")

@@ -26,7 +26,7 @@ the feedforward's quasi-static path, so the two do not fight over the tilt.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast
 
@@ -47,7 +47,7 @@ from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
 from isolator.scenario.arguments import check_public
 
-from .control_sensors import SensorDesign, loops_figure, margins_figure, run_sensor_designs, sensor_report, time_figure
+from . import control_sensors as sensor_study
 from .figures import nan_if_none, save_figure
 from .reporting import (
     band_lines,
@@ -118,6 +118,8 @@ class ControlStudy:
         Each actuator's saturation [N], as the runs' actuator forces are ordered.
     sensors : tuple of SensorDesign
         The output-feedback designs from the scenario's ``[[sensors]]`` (none without sensors).
+    sensors_left_out : dict
+        The output-feedback methods that could not be designed on the scenario, with the reason.
     """
 
     runs: dict[str, Response]
@@ -129,7 +131,8 @@ class ControlStudy:
     folder: Path
     band: Band
     max_force: tuple[float, ...] = ()
-    sensors: tuple[SensorDesign, ...] = ()
+    sensors: tuple[sensor_study.SensorDesign, ...] = ()
+    sensors_left_out: dict[str, str] = field(default_factory=dict)
 
     def settling_time_max(self, run: str) -> float | None:
         return largest(self.settling[run].values())
@@ -171,8 +174,9 @@ class ControlStudy:
             if self.runs[run].windows is not None:
                 settle, rate = self.window_cycle(run)
                 out[run].update(window_settling_time_max=settle, moves_per_hour=rate)
-        if self.sensors:
+        if self.sensors or self.sensors_left_out:
             out["sensor_feedback"] = {d.method: d.to_dict() for d in self.sensors}
+            out["sensor_feedback_left_out"] = self.sensors_left_out
         return out
 
 
@@ -202,6 +206,7 @@ def run_control_study(
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
     if feedforward not in ("allocation", "optimal"):
         raise ParameterError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
+    sample_rate = sensor_study.check_sample_rate(sample_rate)
     folder = output_folder(out)
     say = progress_printer(progress, "  control study: ")
     lin = linearise(scenario)
@@ -224,10 +229,11 @@ def run_control_study(
     qs = ff.path(runs["passive"].t).T  # pneumatic tables: each run's own leveling path (as compare_feedforward)
     deviation = {name: path_deviation(r, run_quasi_static(sim, r) if scenario.is_pneumatic else qs)
                  for name, r in runs.items()}
-    sensors = tuple(run_sensor_designs(scenario, band, settling_in_band, sample_rate, say=say)) if scenario.sensors \
-        else ()
+    designs, left_out = sensor_study.run_sensor_designs(scenario, band, settling_in_band, sample_rate, say=say) \
+        if scenario.sensors else ([], {})
+    sensors = tuple(designs)  # the output-feedback designs: the machine's own sensors, exported controllers
     study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band,
-                         tuple(a.max_force for a in scenario.actuators), sensors)
+                         tuple(a.max_force for a in scenario.actuators), sensors, left_out)
     write_json(folder, study.to_dict())
     ff.forces.to_csv(folder / "feedforward.csv")
     say("figures and report")
@@ -236,9 +242,9 @@ def run_control_study(
     _settling_figure(study, folder / "settling.png")
     _forces_figure(study, folder / "forces.png")
     if sensors:
-        loops_figure(sensors, scenario, folder / "sensors-loops.png")
-        margins_figure(sensors, folder / "sensors-margins.png")
-        time_figure(sensors, runs["passive"], band, folder / "sensors-time.png")
+        sensor_study.loops_figure(sensors, scenario, folder / "sensors-loops.png")
+        sensor_study.margins_figure(sensors, folder / "sensors-margins.png")
+        sensor_study.time_figure(sensors, runs["passive"], band, folder / "sensors-time.png")
     _report(study, scenario, loops)
     return study
 
@@ -385,7 +391,7 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
     for name, resp in loops.items():
         lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
     extra = ", `sensors-loops.png`, `sensors-margins.png`, `sensors-time.png`" if study.sensors else ""
-    lines += ["", *sensor_report(study.sensors),
+    lines += ["", *sensor_study.sensor_report(study.sensors, study.sensors_left_out),
               f"Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`{extra}."]
     write_report(study.folder, lines)
 

@@ -25,7 +25,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from controllers import feedback as fb
-from isolator import SIGNALS, Band, OptimisationError, ParameterError, Response, Scenario, Simulator
+from controllers.feedback.output_feedback import travel
+from isolator import SIGNALS, Band, OptimisationError, ParameterError, Response, Scenario, ScenarioError, Simulator
 from isolator.analysis.linear import linearise
 from isolator.scenario.arguments import check_public
 from isolator.simulation.discrete_controller import DiscreteController
@@ -34,7 +35,7 @@ from .figures import save_figure
 from .reporting import fmt, micro_unit, table_header, table_row
 from .sensor_loops import LoopResponse, NoiseMotion, loop_response, noise_motion
 
-__all__ = ["SENSOR_METHODS", "SensorDesign", "run_sensor_designs", "sensor_report"]
+__all__ = ["SENSOR_METHODS", "SensorDesign", "check_sample_rate", "run_sensor_designs", "sensor_report"]
 
 #: the output-feedback designs the study compares
 SENSOR_METHODS = ("skyhook", "lqg", "hinf")
@@ -93,9 +94,17 @@ class SensorDesign:
                 "robustness": self.robustness, "settings": self.controller.settings}
 
 
+def check_sample_rate(sample_rate: float) -> float:
+    """The designs' rate [Hz], or a one-line :class:`ParameterError` naming ``--sample-rate``."""
+    if isinstance(sample_rate, bool) or not isinstance(sample_rate, int | float) or not (
+            math.isfinite(sample_rate) and sample_rate > 0):
+        raise ParameterError(f"sample_rate (--sample-rate): must be a finite rate > 0 Hz, got {sample_rate!r}")
+    return float(sample_rate)
+
+
 def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Response, Band], dict[str, float | None]],
                        sample_rate: float = 2000.0, methods: Sequence[str] = SENSOR_METHODS,
-                       say: Callable[[str], None] | None = None) -> list[SensorDesign]:
+                       say: Callable[[str], None] | None = None) -> tuple[list[SensorDesign], dict[str, str]]:
     """Design, check and simulate each output-feedback method on ``scenario``.
 
     Parameters
@@ -110,8 +119,15 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
         Of :data:`SENSOR_METHODS`; ``hinf`` is left out when slycot is missing or it has no solution.
     say : callable, optional
         Progress lines.
+
+    Returns
+    -------
+    designs : list of SensorDesign
+    left_out : dict
+        Each method that could not be designed on this scenario, with the reason (one line).
     """
     say = say or (lambda text: None)
+    skipped: dict[str, str] = {}
     sim = Simulator(scenario)
     middle, _ = fb.design_positions(scenario)
     plant = fb.sensor_plant(linearise(scenario, positions=middle[0]))
@@ -121,10 +137,9 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
         say(f"sensor feedback: {method} at {sample_rate:g} Hz")
         try:
             ctrl = fb.design_controller(scenario, method, sample_rate)
-        except (ParameterError, OptimisationError):
-            if method != "hinf":
-                raise
-            say("  hinf left out (slycot missing or no solution)")
+        except (ParameterError, ScenarioError, OptimisationError) as exc:  # e.g. no collocated geophones
+            say(f"  {method} left out: {exc}")
+            skipped[method] = str(exc)
             continue
         robust = fb.check_robustness(scenario, ctrl)
         along = fb.check_robustness(scenario, ctrl, positions=[tuple(q) for q in _along_travel(scenario)])
@@ -133,11 +148,15 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
         out.append(SensorDesign(method, ctrl, response, settle(response, band), loop_response(plant, ctrl, f),
                                 noise_motion(plant, ctrl), robust.to_dict(), along.cases,
                                 float(np.max(np.abs(forces))), float(np.sqrt(np.mean(forces**2)))))
-    return out
+    return out, skipped
 
 
 def _along_travel(scenario: Scenario, points: int = 9) -> np.ndarray:
-    """Positions (points, carriages) [m] along the travel of the carriage that schedules by default."""
+    """Positions (points, carriages) [m] along the travel of the carriage that schedules by default (the
+    carriages at mid-travel, one point, when none travels)."""
+    ranges = travel(scenario)
+    if not ranges.size or not np.any(ranges[:, 1] > ranges[:, 0]):
+        return fb.design_positions(scenario)[0]
     positions, index = fb.design_positions(scenario, 2)
     lo, hi = positions[0, index], positions[-1, index]
     out = np.repeat(positions[:1], points, axis=0)
@@ -227,10 +246,11 @@ def time_figure(designs: Sequence[SensorDesign], passive: Response, band: Band, 
     save_figure(fig, path)
 
 
-def sensor_report(designs: Sequence[SensorDesign]) -> list[str]:
+def sensor_report(designs: Sequence[SensorDesign], left_out: dict[str, str] | None = None) -> list[str]:
     """The report's section on the sensor-based designs (markdown lines)."""
+    skipped = [f"- {method} left out: {why}" for method, why in (left_out or {}).items()]
     if not designs:
-        return []
+        return ["## Output feedback from the sensors", "", *skipped, ""] if skipped else []
     lines = ["## Output feedback from the sensors (what the machine can run)", "",
              f"Discrete controllers from the scenario's [[sensors]] to its [[actuators]] at "
              f"{designs[0].controller.sample_rate:g} Hz, as `isolator controller` exports them; the move simulated "
@@ -255,8 +275,9 @@ def sensor_report(designs: Sequence[SensorDesign]) -> list[str]:
                                 f"{max(c.spectral_radius for c in d.travel):.5f}",
                                 "stable in all " + str(d.robustness["cases_checked"]) + " cases"
                                 if d.robustness["stable"] else "UNSTABLE somewhere"]))
-    lines += ["", "The noise columns: the stationary RMS that the sensors' own noise (their `noise`, per sample) "
-              "causes through the sampled loop, exact (discrete Lyapunov equation), carriages mid-travel.", ""]
+    lines += ["", *skipped, "", "The noise columns: the stationary RMS that the sensors' own noise (their `noise`, "
+              "per sample) causes through the sampled loop, exact (discrete Lyapunov equation), carriages "
+              "mid-travel.", ""]
     return lines
 
 

@@ -83,9 +83,10 @@ def loop_response(plant: SensorPlant, controller: DiscreteController, frequency_
         hold = hold * np.exp(-1j * w * period)
     a, b, c, d = plant.matrices()
     m = plant.n_actuators
-    labels = list(plant.system.input_labels)
+    b, d = b[:, :m], d[:, :m]
     sensors = plant.lin.scenario.sensors
-    ground = [labels.index(f"ground:{axis}") for axis in ("x", "y", "z")]
+    # the floor's path to the sensors, exact in each sensor's quantity (an accelerometer's improper term too)
+    floor_path = plant.lin.sensor_response(f, [f"ground:{axis}" for axis in ("x", "y", "z")])
     p = len(sensors)
     sens, comp = np.empty(f.size), np.empty(f.size)
     trans, passive = np.empty((f.size, p)), np.empty((f.size, p))
@@ -93,7 +94,7 @@ def loop_response(plant: SensorPlant, controller: DiscreteController, frequency_
     for i, wi in enumerate(w):
         s = 1j * wi
         h = c @ np.linalg.solve(s * eye_n - a, b) + d
-        pu, pw = h[:, :m], h[:, ground]
+        pu, pw = h[:, :m], floor_path[i]
         loop = pu @ (hold[i] * k[i])
         so = np.linalg.inv(np.eye(p) - loop)
         sens[i] = np.linalg.norm(so, 2)

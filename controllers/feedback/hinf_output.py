@@ -35,7 +35,15 @@ from scipy.signal import cont2discrete
 from isolator.errors import OptimisationError, ParameterError
 from isolator.scenario.arguments import check_public
 
-from .output_designs import NOISE_FLOOR, DiscreteDesign, loop_damping, lowest_mode_hz, noise_model, positive
+from .output_designs import (
+    NOISE_FLOOR,
+    DiscreteDesign,
+    loop_damping,
+    lowest_mode_hz,
+    noise_model,
+    positive,
+    refuse_held_air,
+)
 from .sensor_plant import SensorPlant, loop_matrix
 
 __all__ = ["hinf_design", "import_slycot"]
@@ -93,6 +101,7 @@ def hinf_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max
         No controller achieves a finite norm.
     """
     slycot = import_slycot()
+    refuse_held_air(plant, "hinf")
     v_max, w_max = positive(max_velocity, "max_velocity"), positive(max_rate, "max_rate")
     floor, factor = positive(noise_floor, "noise_floor"), positive(relax, "relax")
     if factor < 1:

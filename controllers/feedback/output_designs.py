@@ -41,6 +41,7 @@ __all__ = [
     "lqg_design",
     "noise_model",
     "positive",
+    "refuse_held_air",
     "skyhook_design",
 ]
 
@@ -74,11 +75,12 @@ class DiscreteDesign:
         return self.A, self.B, self.C, self.D
 
 
-def loop_damping(matrix: np.ndarray, sample_rate: float) -> tuple[float, float]:
+def loop_damping(matrix: np.ndarray, sample_rate: float, held: int = 0) -> tuple[float, float]:
     """The sampled loop's spectral radius and its least-damped pole's damping ratio.
 
     Poles at ``z = 0`` (delays) and on the positive real axis (first-order lags, filters) count as fully
-    damped; the rest are mapped to ``s = ln(z) f_s``.
+    damped; the rest are mapped to ``s = ln(z) f_s``. The ``held`` poles nearest ``z = 1`` are left out:
+    a pneumatic table's held air (:attr:`SensorPlant.held_air`), which no controller reaches.
 
     Returns
     -------
@@ -87,6 +89,8 @@ def loop_damping(matrix: np.ndarray, sample_rate: float) -> tuple[float, float]:
         ``-Re(s) / |s|`` of the least-damped oscillatory pole (1 when there is none).
     """
     z = np.linalg.eigvals(matrix)
+    if held:
+        z = np.delete(z, np.argsort(np.abs(z - 1.0))[:held])
     radius = float(np.max(np.abs(z))) if z.size else 0.0
     oscillatory = z[(np.abs(z) > 1e-12) & (np.abs(z.imag) > 1e-9)]
     if oscillatory.size == 0:
@@ -129,8 +133,10 @@ def _filter(quantity: str, corner_hz: float, sample_rate: float) -> control.Stat
 
 
 def lowest_mode_hz(plant: SensorPlant) -> float:
-    """The table's lowest natural frequency [Hz] (its linear model's smallest eigenvalue magnitude)."""
-    return float(np.min(np.abs(plant.lin.eigenvalues))) / (2 * math.pi)
+    """The table's lowest natural frequency [Hz]: its linear model's smallest eigenvalue magnitude, a
+    pneumatic table's held air (poles at zero) left out."""
+    eig = np.abs(plant.lin.eigenvalues)
+    return float(np.min(eig[eig > 1e-9 * max(1.0, float(eig.max()))])) / (2 * math.pi)
 
 
 def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, gain: float | None = None,
@@ -182,7 +188,7 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
     sampled = plant.discrete(sample_rate, delay)
 
     def damping(value: float) -> tuple[float, float]:
-        return loop_damping(loop_matrix(sampled, (a, value * b, c, value * d)), sample_rate)
+        return loop_damping(loop_matrix(sampled, (a, value * b, c, value * d)), sample_rate, plant.held_air)
 
     if gain is None:
         grid = np.logspace(1, 6, 61)
@@ -198,6 +204,15 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
     return DiscreteDesign(a, c_gain * b, c, c_gain * d,
                           {"gain": c_gain, "highpass_hz": corner, "gain_chosen": gain is None,
                            "least_damping": zeta, "spectral_radius": radius})
+
+
+def refuse_held_air(plant: SensorPlant, method: str) -> None:
+    """A model-based design on a pneumatic table: its leveling groups' held air (poles at zero no actuator or
+    sensor reaches) leaves the Riccati equations without a stabilising solution; a one-line refusal."""
+    if plant.held_air:
+        raise ParameterError(f"method: {method} cannot be designed on a pneumatic table (the air its leveling "
+                             f"groups hold is {plant.held_air} pole(s) at zero that no actuator or sensor reaches); "
+                             "use --method skyhook")
 
 
 def positive(value: float, key: str) -> float:
@@ -330,6 +345,7 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
     OptimisationError
         A Riccati equation has no stabilising solution.
     """
+    refuse_held_air(plant, "lqg")
     v_max, w_max = positive(max_velocity, "max_velocity"), positive(max_rate, "max_rate")
     floor = positive(noise_floor, "noise_floor")
     sampled = plant.discrete(sample_rate, delay)

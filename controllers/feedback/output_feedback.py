@@ -28,6 +28,7 @@ from isolator.analysis.modes import modes
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
+from isolator.simulation.closed_loop import controller_factor
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
 
 from .hinf_output import hinf_design
@@ -78,7 +79,10 @@ def design_positions(scenario: Scenario, schedule: int = 1, carriage: str | None
         raise ParameterError(f"schedule_carriage: no carriage named '{carriage}' (the scenario has "
                              f"{', '.join(names) or 'none'})")
     if schedule == 1:
-        return middle[None, :], (names.index(carriage) if carriage else 0)
+        if carriage is not None:
+            raise ParameterError("schedule_carriage (--schedule-carriage): names the carriage of a schedule; "
+                                 "give --schedule N with N >= 2 design points, or leave it out")
+        return middle[None, :], 0
     strokes = ranges[:, 1] - ranges[:, 0]
     if not names or float(np.max(strokes)) <= 0:
         raise ParameterError(f"schedule: {schedule} design points need a carriage that travels; none does")
@@ -147,8 +151,17 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
     if not scenario.sensors:
         raise ScenarioError(f"sensors: the {method} design feeds back the scenario's [[sensors]], and it has none "
                             "(add [[sensors]] entries: geophones or accelerometers on the table)")
+    if not any(s.on == "table" for s in scenario.sensors):
+        raise ScenarioError(f"sensors: every one of the scenario's [[sensors]] is on the floor; the {method} design "
+                            "feeds back the table's motion and needs at least one sensor with on = \"table\"")
     if not scenario.actuators:
         raise ScenarioError(f"actuators: the {method} design commands the scenario's [[actuators]], and it has none")
+    try:  # the simulation must be able to run it: a stepping grid that is a multiple of both rates
+        controller_factor(scenario.simulation, float(sample_rate))
+    except ParameterError as exc:
+        raise ParameterError(f"sample_rate (--sample-rate): {sample_rate:.6g} Hz cannot be simulated with this "
+                             f"scenario ({str(exc).split(': ', 1)[1]}); choose a rate that divides a multiple of "
+                             "the scenario's simulation.sample_rate") from None
     settings = dict(options or {})
     known = set(list(inspect.signature(METHODS[method]).parameters)[3:])
     if unknown := sorted(set(settings) - known):

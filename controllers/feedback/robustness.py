@@ -18,6 +18,7 @@ motions about the rest configuration).
 
 from __future__ import annotations
 
+import itertools
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -34,7 +35,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.simulation.discrete_controller import DiscreteController
 
 from .loop_margins import LoopMargins, closed_loop_matrix, loop_margins
-from .sensor_plant import sensor_plant
+from .sensor_plant import held_air, sensor_plant
 from .uncertainty import SCALED, Uncertainty
 
 __all__ = ["RobustnessCase", "RobustnessReport", "check_robustness"]
@@ -219,16 +220,26 @@ class RobustnessReport:
             f"{' with one sample of delay' if self.delay else ''} ({n_bad} of {len(self.cases)} cases unstable)")
 
 
-def _configurations(scenario: Scenario, positions: Sequence[Mapping[str, float] | Sequence[float]] | None
-                    ) -> list[np.ndarray]:
-    """The rest configurations to check (carriage coordinates [m], file order)."""
+def _configurations(scenario: Scenario, positions: Sequence[Mapping[str, float] | Sequence[float]] | None,
+                    controller: DiscreteController | None = None) -> list[np.ndarray]:
+    """The rest configurations to check (carriage coordinates [m], file order): given, or every combination of
+    each carriage's extremes and middle, the start and the end; for a scheduled controller also the scheduling
+    carriage halfway between neighbouring design points (where the matrices are interpolated)."""
     if positions is not None:
         if isinstance(positions, str | bytes | Mapping) or not len(positions):
             raise ParameterError("positions: must be a non-empty list of configurations (each by carriage name or "
                                  "one value per carriage)")
         return [rest_positions(scenario, p) for p in positions]
     out: list[np.ndarray] = []
-    for q in travel_configurations(scenario)[2:].tolist() + travel_configurations(scenario)[:2].tolist():
+    base = travel_configurations(scenario)[2:].tolist() + travel_configurations(scenario)[:2].tolist()
+    extra = []
+    if controller is not None and len(controller.schedule) > 1:
+        c = controller.schedule_carriage
+        points = [e.q[c] for e in controller.schedule]
+        for q in base:
+            for lo, hi in itertools.pairwise(points):
+                extra.append([*q[:c], 0.5 * (lo + hi), *q[c + 1:]])
+    for q in base + extra:
         if not any(np.allclose(q, seen, rtol=0.0, atol=1e-12) for seen in out):
             out.append(np.array(q, dtype=float))
     return out
@@ -260,7 +271,9 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
         Default: none (the scenario's parameters only).
     positions : list of configurations, optional
         Rest configurations instead of the travel's: each by carriage name (the others at their start)
-        or one value per carriage [m].
+        or one value per carriage [m]. Default: every combination of each carriage's extremes and middle,
+        the start and the end, and for a scheduled controller the scheduling carriage halfway between its
+        design points.
     progress : callable, optional
         ``progress(done, total)`` after each case (e.g. to update a ``tqdm`` bar).
     margins : bool
@@ -279,7 +292,7 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
     """
     uncertainty = Uncertainty() if uncertainty is None else uncertainty
     _check_names(scenario, controller)
-    configs = _configurations(scenario, positions)
+    configs = _configurations(scenario, positions, controller)
     layout = ParameterLayout.of(scenario)
     nominal = layout.pack(scenario)
     samples = uncertainty.samples()
@@ -301,7 +314,7 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
             a, b, c, d = (np.asarray(x, dtype=float) for x in (sys.A, sys.B, sys.C, sys.D))
             plant = (a, b[:, :m], c, d[:, :m])
             eig = np.linalg.eigvals(closed_loop_matrix(plant, kd))
-            neutral = _air_integrators(lin.eigenvalues) if lin.air is not None else 0
+            neutral = held_air(lin)
             if neutral:  # the air each leveling group holds: no input or sensor reaches it
                 eig = np.delete(eig, np.argsort(np.abs(eig - 1.0))[:neutral])
             radius = float(np.max(np.abs(eig), initial=0.0))
@@ -313,11 +326,6 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
                 progress(done, total)
     return RobustnessReport(controller.method, controller.sample_rate, bool(controller.delay),
                             tuple(a.name for a in scenario.actuators), uncertainty, tuple(cases))
-
-
-def _air_integrators(eig: np.ndarray) -> int:
-    """Pneumatic plants: the open loop's poles at zero, one per leveling group with its valve closed."""
-    return int(np.sum(np.abs(eig) <= 1e-9 * max(1.0, float(np.abs(eig).max()))))
 
 
 check_public(globals())

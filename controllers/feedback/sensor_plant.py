@@ -29,7 +29,7 @@ from isolator.scenario.arguments import check_public
 
 from .loop_margins import closed_loop_matrix
 
-__all__ = ["DISTURBANCES", "SensorPlant", "loop_matrix", "sensor_plant"]
+__all__ = ["DISTURBANCES", "SensorPlant", "held_air", "loop_matrix", "sensor_plant"]
 
 #: the disturbance inputs of the plant, after the actuators
 DISTURBANCES = (*GROUND_INPUTS, *FORCE_INPUTS)
@@ -56,6 +56,12 @@ class SensorPlant:
     def n_actuators(self) -> int:
         """Number of actuators (the first inputs)."""
         return len(self.lin.scenario.actuators)
+
+    @property
+    def held_air(self) -> int:
+        """Pneumatic tables: the open loop's poles at zero, one per leveling group with its valve closed (the
+        air it holds: no actuator or sensor reaches it); 0 otherwise."""
+        return held_air(self.lin)
 
     @property
     def n_sensors(self) -> int:
@@ -119,6 +125,15 @@ class SensorPlant:
             cz = np.hstack([cz, du])
         inputs, outputs = list(self.system.input_labels), list(self.system.output_labels)
         return control.ss(az, bz, cz, dz, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
+
+
+def held_air(lin: LinearModel) -> int:
+    """The poles at zero of a pneumatic table's linear model (one per leveling group holding its air); 0 for
+    a table without air springs."""
+    if lin.air is None:
+        return 0
+    eig = lin.eigenvalues
+    return int(np.sum(np.abs(eig) <= 1e-9 * max(1.0, float(np.abs(eig).max()))))
 
 
 def loop_matrix(plant: control.StateSpace, controller: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]

@@ -243,3 +243,52 @@ def test_lqg_from_accelerometers_without_lag_runs_as_checked() -> None:
     run = Simulator(scenario).run(controller=ctrl)
     assert np.abs(run.actuator_forces).max() < 0.5 * 500.0
     assert run.settling_time_max is not None
+
+
+def test_pneumatic_tables_get_skyhook_and_a_clear_refusal_otherwise() -> None:
+    """A pneumatic table's held air (poles at zero no actuator reaches) neither sets the geophone corner nor
+    counts against the loop; the model-based designs refuse it in one line."""
+    from importlib.resources import files
+
+    text = (files("isolator") / "data" / "scenarios" / "paper-table-3-2-geophones.toml").read_text()
+    sensors = text[text.index("[[sensors]]"):text.index("[simulation]")]
+    pneumatic = (files("isolator") / "data" / "scenarios" / "paper-table-3-2-pneumatic-active.toml").read_text()
+    cut = pneumatic.index("[simulation]")
+    import tomllib
+
+    from isolator import scenario_from_dict
+
+    scenario = scenario_from_dict(tomllib.loads(pneumatic[:cut] + sensors + pneumatic[cut:]))
+    plant = sensor_plant(linearise(scenario))
+    assert plant.held_air > 0
+    design = skyhook_design(plant, RATE)
+    assert design.settings["highpass_hz"] > 0.1
+    radius, zeta = loop_damping(loop_matrix(plant.discrete(RATE), design.matrices), RATE, plant.held_air)
+    assert radius < 1
+    assert zeta > 0.2
+    for method in ("lqg", "hinf"):
+        with pytest.raises(ParameterError, match=f"method: {method} cannot be designed on a pneumatic table"):
+            design_controller(scenario, method, RATE)
+
+
+def test_more_refusals() -> None:
+    scenario = load_scenario("paper-table-3-2-geophones")
+    data = geophone_dict()
+    for s in data["sensors"]:
+        s["on"] = "floor"
+    with pytest.raises(ScenarioError, match=r"every one of the scenario's .* is on the floor"):
+        design_controller(make(data), "lqg", RATE)
+    with pytest.raises(ParameterError, match=r"--sample-rate.*1234 Hz cannot be simulated with this scenario"):
+        design_controller(scenario, "lqg", 1234.0)
+    with pytest.raises(ParameterError, match=r"--schedule-carriage.*give --schedule N with N >= 2"):
+        design_controller(scenario, "lqg", RATE, schedule_carriage="y-stage")
+
+
+def test_a_schedule_is_checked_between_its_design_points() -> None:
+    from controllers.feedback import check_robustness
+
+    scenario = load_scenario("paper-table-3-2-geophones")
+    ctrl = design_controller(scenario, "skyhook", RATE, schedule=3, options={"gain": 2e4})
+    report = check_robustness(scenario, ctrl, margins=False)
+    checked = {round(c.positions[0], 9) for c in report.cases}
+    assert {-0.35, 0.35} <= checked  # halfway between -0.7, 0 and 0.7

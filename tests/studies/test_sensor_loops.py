@@ -74,3 +74,37 @@ def test_noise_motion_equals_a_monte_carlo_run_of_the_sampled_loop() -> None:
     assert rms[0] == pytest.approx(exact.table_rms["z"], rel=0.1)
     assert rms[1] == pytest.approx(exact.table_rms["rx"], rel=0.1)
     np.testing.assert_allclose(np.sqrt(forces / count), exact.force_rms, rtol=0.1)
+
+
+def test_an_accelerometer_sees_the_floor_as_a_geophone_does() -> None:
+    """Floor-to-sensor transmissibility is a ratio of like quantities: accelerometers and geophones at the same
+    points give the same passive curve (the floor's improper acceleration term included)."""
+    f = np.array([1.0, 5.0, 20.0, 100.0])
+    curves = []
+    for quantity in ("velocity", "acceleration"):
+        data = _still_table()
+        for s in data["sensors"]:
+            s["quantity"] = quantity
+        scenario = scenario_from_dict(data)
+        ctrl = design_controller(scenario, "skyhook", RATE, options={"gain": 1e4})
+        curves.append(loop_response(sensor_plant(linearise(scenario)), ctrl, f).passive)
+    np.testing.assert_allclose(curves[1], curves[0], rtol=1e-9)
+
+
+def test_the_control_study_leaves_out_a_design_the_sensors_cannot_carry(tmp_path, capsys) -> None:
+    """Geophones away from the actuators: skyhook cannot be designed, the study says why and goes on with
+    the others."""
+    import tomli_w
+
+    from isolator.cli.app import main
+
+    text = (files("isolator") / "data" / "scenarios" / "paper-table-3-2-geophones.toml").read_text()
+    data = tomllib.loads(text)
+    data["sensors"][0]["position"] = [0.5, 0.2, 0.15]
+    path = tmp_path / "moved.toml"
+    path.write_text(tomli_w.dumps(data))
+    assert main(["study", "control", str(path), "--quick", "--out", str(tmp_path / "out")]) == 0
+    out = capsys.readouterr().out
+    assert "lqg (sensors): settling" in out
+    report = (tmp_path / "out" / "report.md").read_text()
+    assert "- skyhook left out: sensors: skyhook needs a table velocity or acceleration sensor collocated" in report
