@@ -5,60 +5,21 @@ and the geophones' rows built here from their geometry."""
 
 from __future__ import annotations
 
-import tomllib
-from pathlib import Path
-
-import control
 import numpy as np
 import pytest
 from scipy.linalg import expm
 
-from controllers.feedback import from_statespace
 from isolator import Simulator, scenario_from_dict
 from isolator.scenario.definitions import SIGNALS
-from isolator.scenario.reader import bundled_scenarios
 from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.discrete_controller import DiscreteController
-from isolator.simulation.settling import settling_metrics
-from isolator.simulation.stepping import hold_time
 
 pytest.importorskip("mujoco")
 
 from isolator.validation.multibody import MujocoTable
+from sampled_loops import RATE, dynamic, geophone_data, pulse, settling
 
-RATE = 2000.0
-PULSE = (0.6, 0.8)  # s: a feedforward force pulse after the (parked) carriages' stop time, 0.5 s
 TOLERANCE = 1e-4  # of each signal's peak (see the test)
-
-
-def geophone_data(duration: float = 4.0, max_force: float = 80.0) -> dict:
-    """The bundled geophone table, carriages parked at their start (as in test_sampled_loop.py)."""
-    data = tomllib.loads(Path(bundled_scenarios()["paper-table-3-2-geophones"]).read_text())
-    data["simulation"]["duration"] = duration
-    for act in data["actuators"]:
-        act["max_force"] = max_force
-    for c in data["carriages"]:
-        start = c["profile"]["start"]
-        c["profile"] = {"type": "samples", "t": [0.0, 0.5], "q": [start, start]}
-    return data
-
-
-def dynamic(s, delay: bool = False) -> DiscreteController:
-    """12 states: per geophone/actuator pair, skyhook damping -2000 N s/m through a 40 Hz low-pass."""
-    w = 2 * np.pi * 40.0
-    channel = control.ss(control.tf([-2000.0 * w], [1.0, w]))
-    system = channel
-    for _ in range(11):
-        system = control.append(system, channel)
-    names = [x.name for x in s.sensors], [a.name for a in s.actuators], [c.name for c in s.carriages]
-    return from_statespace(system, RATE, *names, delay=delay)
-
-
-def pulse(s, value: float = 100.0) -> ForceHistory:
-    t = np.array([0.0, PULSE[0], PULSE[0], PULSE[1], PULSE[1], 4.0])
-    f = np.zeros((12, t.size))
-    f[0, 2:4], f[5, 2:4], f[8, 2:4] = value, -0.6 * value, 0.8 * value  # x1, z2, z3
-    return ForceHistory(t, f, tuple(a.name for a in s.actuators))
 
 
 def quat_mul(p: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -144,13 +105,6 @@ def numpy_loop(s, plant, ctrl: DiscreteController, forces: ForceHistory, delay: 
         hold, pending = (pending, u) if delay else (u, u)
         z = phi @ z + gamma @ np.clip(hold + ff[k], -limit, limit)
     return ticks, out
-
-
-def settling(s, response, t: np.ndarray, signals: np.ndarray) -> np.ndarray:
-    sim = Simulator(s)
-    hold = hold_time(sim.equilibria(sim.parameters)[1])
-    metrics = settling_metrics(t, signals, np.zeros(6), response.stop_time, response.band, hold, interpolate=True)
-    return np.array([metrics[k].time for k in SIGNALS])
 
 
 def test_the_compiled_loop_is_the_numpy_loop_on_the_mujoco_plant():
