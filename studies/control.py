@@ -34,6 +34,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from controllers import feedback as fb
+from controllers.feedback.output_feedback import checked_sample_rate
 from controllers.feedforward import (
     Feedforward,
     feedforward_allocation,
@@ -206,7 +207,7 @@ def run_control_study(
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
     if feedforward not in ("allocation", "optimal"):
         raise ParameterError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
-    sample_rate = sensor_study.check_sample_rate(sample_rate)
+    sample_rate = checked_sample_rate(sample_rate)
     folder = output_folder(out)
     say = progress_printer(progress, "  control study: ")
     lin = linearise(scenario)

@@ -35,7 +35,7 @@ from .figures import save_figure
 from .reporting import fmt, micro_unit, table_header, table_row
 from .sensor_loops import LoopResponse, NoiseMotion, loop_response, noise_motion
 
-__all__ = ["SENSOR_METHODS", "SensorDesign", "check_sample_rate", "run_sensor_designs", "sensor_report"]
+__all__ = ["SENSOR_METHODS", "SensorDesign", "run_sensor_designs", "sensor_report"]
 
 #: the output-feedback designs the study compares
 SENSOR_METHODS = ("skyhook", "lqg", "hinf")
@@ -92,14 +92,6 @@ class SensorDesign:
                 "sensitivity_peak": float(np.max(self.loops.sensitivity)),
                 "complementary_peak": float(np.max(self.loops.complementary)),
                 "robustness": self.robustness, "settings": self.controller.settings}
-
-
-def check_sample_rate(sample_rate: float) -> float:
-    """The designs' rate [Hz], or a one-line :class:`ParameterError` naming ``--sample-rate``."""
-    if isinstance(sample_rate, bool) or not isinstance(sample_rate, int | float) or not (
-            math.isfinite(sample_rate) and sample_rate > 0):
-        raise ParameterError(f"sample_rate (--sample-rate): must be a finite rate > 0 Hz, got {sample_rate!r}")
-    return float(sample_rate)
 
 
 def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Response, Band], dict[str, float | None]],

@@ -36,7 +36,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.rules import check_value
 
-__all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "decentralised", "lead", "pid", "skyhook"]
+__all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "decentralised", "lead", "pid", "positive", "skyhook"]
 
 MEASUREMENTS = STATE_NAMES
 #: default controller sample rate [Hz]
@@ -154,7 +154,9 @@ def decentralised(
     return Controller(name, system, sample_rate, description)
 
 
-def _positive(value: float, key: str, allow_zero: bool = False) -> float:
+def positive(value: float, key: str, allow_zero: bool = False) -> float:
+    """``value`` as a float, or a :class:`ParameterError` naming ``key`` unless it is finite and > 0 (``>= 0``
+    with ``allow_zero``): the check of every design setting."""
     v = check_value(key, value, key, ParameterError)
     if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
         raise ParameterError(f"{key}: must be a finite number {'>=' if allow_zero else '>'} 0, got {value}")
@@ -169,7 +171,7 @@ def skyhook(lin: LinearModel, damping: float, sample_rate: float = SAMPLE_RATE) 
     damping : float
         ``c`` per actuator [N s/m].
     """
-    c = _positive(damping, "damping")
+    c = positive(damping, "damping")
     return decentralised(lin, control.tf([c], [1.0]), "velocity", "skyhook", sample_rate,
                          f"skyhook damping {c:.4g} N s/m per actuator")
 
@@ -213,8 +215,8 @@ def pid(
     derivative_filter_hz : float
         Corner of the derivative's low-pass [Hz].
     """
-    kp, ki, kd = (_positive(v, k, allow_zero=True) for v, k in ((kp, "kp"), (ki, "ki"), (kd, "kd")))
-    wf = 2 * math.pi * _positive(derivative_filter_hz, "derivative_filter_hz")
+    kp, ki, kd = (positive(v, k, allow_zero=True) for v, k in ((kp, "kp"), (ki, "ki"), (kd, "kd")))
+    wf = 2 * math.pi * positive(derivative_filter_hz, "derivative_filter_hz")
     s = control.tf("s")
     description = (f"PID kp {kp:.4g} N/m, ki {ki:.4g} N/(m s), kd {kd:.4g} N s/m, "
                    f"derivative filter {derivative_filter_hz:.4g} Hz")
@@ -258,8 +260,8 @@ def lead(
         Corners [Hz], zero below pole (most phase lead at their geometric mean;
         above the pole it acts as damping ``k / w_z`` plus stiffness).
     """
-    k = _positive(gain, "gain")
-    fz, fp = _positive(zero_hz, "zero_hz"), _positive(pole_hz, "pole_hz")
+    k = positive(gain, "gain")
+    fz, fp = positive(zero_hz, "zero_hz"), positive(pole_hz, "pole_hz")
     if fp <= fz:
         raise ParameterError(f"pole_hz: must be above zero_hz ({fz:.4g} Hz) for a lead, got {fp}")
     wz, wp = 2 * math.pi * fz, 2 * math.pi * fp
@@ -279,8 +281,8 @@ def actuated(lin: LinearModel) -> tuple[np.ndarray, np.ndarray]:
 def _scales(lin: LinearModel, max_displacement: float, max_rotation: float, max_velocity: float,
             max_rate: float) -> tuple[np.ndarray, np.ndarray]:
     """Bryson's rule scales: acceptable size of each state and each actuator's ``max_force``."""
-    states = [_positive(max_displacement, "max_displacement")] * 3 + [_positive(max_rotation, "max_rotation")] * 3
-    states += [_positive(max_velocity, "max_velocity")] * 3 + [_positive(max_rate, "max_rate")] * 3
+    states = [positive(max_displacement, "max_displacement")] * 3 + [positive(max_rotation, "max_rotation")] * 3
+    states += [positive(max_velocity, "max_velocity")] * 3 + [positive(max_rate, "max_rate")] * 3
     return np.array(states), np.array([a.max_force for a in lin.scenario.actuators])
 
 

@@ -35,13 +35,13 @@ from scipy.signal import cont2discrete
 from isolator.errors import OptimisationError, ParameterError
 from isolator.scenario.arguments import check_public
 
+from .designs import positive
 from .output_designs import (
     NOISE_FLOOR,
     DiscreteDesign,
     loop_damping,
     lowest_mode_hz,
     noise_model,
-    positive,
     refuse_held_air,
 )
 from .sensor_plant import SensorPlant, loop_matrix

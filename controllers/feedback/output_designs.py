@@ -30,6 +30,7 @@ from scipy.linalg import solve_discrete_are
 from isolator.errors import OptimisationError, ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 
+from .designs import positive
 from .sensor_plant import DISTURBANCES, SensorPlant, loop_matrix
 
 __all__ = [
@@ -40,7 +41,6 @@ __all__ = [
     "lowest_mode_hz",
     "lqg_design",
     "noise_model",
-    "positive",
     "refuse_held_air",
     "skyhook_design",
 ]
@@ -135,8 +135,7 @@ def _filter(quantity: str, corner_hz: float, sample_rate: float) -> control.Stat
 def lowest_mode_hz(plant: SensorPlant) -> float:
     """The table's lowest natural frequency [Hz]: its linear model's smallest eigenvalue magnitude, a
     pneumatic table's held air (poles at zero) left out."""
-    eig = np.abs(plant.lin.eigenvalues)
-    return float(np.min(eig[eig > 1e-9 * max(1.0, float(eig.max()))])) / (2 * math.pi)
+    return float(np.sort(np.abs(plant.lin.eigenvalues))[plant.held_air]) / (2 * math.pi)
 
 
 def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, gain: float | None = None,
@@ -213,12 +212,6 @@ def refuse_held_air(plant: SensorPlant, method: str) -> None:
         raise ParameterError(f"method: {method} cannot be designed on a pneumatic table (the air its leveling "
                              f"groups hold is {plant.held_air} pole(s) at zero that no actuator or sensor reaches); "
                              "use --method skyhook")
-
-
-def positive(value: float, key: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value) or value <= 0:
-        raise ParameterError(f"{key}: must be a finite number > 0, got {value!r}")
-    return float(value)
 
 
 def disturbance_scale(plant: SensorPlant) -> np.ndarray:

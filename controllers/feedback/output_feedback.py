@@ -35,7 +35,7 @@ from .hinf_output import hinf_design
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
 from .sensor_plant import SensorPlant, sensor_plant
 
-__all__ = ["METHODS", "design_controller", "design_positions", "travel"]
+__all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positions", "travel"]
 
 #: the output-feedback designs, by name
 METHODS: dict[str, Callable[..., DiscreteDesign]] = {"skyhook": skyhook_design, "lqg": lqg_design,
@@ -104,6 +104,15 @@ def _check_rate(plant: SensorPlant, sample_rate: float, where: str) -> None:
                              "that is usual)")
 
 
+def checked_sample_rate(sample_rate: float) -> float:
+    """A controller's rate [Hz] as a float, or a one-line :class:`ParameterError` naming ``--sample-rate``
+    unless it is a finite number > 0."""
+    if isinstance(sample_rate, bool) or not isinstance(sample_rate, numbers.Real) or not (
+            math.isfinite(sample_rate) and sample_rate > 0):
+        raise ParameterError(f"sample_rate (--sample-rate): must be a finite rate > 0 Hz, got {sample_rate!r}")
+    return float(sample_rate)
+
+
 def design_controller(scenario: Scenario, method: str, sample_rate: float, delay: bool = False,
                       schedule: int = 1, schedule_carriage: str | None = None,
                       options: Mapping[str, Any] | None = None,
@@ -145,9 +154,7 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
     """
     if method not in METHODS:
         raise ParameterError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
-    if isinstance(sample_rate, bool) or not isinstance(sample_rate, numbers.Real) or not (
-            math.isfinite(sample_rate) and sample_rate > 0):
-        raise ParameterError(f"sample_rate (--sample-rate): must be a finite rate > 0 Hz, got {sample_rate!r}")
+    sample_rate = checked_sample_rate(sample_rate)
     if not scenario.sensors:
         raise ScenarioError(f"sensors: the {method} design feeds back the scenario's [[sensors]], and it has none "
                             "(add [[sensors]] entries: geophones or accelerometers on the table)")
@@ -157,7 +164,7 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
     if not scenario.actuators:
         raise ScenarioError(f"actuators: the {method} design commands the scenario's [[actuators]], and it has none")
     try:  # the simulation must be able to run it: a stepping grid that is a multiple of both rates
-        controller_factor(scenario.simulation, float(sample_rate))
+        controller_factor(scenario.simulation, sample_rate)
     except ParameterError as exc:
         raise ParameterError(f"sample_rate (--sample-rate): {sample_rate:.6g} Hz cannot be simulated with this "
                              f"scenario ({str(exc).split(': ', 1)[1]}); choose a rate that divides a multiple of "
@@ -176,11 +183,11 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
     for q in points:
         where = ", ".join(f"{n} at {v:.4g} m" for n, v in zip(names, q, strict=True)) or "at rest"
         plant = sensor_plant(linearise(scenario, positions=q, parameters=parameters))
-        _check_rate(plant, float(sample_rate), f"with {where}")
-        designs.append(METHODS[method](plant, float(sample_rate), delay, **settings))
+        _check_rate(plant, sample_rate, f"with {where}")
+        designs.append(METHODS[method](plant, sample_rate, delay, **settings))
     record: dict[str, Any] = {**settings, "design_positions": points.tolist(),
                               "points": [d.settings for d in designs]}
-    common = {"sample_rate": float(sample_rate), "sensors": [s.name for s in scenario.sensors],
+    common: dict[str, Any] = {"sample_rate": sample_rate, "sensors": [s.name for s in scenario.sensors],
               "actuators": [a.name for a in scenario.actuators], "carriages": names, "method": method,
               "settings": record, "delay": bool(delay)}
     if len(designs) == 1:

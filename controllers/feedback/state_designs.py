@@ -28,10 +28,10 @@ from .designs import (
     SAMPLE_RATE,
     Controller,
     _measured_state,
-    _positive,
     _scales,
     actuated,
     actuator_labels,
+    positive,
 )
 from .hinf_output import import_slycot
 
@@ -117,8 +117,8 @@ def hinf(
     a, b2 = actuated(lin)
     labels = list(lin.system.input_labels)
     bw = np.asarray(lin.system.B, dtype=float)[:, [labels.index(n) for n in FORCE_INPUTS]]
-    d = _positive(disturbance, "disturbance")
-    eps = _positive(noise, "noise")
+    d = positive(disturbance, "disturbance")
+    eps = positive(noise, "noise")
     sx, su = _scales(lin, max_displacement, max_rotation, max_velocity, max_rate)
     n, m = a.shape[0], b2.shape[1]
     a_s = a * sx[None, :] / sx[:, None]
@@ -129,7 +129,7 @@ def hinf(
     d21 = np.hstack([np.zeros((n, 6)), eps * np.eye(n)])
     plant = control.ss(a_s, np.hstack([b1, b2_s]), np.vstack([c1, np.eye(n)]),
                        np.block([[np.zeros((n + m, 6 + n)), d12], [d21, np.zeros((n, m))]]))
-    factor = _positive(relax, "relax")
+    factor = positive(relax, "relax")
     if factor < 1:
         raise ParameterError(f"relax: must be >= 1 (a factor on the optimal norm), got {relax}")
     try:
