@@ -25,7 +25,7 @@ from isolator.scenario.definitions import SIGNALS, Scenario
 
 from .designs import MEASUREMENTS, Controller, actuator_labels
 
-__all__ = ["REFERENCE_INPUTS", "ClosedLoop", "LoopStability", "check_stability", "closed_loop"]
+__all__ = ["REFERENCE_INPUTS", "ClosedLoop", "LoopStability", "check_stability", "closed_loop", "lagged_plant"]
 
 REFERENCE_INPUTS = tuple(f"reference:{s}" for s in SIGNALS)
 
@@ -50,7 +50,10 @@ class _Plant:
     outputs: list[str]
 
 
-def _plant(lin: LinearModel) -> _Plant:
+def lagged_plant(lin: LinearModel) -> _Plant:
+    """The linear table with a first-order lag state per actuator that has a ``bandwidth``, split for feedback:
+    commands ``u`` [N] before the lag, disturbances ``w`` (ground and force inputs), the linear model's outputs
+    and the measured table states (the fields of :class:`_Plant`)."""
     sys = lin.system
     a, b = np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)
     c, d = np.asarray(sys.C, dtype=float), np.asarray(sys.D, dtype=float)
@@ -128,7 +131,7 @@ def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) ->
         With ``check``: the loop is unstable in continuous time or at the
         controller's sample rate.
     """
-    p = _plant(lin)
+    p = lagged_plant(lin)
     k = controller.system
     if list(k.output_labels) != actuator_labels(lin.scenario) or list(k.input_labels) != list(MEASUREMENTS):
         raise ParameterError("controller: was designed for other actuators or measurements than this plant's")
@@ -209,7 +212,7 @@ class LoopStability:
 
 def check_stability(lin: LinearModel, controller: Controller, where: str = "") -> LoopStability:
     """Check the loop of ``controller`` around ``lin`` continuous and sampled."""
-    p = _plant(lin)
+    p = lagged_plant(lin)
     return _stability(lin, p, controller, _loop_matrix(p, controller), where)
 
 

@@ -28,6 +28,7 @@ from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 
 from .loop_margins import closed_loop_matrix
+from .loops import lagged_plant
 
 __all__ = ["DISTURBANCES", "SensorPlant", "held_air", "loop_matrix", "sensor_plant"]
 
@@ -172,33 +173,20 @@ def sensor_plant(lin: LinearModel) -> SensorPlant:
         raise ScenarioError("actuators: the scenario has no [[actuators]] to control with")
     if not scenario.sensors:
         raise ScenarioError("sensors: the scenario has no [[sensors]] to feed back (add [[sensors]] entries)")
-    sys = lin.system
-    a, b = np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)
-    c, d = np.asarray(sys.C, dtype=float), np.asarray(sys.D, dtype=float)
-    in_labels, out_labels = list(sys.input_labels), list(sys.output_labels)
+    plant = lagged_plant(lin)  # the table with each lagged actuator's lag state, commands in
+    rows = [plant.outputs.index(f"s:{s.name}") for s in scenario.sensors]
+    in_labels = list(lin.system.input_labels)
     iu = [in_labels.index(f"actuator:{act.name}") for act in scenario.actuators]
-    iw = [in_labels.index(name) for name in DISTURBANCES]
-    rows = [out_labels.index(f"s:{s.name}") for s in scenario.sensors]
     acts = scenario.actuators
     lagged = [k for k, act in enumerate(acts) if act.bandwidth is not None]
     direct = [k for k in range(len(acts)) if k not in lagged]
-    tau = np.array([1.0 / (2 * math.pi * float(acts[k].bandwidth)) for k in lagged])  # type: ignore[arg-type]
-    n, nl, m = a.shape[0], len(lagged), len(acts)
-    bu = b[:, iu]
-    # lag states f_k' = (u_k - f_k) / tau_k push the table through the actuator's column
-    a_full = np.zeros((n + nl, n + nl))
-    a_full[:n, :n] = a
-    a_full[:n, n:] = bu[:, lagged]
-    a_full[n:, n:] = -np.diag(1.0 / tau) if nl else np.zeros((0, 0))
-    b_full = np.zeros((n + nl, m + len(iw)))
-    b_full[:n, direct] = bu[:, direct]
-    b_full[n + np.arange(nl), lagged] = 1.0 / tau
-    b_full[:n, m:] = b[:, iw]
-    du = d[np.ix_(rows, iu)]  # accelerometers: the force acts on the acceleration at once
-    c_full = np.hstack([c[rows], du[:, lagged]])
-    d_full = np.zeros((len(rows), m + len(iw)))
+    n, m = lin.system.nstates, len(acts)
+    du = np.asarray(lin.system.D, dtype=float)[np.ix_(rows, iu)]  # accelerometers: the force acts at once
+    c_full = plant.cy[rows].copy()
+    c_full[:, n:] = du[:, lagged]  # ... through its lag state when it has one
+    d_full = np.hstack([np.zeros((len(rows), m)), plant.dyw[rows]])
     d_full[:, direct] = du[:, direct]
-    d_full[:, m:] = d[np.ix_(rows, iw)]
+    a_full, b_full = plant.a, np.hstack([plant.bu, plant.bw])
     system = control.ss(a_full, b_full, c_full, d_full,
                         inputs=[f"actuator:{act.name}" for act in acts] + list(DISTURBANCES),
                         outputs=[f"s:{s.name}" for s in scenario.sensors], name="sensor-plant")
