@@ -192,20 +192,10 @@ class DiscreteController:
         """``(A, B, C, D)`` at the carriages' positions ``q`` [m] (interpolated and clamped when scheduled)."""
         if not self.schedule:
             return self.A, self.B, self.C, self.D  # type: ignore[return-value]
-        s, c = self.schedule, self.schedule_carriage
-        if len(s) == 1:
-            return s[0].A, s[0].B, s[0].C, s[0].D
-        qs = float(np.asarray(q, dtype=float).ravel()[c]) if q is not None else math.nan
-        k, w = 0, 0.0
-        if qs > s[0].q[c]:  # else below the range, or NaN: the first point
-            k, w = len(s) - 2, 1.0
-            for i in range(len(s) - 1):
-                if qs < s[i + 1].q[c]:
-                    k, w = i, (qs - s[i].q[c]) / (s[i + 1].q[c] - s[i].q[c])
-                    break
-        a, b = s[k], s[k + 1]
-        mix = lambda x, y: (1.0 - w) * x + w * y  # noqa: E731
-        return mix(a.A, b.A), mix(a.B, b.B), mix(a.C, b.C), mix(a.D, b.D)
+        q_row = np.full(max(len(self.carriages), 1), math.nan) if q is None else np.asarray(q, dtype=float).ravel()
+        w = self.schedule_weights(q_row[None, :])[0]
+        return tuple(sum(wj * getattr(e, k) for wj, e in zip(w, self.schedule, strict=True))
+                     for k in _MATRICES)
 
     def schedule_weights(self, q: np.ndarray) -> np.ndarray:
         """Each design point's weight (N, points) at the carriages' positions ``q`` (N, carriages) [m]:
