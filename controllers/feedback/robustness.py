@@ -245,16 +245,6 @@ def _configurations(scenario: Scenario, positions: Sequence[Mapping[str, float] 
     return out
 
 
-def _check_names(scenario: Scenario, controller: DiscreteController) -> None:
-    for key, mine in (("sensors", scenario.sensors), ("actuators", scenario.actuators),
-                      ("carriages", scenario.carriages)):
-        names = tuple(x.name for x in mine)
-        theirs = tuple(getattr(controller, key))
-        if theirs != names and (theirs or key != "carriages"):
-            raise ParameterError(f"controller.{key}: {list(theirs)} are not the scenario's {list(names)} (in file "
-                                 "order)")
-
-
 def check_robustness(scenario: Scenario, controller: DiscreteController, uncertainty: Uncertainty | None = None,
                      positions: Sequence[Mapping[str, float] | Sequence[float]] | None = None,
                      progress: Callable[[int, int], object] | None = None, margins: bool = True
@@ -291,7 +281,7 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
         the uncertainty at which the passive table tips (one line naming the values and the positions).
     """
     uncertainty = Uncertainty() if uncertainty is None else uncertainty
-    _check_names(scenario, controller)
+    controller.check_names(scenario)
     configs = _configurations(scenario, positions, controller)
     layout = ParameterLayout.of(scenario)
     nominal = layout.pack(scenario)

@@ -112,19 +112,6 @@ def state_feedback(feedback: FeedbackLaw) -> SampledLaw:
                       offsets=lambda t: -np.asarray(feedback.references(t), dtype=float).reshape(t.size, -1))
 
 
-def _check_names(scenario: Scenario, controller: DiscreteController) -> None:
-    for key, ours in (("sensors", scenario.sensors), ("actuators", scenario.actuators),
-                      ("carriages", scenario.carriages)):
-        names, theirs = tuple(x.name for x in ours), tuple(getattr(controller, key))
-        for i in range(max(len(names), len(theirs))):
-            mine = names[i] if i < len(names) else None
-            other = theirs[i] if i < len(theirs) else None
-            if mine != other:
-                raise ParameterError(
-                    f"controller: its {key}[{i}] is {other!r} where the scenario's [[{key}]] has {mine!r} "
-                    f"({len(theirs)} against {len(names)}, in file order)")
-
-
 def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equilibrium,
                    controller: DiscreteController, noise: bool = False, seed: int = 0) -> SampledLaw:
     """A :class:`DiscreteController` of the scenario's sensors, actuators and carriages as the loop runs it.
@@ -141,7 +128,7 @@ def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equil
     ParameterError
         Names that differ from the scenario's (the first one named).
     """
-    _check_names(scenario, controller)
+    controller.check_names(scenario)
     sensors = scenario.sensors
     t0 = np.zeros(1)
     c0 = inputs_at(scenario, t0, t0)  # zero actuator force

@@ -35,6 +35,7 @@ import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
+from isolator.scenario.definitions import Scenario
 
 __all__ = ["DiscreteController", "ScheduleEntry"]
 
@@ -196,6 +197,21 @@ class DiscreteController:
         w = self.schedule_weights(q_row[None, :])[0]
         return tuple(sum(wj * getattr(e, k) for wj, e in zip(w, self.schedule, strict=True))
                      for k in _MATRICES)
+
+    def check_names(self, scenario: Scenario) -> None:
+        """Refuse a controller for another table: its sensors, actuators and carriages must be the scenario's
+        ``[[sensors]]``, ``[[actuators]]`` and ``[[carriages]]`` names in file order (one
+        :class:`ParameterError` naming the first that differs)."""
+        for key, ours in (("sensors", scenario.sensors), ("actuators", scenario.actuators),
+                          ("carriages", scenario.carriages)):
+            names, theirs = tuple(x.name for x in ours), tuple(getattr(self, key))
+            for i in range(max(len(names), len(theirs))):
+                mine = names[i] if i < len(names) else None
+                other = theirs[i] if i < len(theirs) else None
+                if mine != other:
+                    raise ParameterError(
+                        f"controller.{key}[{i}]: {other!r} where the scenario's [[{key}]] has {mine!r} "
+                        f"({len(theirs)} against {len(names)}, in file order)")
 
     def schedule_weights(self, q: np.ndarray) -> np.ndarray:
         """Each design point's weight (N, points) at the carriages' positions ``q`` (N, carriages) [m]:
