@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from isolator.model.rotations import cardan_matrix, quaternion_to_matrix
 from isolator.model.variants import Model
 from isolator.numerics.native import NativeFunction
 from isolator.numerics.rk4 import rk4_step
@@ -85,20 +86,9 @@ class SampledLaw:
 
 
 def _rotation(x: ca.SX, kind: str) -> ca.SX:
-    """The table's rotation matrix of a state (as :func:`isolator.simulation.points.rotation_matrices`)."""
-    if kind == "paper":
-        cx, cy, cz = (ca.cos(x[3 + i]) for i in range(3))
-        sx, sy, sz = (ca.sin(x[3 + i]) for i in range(3))
-        rows = [[cz * cy, cz * sy * sx - sz * cx, cz * sy * cx + sz * sx],
-                [sz * cy, sz * sy * sx + cz * cx, sz * sy * cx - cz * sx],
-                [-sy, cy * sx, cy * cx]]
-    else:
-        q = x[3:7] / ca.norm_2(x[3:7])
-        w, a, b, c = q[0], q[1], q[2], q[3]
-        rows = [[1 - 2 * (b * b + c * c), 2 * (a * b - w * c), 2 * (a * c + w * b)],
-                [2 * (a * b + w * c), 1 - 2 * (a * a + c * c), 2 * (b * c - w * a)],
-                [2 * (a * c - w * b), 2 * (b * c + w * a), 1 - 2 * (a * a + b * b)]]
-    return ca.vertcat(*[ca.horzcat(*row) for row in rows])
+    """The table's rotation matrix of a state, as the model's own equations build it: Cardan angles in
+    ``x[3:6]`` ("paper") or the quaternion in ``x[3:7]`` (normalised)."""
+    return cardan_matrix(x[3:6]) if kind == "paper" else quaternion_to_matrix(x[3:7])
 
 
 def _readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.SX, p: ca.SX, ref: ca.SX) -> ca.SX:
