@@ -20,7 +20,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controllers.feedback.loop_margins import DiscreteResponse
 from controllers.feedback.sensor_plant import SensorPlant, loop_matrix
+from isolator.analysis.frequency_response import state_space_response
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.discrete_controller import DiscreteController
@@ -52,14 +54,6 @@ class LoopResponse:
     passive: np.ndarray
 
 
-def _controller_response(ctrl: tuple[np.ndarray, ...], zs: np.ndarray) -> np.ndarray:
-    a, b, c, d = ctrl
-    n = a.shape[0]
-    if n == 0:
-        return np.broadcast_to(d, (zs.size, *d.shape)).copy()
-    return np.stack([c @ np.linalg.solve(z * np.eye(n) - a, b) + d for z in zs])
-
-
 def loop_response(plant: SensorPlant, controller: DiscreteController, frequency_hz: np.ndarray,
                   q: np.ndarray | None = None) -> LoopResponse:
     """The loop's sensitivities and floor-to-sensor transmissibility at ``frequency_hz`` [Hz] (below Nyquist).
@@ -77,24 +71,21 @@ def loop_response(plant: SensorPlant, controller: DiscreteController, frequency_
     w = 2 * math.pi * f
     zs = np.exp(1j * w * period)
     ctrl = controller.matrices(plant.lin.positions if q is None else q)
-    k = _controller_response(ctrl, zs)
+    k = DiscreteResponse(*ctrl)(zs)
     hold = np.where(w > 0, (1 - np.exp(-1j * w * period)) / np.where(w > 0, 1j * w * period, 1.0), 1.0)
     if controller.delay:
         hold = hold * np.exp(-1j * w * period)
-    a, b, c, d = plant.matrices()
     m = plant.n_actuators
-    b, d = b[:, :m], d[:, :m]
+    actuated = state_space_response(plant.system, f, list(plant.system.input_labels)[:m])
     sensors = plant.lin.scenario.sensors
     # the floor's path to the sensors, exact in each sensor's quantity (an accelerometer's improper term too)
     floor_path = plant.lin.sensor_response(f, [f"ground:{axis}" for axis in ("x", "y", "z")])
     p = len(sensors)
     sens, comp = np.empty(f.size), np.empty(f.size)
     trans, passive = np.empty((f.size, p)), np.empty((f.size, p))
-    eye_n = np.eye(a.shape[0])
     for i, wi in enumerate(w):
         s = 1j * wi
-        h = c @ np.linalg.solve(s * eye_n - a, b) + d
-        pu, pw = h[:, :m], floor_path[i]
+        pu, pw = actuated[i], floor_path[i]
         loop = pu @ (hold[i] * k[i])
         so = np.linalg.inv(np.eye(p) - loop)
         sens[i] = np.linalg.norm(so, 2)

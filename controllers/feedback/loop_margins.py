@@ -119,7 +119,7 @@ def closed_loop_matrix(plant: tuple[np.ndarray, ...], controller: tuple[np.ndarr
     return a + np.vstack([bp, bk @ dp]) @ right
 
 
-class _Response:
+class DiscreteResponse:
     """``C (zI - A)^-1 B + D`` of one system at any ``z``: by ``A``'s eigenvectors when they are well
     conditioned (``C V diag(1 / (z - lambda)) V^-1 B``), else by solving at each ``z``."""
 
@@ -147,7 +147,7 @@ class _Loop:
     """The return ``M(z) = K(z) P(z)`` and ``S = (I - M)^-1`` at any points of the unit circle."""
 
     def __init__(self, plant: tuple[np.ndarray, ...], controller: tuple[np.ndarray, ...], rate: float) -> None:
-        self.plant, self.controller, self.rate = _Response(*plant), _Response(*controller), rate
+        self.plant, self.controller, self.rate = DiscreteResponse(*plant), DiscreteResponse(*controller), rate
         self.m = plant[1].shape[1]
 
     def sensitivity(self, f: np.ndarray) -> np.ndarray:
