@@ -36,7 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from isolator.errors import ParameterError
+from isolator.analysis.sampling import closed_loop_matrix
 from isolator.scenario.arguments import check_public
 
 __all__ = ["LoopMargins", "closed_loop_matrix", "loop_margins"]
@@ -89,34 +89,6 @@ class LoopMargins:
     def disk_phase_margin(self) -> float:
         """The phase [deg] every actuator may take at once by the multiloop disk margin: ``2 atan(a / 2)``."""
         return math.degrees(2.0 * math.atan(self.disk_margin / 2.0))
-
-
-def closed_loop_matrix(plant: tuple[np.ndarray, ...], controller: tuple[np.ndarray, ...]) -> np.ndarray:
-    """State matrix of the sampled loop, states ``[x, xc]``.
-
-    Parameters
-    ----------
-    plant : tuple of ndarray
-        ``(Ap, Bp, Cp, Dp)``: the sampled plant from the commands [N] to the readings (Bp, Dp only the
-        commands' columns).
-    controller : tuple of ndarray
-        ``(Ak, Bk, Ck, Dk)`` of the controller (``u = Ck xc + Dk y``).
-
-    Raises
-    ------
-    ParameterError
-        ``I - Dk Dp`` is singular (the loop has no solution for ``u``).
-    """
-    ap, bp, cp, dp = plant
-    ak, bk, ck, dk = controller
-    n, nk, m = ap.shape[0], ak.shape[0], bp.shape[1]
-    try:
-        right = np.linalg.solve(np.eye(m) - dk @ dp, np.hstack([dk @ cp, ck]))
-    except np.linalg.LinAlgError:
-        raise ParameterError("controller: I - D Dp is singular, the loop through the plant's feedthrough "
-                             "has no solution") from None
-    a = np.block([[ap, np.zeros((n, nk))], [bk @ cp, ak]])
-    return a + np.vstack([bp, bk @ dp]) @ right
 
 
 class DiscreteResponse:

@@ -16,18 +16,16 @@ designs use floor inputs only as a disturbance model, where that term is immater
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import control
 import numpy as np
-from scipy.linalg import expm
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
+from isolator.analysis.sampling import closed_loop_matrix, sample_held
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 
-from .loop_margins import closed_loop_matrix
 from .loops import lagged_plant
 
 __all__ = ["DISTURBANCES", "SensorPlant", "held_air", "loop_matrix", "sensor_plant"]
@@ -91,39 +89,7 @@ class SensorPlant:
             continuous plant's, then the delayed command (with ``delay``), then the command applied before
             the sample (with a direct feedthrough).
         """
-        if not (isinstance(sample_rate, int | float) and math.isfinite(sample_rate) and sample_rate > 0):
-            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {sample_rate!r}")
-        a, b, c, d = self.matrices()
-        n, nu, m = a.shape[0], b.shape[1], self.n_actuators
-        block = np.zeros((n + nu, n + nu))
-        block[:n, :n], block[:n, n:] = a, b
-        phi = expm(block / sample_rate)
-        ad, bd = phi[:n, :n], phi[:n, n:]
-        p = c.shape[0]
-        # z = (x, pending): x+ = Ad x + Bd_u applied + Bd_w w; applied = u (no delay) or the pending command
-        hold = m if delay else 0
-        az = np.zeros((n + hold, n + hold))
-        bz = np.zeros((n + hold, nu))
-        az[:n, :n], bz[:n, m:] = ad, bd[:, m:]
-        if delay:
-            az[:n, n:] = bd[:, :m]
-            bz[n:, :m] = np.eye(m)
-        else:
-            bz[:n, :m] = bd[:, :m]
-        cz = np.hstack([c, np.zeros((p, hold))])
-        dz = np.hstack([np.zeros((p, m)), d[:, m:]])
-        du = d[:, :m]
-        if np.any(du != 0):  # the reading's left limit: the command applied over the previous sample
-            k = n + hold
-            applied_a = np.zeros((m, k))
-            applied_b = np.zeros((m, nu))
-            if delay:
-                applied_a[:, n:] = np.eye(m)
-            else:
-                applied_b[:, :m] = np.eye(m)
-            az = np.block([[az, np.zeros((k, m))], [applied_a, np.zeros((m, m))]])
-            bz = np.vstack([bz, applied_b])
-            cz = np.hstack([cz, du])
+        az, bz, cz, dz = sample_held(self.matrices(), self.n_actuators, sample_rate, delay)
         inputs, outputs = list(self.system.input_labels), list(self.system.output_labels)
         return control.ss(az, bz, cz, dz, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
 

@@ -20,11 +20,10 @@ from isolator.analysis.linear import LinearModel
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import FloorSpectrum
+from isolator.scenario.random_sources import VC_CLASSES
 
 __all__ = ["VC_CLASSES", "VibrationCriteria", "third_octave_bands", "vibration_criteria"]
 
-#: VC class limits: one-third-octave RMS velocity [m/s]
-VC_CLASSES: dict[str, float] = {f"VC-{c}": 50e-6 / 2**k for k, c in enumerate("ABCDEFG")}
 
 _POINTS_PER_BAND = 64
 
@@ -40,30 +39,6 @@ def third_octave_bands(low: float = 1.0, high: float = 80.0) -> tuple[np.ndarray
     n = np.arange(int(np.ceil(10 * np.log10(low) - 1e-9)), int(np.floor(10 * np.log10(high) + 1e-9)) + 1)
     centres = 10.0 ** (n / 10)
     return centres, centres * 10 ** (-1 / 20), centres * 10 ** (1 / 20)
-
-
-def _psd(spectrum: FloorSpectrum, axis: str, f: np.ndarray) -> np.ndarray:
-    """The floor's velocity PSD [(m/s)^2/Hz] along ``axis`` at frequencies ``f``; zero outside the data."""
-    if axis not in spectrum.values:
-        return np.zeros_like(f)
-    fs, vs = spectrum.frequency, spectrum.values[axis]
-    if spectrum.kind == "psd":
-        positive = vs > 0
-        out = np.zeros_like(f)
-        inside = (f >= fs[0]) & (f <= fs[-1])
-        if positive.all():  # log-log interpolation between the given points
-            out[inside] = np.exp(np.interp(np.log(f[inside]), np.log(fs), np.log(vs)))
-        else:
-            out[inside] = np.interp(f[inside], fs, vs)
-        return out
-    # third-octave band RMS: spread evenly over each band (edges at the geometric means)
-    edges = np.sqrt(fs[:-1] * fs[1:])
-    lower = np.concatenate([[fs[0] ** 2 / edges[0]], edges])
-    upper = np.concatenate([edges, [fs[-1] ** 2 / edges[-1]]])
-    density = vs**2 / (upper - lower)
-    idx = np.searchsorted(upper, f, side="left")
-    out = np.where((f >= lower[0]) & (f <= upper[-1]), density[np.clip(idx, 0, fs.size - 1)], 0.0)
-    return out
 
 
 @dataclass(frozen=True)
@@ -193,7 +168,7 @@ def vibration_criteria(
     width = np.diff(cells, axis=1)
     flat = f.ravel()
     h = lin.frequency_response(flat, [f"ground:{a}" for a in "xyz"], outputs)  # (nf, 3, 3)
-    floor_psd = np.stack([_psd(spectrum, a, flat) for a in "xyz"], axis=1)  # (nf, 3)
+    floor_psd = np.stack([spectrum.velocity_psd(a, flat) for a in "xyz"], axis=1)  # (nf, 3)
     table_psd = np.einsum("fij,fj->fi", np.abs(h) ** 2, floor_psd)
 
     def band_rms(psd: np.ndarray) -> np.ndarray:

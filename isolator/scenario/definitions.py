@@ -14,6 +14,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
+from isolator.scenario.random_sources import Disturbance, SpectralDensity
 from isolator.scenario.sensors import Sensor
 from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import Window
@@ -143,6 +144,9 @@ class Actuator:
     max_rate : float or None
         Largest rate of change of the command [N/s], if any (respected by
         optimised feedforward; commands from files are not rate limited).
+    noise_psd : SpectralDensity or None
+        One-sided PSD [N^2/Hz] of a random force added to the force the actuator applies (after clipping
+        and lag), a source of the error budget.
     """
 
     name: str
@@ -151,6 +155,7 @@ class Actuator:
     max_force: float
     bandwidth: float | None = None
     max_rate: float | None = None
+    noise_psd: SpectralDensity | None = None
 
 
 @dataclass(frozen=True)
@@ -236,6 +241,7 @@ class Scenario:
     windows: tuple[Window, ...] = ()
     sequence: StepSequence | None = None
     sensors: tuple[Sensor, ...] = ()
+    disturbances: tuple[Disturbance, ...] = ()
 
     # -- derived quantities -------------------------------------------------
     @property

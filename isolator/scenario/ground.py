@@ -34,6 +34,41 @@ class FloorSpectrum:
     frequency: np.ndarray
     values: dict[str, np.ndarray]
 
+    @property
+    def edges(self) -> np.ndarray:
+        """Frequencies [Hz] where the velocity PSD may jump or bend: a third-octave spectrum's band edges (the
+        geometric means of adjacent centres, and as far beyond the first and last), a PSD's points."""
+        fs = np.asarray(self.frequency, dtype=float)
+        if self.kind == "psd":
+            return fs
+        inner = np.sqrt(fs[:-1] * fs[1:])
+        return np.concatenate([[fs[0] ** 2 / inner[0]], inner, [fs[-1] ** 2 / inner[-1]]])
+
+    def velocity_psd(self, axis: str, frequency_hz: np.ndarray) -> np.ndarray:
+        """The floor's one-sided velocity PSD [(m/s)^2/Hz] along world ``axis`` at ``frequency_hz`` [Hz]; zero
+        outside the data and on axes not given.
+
+        A PSD is interpolated log-log between its points (linearly where it holds zeros); a third-octave
+        spectrum's band RMS is spread evenly over each whole band, edges at :attr:`edges`.
+        """
+        f = np.asarray(frequency_hz, dtype=float)
+        if axis not in self.values:
+            return np.zeros_like(f)
+        fs, vs = np.asarray(self.frequency, dtype=float), np.asarray(self.values[axis], dtype=float)
+        if self.kind == "psd":
+            out = np.zeros_like(f)
+            inside = (f >= fs[0]) & (f <= fs[-1])
+            if np.all(vs > 0):
+                out[inside] = np.exp(np.interp(np.log(f[inside]), np.log(fs), np.log(vs)))
+            else:
+                out[inside] = np.interp(f[inside], fs, vs)
+            return out
+        edges = self.edges
+        lower, upper = edges[:-1], edges[1:]
+        density = vs**2 / (upper - lower)
+        idx = np.searchsorted(upper, f, side="left")
+        return np.where((f >= lower[0]) & (f <= upper[-1]), density[np.clip(idx, 0, fs.size - 1)], 0.0)
+
 
 @dataclass(frozen=True)
 class Ground:

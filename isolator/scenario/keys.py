@@ -24,7 +24,7 @@ _UNIT_TOL = 1e-6
 #: the keys of a scenario's top level
 TOP_LEVEL_KEYS = ("name", "gravity", "table", "isolators", "air", "leveling", "simulation", "carriages",
                   "actuators", "settling", "ground", "points", "windows", "sequence",
-                  "sensors")
+                  "sensors", "disturbances")
 
 
 def load_toml(path: Path) -> dict[str, Any]:
@@ -62,7 +62,8 @@ def _known_keys() -> frozenset[str]:
     """Every key name the scenario's readers know: a key in a file that is one of them is no typo."""
     folder = Path(__file__).parent
     text = "".join((folder / name).read_text() for name in ("reader.py", "pneumatic_reader.py", "windows_reader.py",
-                                                                 "sequence.py", "tables.py", "sensors.py"))
+                                                                 "sequence.py", "tables.py", "sensors.py",
+                                                                 "ground_reader.py", "random_sources.py"))
     return frozenset(re.findall(r'"([a-z][a-z0-9_]*)"', text))
 
 

@@ -12,15 +12,12 @@ from importlib import resources
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public, reading, register_conversion
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
     Carriage,
-    FloorSpectrum,
     Ground,
     Isolator,
     MotionLimits,
@@ -31,21 +28,17 @@ from isolator.scenario.definitions import (
     Table,
 )
 from isolator.scenario.field_checks import register_field_checks
-from isolator.scenario.keys import KeyReader, load_toml, number, number_list, table_of_tables
+from isolator.scenario.ground_reader import read_spectrum
+from isolator.scenario.keys import KeyReader, load_toml, number, table_of_tables
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
+from isolator.scenario.random_sources import read_density, read_disturbances
 from isolator.scenario.rules import check_scenario_values
 from isolator.scenario.sensors import read_sensors
 from isolator.scenario.sequence import StepSequence, held, read_sequence
-from isolator.scenario.tables import (
-    SPECTRUM_KINDS,
-    load_spectrum,
-    read_csv_columns,
-    read_samples,
-    spectrum_from_columns,
-)
+from isolator.scenario.tables import load_spectrum, read_csv_columns, read_samples
 from isolator.scenario.validation import (
     check_carriage_tree,
     check_isolator_layout,
@@ -179,6 +172,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
     check_unique_names([pt.name for pt in points], "points")
     windows = read_windows(top, data, [pt.name for pt in points])
     sensors = read_sensors(top, data)
+    disturbances = read_disturbances(top, data)
     top.finish()
     scenario = Scenario(
         name=name,
@@ -196,6 +190,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
         windows=windows,
         sequence=sequence,
         sensors=sensors,
+        disturbances=disturbances,
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
     check_sequence(scenario)
@@ -332,8 +327,9 @@ def _read_actuator(r: KeyReader) -> Actuator:
         max_force=r.number("max_force", positive=True),
         bandwidth=r.number("bandwidth", positive=True) if r.has("bandwidth") else None,
         max_rate=r.number("max_rate", positive=True) if r.has("max_rate") else None,
+        noise_psd=read_density(r.raw("noise_psd"), r.key("noise_psd")) if r.has("noise_psd") else None,
     )
-    r.used.update(("bandwidth", "max_rate"))
+    r.used.update(("bandwidth", "max_rate", "noise_psd"))
     r.finish()
     return act
 
@@ -354,29 +350,10 @@ def _read_ground(r: KeyReader, base_dir: Path) -> Ground:
             motion[axis] = _read_profile(KeyReader(r.raw(axis), r.key(axis)), base_dir)
     spectrum = None
     if r.has("spectrum"):
-        spectrum = _read_spectrum(KeyReader(r.raw("spectrum"), r.key("spectrum")), base_dir)
+        spectrum = read_spectrum(KeyReader(r.raw("spectrum"), r.key("spectrum")), base_dir)
     r.used.add("spectrum")
     r.finish()
     return Ground(motion=motion, spectrum=spectrum)
-
-
-def _read_spectrum(r: KeyReader, base_dir: Path) -> FloorSpectrum:
-    kind = r.string("kind")
-    if kind not in SPECTRUM_KINDS:
-        raise ScenarioError(f"{r.key('kind')}: must be one of {', '.join(SPECTRUM_KINDS)}, got '{kind}'")
-    if r.has("file"):
-        if any(r.has(k) for k in ("frequency", "x", "y", "z")):
-            raise ScenarioError(f"{r.key('file')}: give either file or inline frequency and values, not both")
-        spectrum = load_spectrum(base_dir / r.string("file"), kind, key=r.key("file"))
-    else:
-        columns = {"frequency": np.array(number_list(r, "frequency"))}
-        for axis in ("x", "y", "z"):
-            if r.has(axis):
-                columns[axis] = np.array(number_list(r, axis))
-        spectrum = spectrum_from_columns(columns, kind, r.path)
-    r.used.update({"file", "frequency", "x", "y", "z"})
-    r.finish()
-    return spectrum
 
 
 def _read_settling(r: KeyReader) -> Settling:

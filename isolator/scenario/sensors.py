@@ -15,6 +15,7 @@ from typing import Any
 
 from isolator.errors import ScenarioError
 from isolator.scenario.keys import KeyReader, number, table_of_tables
+from isolator.scenario.random_sources import SpectralDensity, read_density
 
 __all__ = ["QUANTITIES", "SENSOR_SITES", "UFF_DIRECTIONS", "Sensor", "read_sensors", "sensor_from_dict"]
 
@@ -49,6 +50,9 @@ class Sensor:
         RMS of the white noise added to each sample [SI units of the quantity] (default 0).
     uff : tuple of (int, str) or None
         The UFF58 channel (node, direction "+X" ... "-Z") that holds this sensor in a UFF record.
+    noise_psd : SpectralDensity or None
+        One-sided PSD of the sensor's noise [SI^2/Hz] (instead of ``noise``): the noise is a sequence of
+        samples at the controller's rate whose PSD below half that rate is this.
     """
 
     name: str
@@ -58,6 +62,7 @@ class Sensor:
     quantity: str
     noise: float = 0.0
     uff: tuple[int, str] | None = None
+    noise_psd: SpectralDensity | None = None
 
     def __post_init__(self) -> None:
         check_sensor(self, "sensor")
@@ -66,6 +71,13 @@ class Sensor:
     def unit(self) -> str:
         """The SI unit of the quantity."""
         return QUANTITIES[self.quantity]
+
+    def noise_density(self, sample_rate: float) -> SpectralDensity | None:
+        """The noise's one-sided PSD [SI^2/Hz] when sampled at ``sample_rate`` [Hz]: ``noise_psd``, or the flat
+        ``2 noise^2 / sample_rate`` of white noise of ``noise`` RMS per sample; None for a noiseless sensor."""
+        if self.noise_psd is not None:
+            return self.noise_psd
+        return SpectralDensity.flat(2.0 * self.noise**2 / sample_rate) if self.noise > 0 else None
 
     @property
     def order(self) -> int:
@@ -95,6 +107,13 @@ def check_sensor(sensor: Sensor, key: str) -> None:
     if abs(norm - 1.0) > 1e-6:
         raise ScenarioError(f"{key}.direction: must be a unit vector, got length {norm:.6g}")
     number(sensor.noise, f"{key}.noise", nonnegative=True)
+    if sensor.noise_psd is not None:
+        if not isinstance(sensor.noise_psd, SpectralDensity):
+            raise ScenarioError(f"{key}.noise_psd: must be a SpectralDensity [SI^2/Hz], got "
+                                f"{type(sensor.noise_psd).__name__}")
+        if sensor.noise > 0:
+            raise ScenarioError(f"{key}.noise_psd: give noise (white, RMS per sample) or noise_psd (a spectrum), "
+                                "not both")
     if sensor.uff is not None:
         node, direction = sensor.uff
         if isinstance(node, bool) or not isinstance(node, int) or node < 0:
@@ -113,15 +132,18 @@ def sensor_from_dict(item: Any, key: str) -> Sensor:
     direction = r.unit_vector("direction")
     noise = r.number("noise", 0.0, nonnegative=True)
     uff = _read_uff(r.raw("uff", None), r.key("uff"))
+    psd = read_density(r.raw("noise_psd"), r.key("noise_psd")) if r.has("noise_psd") else None
+    r.used.add("noise_psd")
     r.finish()
-    return _build(name, on, position, direction, quantity, noise, uff, key)
+    return _build(name, on, position, direction, quantity, noise, uff, key, psd)
 
 
 def _build(name: str, on: str, position: tuple[float, float, float], direction: tuple[float, float, float],
-           quantity: str, noise: float, uff: tuple[int, str] | None, key: str) -> Sensor:
+           quantity: str, noise: float, uff: tuple[int, str] | None, key: str,
+           noise_psd: SpectralDensity | None = None) -> Sensor:
     """The sensor, its own checks naming the file's key (``sensors[2].quantity``)."""
     try:
-        return Sensor(name, on, position, direction, quantity, noise, uff)
+        return Sensor(name, on, position, direction, quantity, noise, uff, noise_psd)
     except ScenarioError as exc:
         raise ScenarioError(str(exc).replace("sensor.", f"{key}.", 1)) from None
 

@@ -1,0 +1,11 @@
+"""The error budget: random motion at the points from the floor, forces, actuators' and sensors' noise,
+passive or through an exported controller (``docs/scenario-format.md``, "Error budget: random disturbances
+and noise at the points")."""
+
+from isolator.analysis.budget.compute import DEFAULT_BAND, budget_band, error_budget
+from isolator.analysis.budget.loop import SampledController
+from isolator.analysis.budget.result import AXES, QUANTITY_UNITS, ErrorBudget
+from isolator.analysis.budget.sources import Source, budget_sources
+
+__all__ = ["AXES", "DEFAULT_BAND", "QUANTITY_UNITS", "ErrorBudget", "SampledController", "Source", "budget_band",
+           "budget_sources", "error_budget"]

@@ -1,0 +1,155 @@
+"""The error budget of a parked table: random motion at the points from the floor, forces, actuators' and
+sensors' noise, passive or through an exported controller (``docs/scenario-format.md``, "Error budget")."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from isolator.analysis.linear import LinearModel, linearise
+from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.definitions import Scenario
+
+from .grid import integrate_psd, seed_grid
+from .loop import SampledController, closed_loop_poles, source_responses
+from .result import AXES, QUANTITY_UNITS, ErrorBudget
+from .sources import budget_sources
+
+__all__ = ["DEFAULT_BAND", "budget_band", "error_budget"]
+
+#: the band [Hz] a budget integrates over by default (with a controller, up to just below half its rate)
+DEFAULT_BAND = (0.1, 1000.0)
+#: how far below half the controller's rate the default band ends
+_BELOW_NYQUIST = 0.999
+
+
+def _point_outputs(lin: LinearModel, points: Sequence[str] | None) -> tuple[tuple[str, ...], list[str]]:
+    """The points' names and the linear model's outputs for them (``table``: the mass centre's x, y, z)."""
+    names = [p.name for p in lin.scenario.points]
+    if not names:
+        chosen = list(points) if points is not None else ["table"]
+        for p in chosen:
+            if p != "table":
+                raise ParameterError(f"points: no point named {p!r}; the scenario has no [[points]], so its "
+                                     "budget is at the mass centre, 'table'")
+        return ("table",), ["x", "y", "z"]
+    chosen = names if points is None else list(points)
+    if not chosen:
+        raise ParameterError("points: name at least one point")
+    for p in chosen:
+        if p not in names:
+            raise ParameterError(f"points: no point named {p!r} (have: {', '.join(names)})")
+    return tuple(chosen), [f"{p}:{a}" for p in chosen for a in AXES]
+
+
+def budget_band(band: Sequence[float] | None, controller: SampledController | None) -> tuple[float, float]:
+    """The band [Hz]: checked (0 < low < high, finite; with a controller below half its rate) or the default."""
+    nyquist = None if controller is None else float(controller.sample_rate) / 2
+    if band is None:
+        low, high = DEFAULT_BAND
+        return (low, high) if nyquist is None else (low, min(high, _BELOW_NYQUIST * nyquist))
+    values = list(band)
+    if len(values) != 2 or not all(isinstance(v, int | float) and not isinstance(v, bool) and math.isfinite(v)
+                                   for v in values):
+        raise ParameterError(f"band: must be two finite frequencies (low, high) [Hz], got {band!r}")
+    low, high = float(values[0]), float(values[1])
+    if not 0 < low < high:
+        raise ParameterError(f"band: must be 0 < low < high [Hz], got {low:g} to {high:g}")
+    if nyquist is not None and high >= nyquist:
+        raise ParameterError(f"band: ends at {high:g} Hz, at or beyond half the controller's sample rate "
+                             f"({nyquist:g} Hz), where the budget neglects aliasing; end it below {nyquist:g} Hz")
+    return low, high
+
+
+def error_budget(
+    scenario: Scenario | LinearModel,
+    controller: SampledController | None = None,
+    points: Sequence[str] | None = None,
+    quantity: str = "displacement",
+    band: Sequence[float] | None = None,
+    positions: Mapping[str, float] | Sequence[float] | None = None,
+) -> ErrorBudget:
+    """The random motion at the points, per source, as a precision engineer's dynamic error budget.
+
+    The output PSD of a point's motion along world axis ``d`` is ``sum over sources |H(f)|^2 S(f)``, each
+    source uncorrelated with the others; the RMS values are the roots of its integral over the band, on a
+    grid refined until that integral is converged (0.02 %).
+
+    Parameters
+    ----------
+    scenario : Scenario or LinearModel
+        The table; a scenario is linearised with its carriages at their start (or at ``positions``).
+    controller : DiscreteController, optional
+        An exported controller (``controller.json``) in the loop: the sampled loop in the frequency domain
+        (zero-order hold, the controller's discrete response, the actuators' lag and the design's delay;
+        aliasing neglected); a scheduled one taken at the carriages' positions. None: the passive table.
+    points : sequence of str, optional
+        ``[[points]]`` names (default all; a scenario without points has ``table``, its mass centre).
+    quantity : {"displacement", "velocity", "acceleration"}
+        Of the points' absolute motion [m, m/s, m/s^2].
+    band : (float, float), optional
+        [Hz], 0 < low < high; default 0.1 Hz to 1 kHz (with a controller, ending just below half its rate).
+    positions : mapping or sequence, optional
+        Carriage positions [m] by name or one per carriage (a scenario only).
+
+    Returns
+    -------
+    ErrorBudget
+
+    Raises
+    ------
+    ScenarioError
+        The scenario has no random source.
+    ParameterError
+        An unknown point or quantity, a bad band, a controller for another table.
+    UnstableClosedLoopError
+        The sampled loop is unstable.
+
+    Examples
+    --------
+    >>> from isolator import load_scenario
+    >>> from isolator.analysis.budget import error_budget
+    >>> budget = error_budget(load_scenario("paper-table-3-2-budget"))
+    >>> budget.sources
+    ('floor:x', 'floor:y', 'floor:z', 'force:acoustic-z')
+    >>> round(budget.value("probe", "z") * 1e9, 1)
+    18.2
+    """
+    if quantity not in QUANTITY_UNITS:
+        raise ParameterError(f"quantity: must be one of {', '.join(QUANTITY_UNITS)}, got {quantity!r}")
+    if isinstance(scenario, LinearModel):
+        if positions is not None:
+            raise ParameterError("positions: give them to linearise(); a LinearModel is parked already")
+        lin = scenario
+    elif isinstance(scenario, Scenario):
+        lin = linearise(scenario, positions)
+    else:
+        raise ParameterError(f"scenario: must be a Scenario or a LinearModel, got {type(scenario).__name__}")
+    if controller is not None:
+        controller.check_names(lin.scenario)
+    limits = budget_band(band, controller)
+    names, outputs = _point_outputs(lin, points)
+    rate = None if controller is None else float(controller.sample_rate)
+    sources = budget_sources(lin, rate)
+    if not sources:
+        raise ScenarioError("the scenario has no random source for a budget: add [ground.spectrum] (a floor "
+                            "spectrum or vc = \"VC-C\"), [[disturbances]], an actuator's noise_psd"
+                            + (" or a sensor's noise" if controller is not None else
+                               " (sensors' noise counts only with --controller)"))
+    poles = lin.eigenvalues if controller is None else np.concatenate(
+        [lin.eigenvalues, closed_loop_poles(lin, controller)])
+    corners = np.concatenate([np.asarray(s.corners, dtype=float) for s in sources] + [np.zeros(0)])
+    order = {"displacement": 0, "velocity": 1, "acceleration": 2}[quantity]
+
+    def evaluate(f: np.ndarray) -> np.ndarray:
+        h = source_responses(lin, sources, outputs, f, controller)  # (nf, outputs, sources)
+        gain = np.abs(h) ** 2 * (2 * np.pi * f[:, None, None]) ** (2 * order)
+        density = np.stack([np.asarray(s.density(f), dtype=float) for s in sources], axis=1)  # (nf, sources)
+        return np.asarray(gain * density[:, None, :])
+
+    f, psd = integrate_psd(evaluate, seed_grid(limits, poles, corners))
+    psd = psd.reshape(f.size, len(names), len(AXES), len(sources)).transpose(1, 2, 3, 0)
+    return ErrorBudget(quantity, limits, None if controller is None else str(controller.method), names,
+                       tuple(s.name for s in sources), f, psd, np.asarray(lin.positions, dtype=float))

@@ -1,0 +1,170 @@
+"""The error budget's result: every source's spectrum at every point and axis, their RMS, the total and the
+cumulative RMS (``docs/scenario-format.md``, "Error budget"), with its JSON, CSV and figure."""
+
+from __future__ import annotations
+
+import csv
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+__all__ = ["AXES", "QUANTITY_UNITS", "ErrorBudget"]
+
+#: the world axes of a point's motion
+AXES = ("x", "y", "z")
+#: SI unit of each quantity
+QUANTITY_UNITS = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
+
+
+@dataclass(frozen=True)
+class ErrorBudget:
+    """Random motion at the points: each source's power spectral density, RMS and share.
+
+    Attributes
+    ----------
+    quantity : {"displacement", "velocity", "acceleration"}
+        Of the points' absolute motion along world axes [m, m/s, m/s^2].
+    band : tuple of float
+        ``(low, high)`` [Hz] integrated over.
+    controller : str or None
+        The exported controller's ``method``, None for the passive table.
+    points : tuple of str
+        Point names (``table``: the mass centre of a scenario without ``[[points]]``).
+    sources : tuple of str
+        ``floor:x``, ``force:<name>``, ``actuator:<name>``, ``sensor:<name>``.
+    frequency : ndarray (nf,)
+        [Hz], increasing, from ``band[0]`` to ``band[1]`` (placed where the resonances and the sources'
+        corners are).
+    psd : ndarray (points, 3, sources, nf)
+        One-sided PSD of each source's part [SI^2/Hz].
+    positions : ndarray
+        The carriages' rest positions [m] the table was linearised at.
+    """
+
+    quantity: str
+    band: tuple[float, float]
+    controller: str | None
+    points: tuple[str, ...]
+    sources: tuple[str, ...]
+    frequency: np.ndarray
+    psd: np.ndarray
+    positions: np.ndarray
+
+    @property
+    def unit(self) -> str:
+        """SI unit of the quantity."""
+        return QUANTITY_UNITS[self.quantity]
+
+    @property
+    def total_psd(self) -> np.ndarray:
+        """(points, 3, nf) [SI^2/Hz]: the sum over the (uncorrelated) sources."""
+        return np.asarray(self.psd.sum(axis=2))
+
+    @property
+    def asd(self) -> np.ndarray:
+        """(points, 3, sources, nf) amplitude spectral density [SI/sqrt(Hz)]."""
+        return np.sqrt(self.psd)
+
+    @property
+    def source_rms(self) -> np.ndarray:
+        """(points, 3, sources) RMS of each source's part over the band [SI]."""
+        return np.sqrt(np.trapezoid(self.psd, self.frequency, axis=-1))
+
+    @property
+    def rms(self) -> np.ndarray:
+        """(points, 3) total RMS over the band [SI]: the root of the sum of the sources' squares."""
+        return np.sqrt(np.trapezoid(self.total_psd, self.frequency, axis=-1))
+
+    @property
+    def cumulative(self) -> np.ndarray:
+        """(points, 3, nf) RMS from the band's low edge up to each frequency [SI]; ends at :attr:`rms`."""
+        total = self.total_psd
+        steps = 0.5 * (total[..., 1:] + total[..., :-1]) * np.diff(self.frequency)
+        return np.sqrt(np.concatenate([np.zeros((*total.shape[:2], 1)), np.cumsum(steps, axis=-1)], axis=-1))
+
+    def value(self, point: str, axis: str, source: str | None = None) -> float:
+        """The RMS [SI] at ``point`` along ``axis``: the total, or one source's part.
+
+        Raises
+        ------
+        KeyError
+            An unknown point, axis or source (its message names the known ones).
+        """
+        i, j = self._index(point, axis)
+        if source is None:
+            return float(self.rms[i, j])
+        if source not in self.sources:
+            raise KeyError(f"source: no source named {source!r} (have: {', '.join(self.sources)})")
+        return float(self.source_rms[i, j, self.sources.index(source)])
+
+    def _index(self, point: str, axis: str) -> tuple[int, int]:
+        if point not in self.points:
+            raise KeyError(f"point: no point named {point!r} in the budget (have: {', '.join(self.points)})")
+        if axis not in AXES:
+            raise KeyError(f"axis: must be one of x, y, z, got {axis!r}")
+        return self.points.index(point), AXES.index(axis)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``isolator budget --json``: ``quantity``, ``band``, ``controller`` and ``points``
+        ``{point: {axis: {"rms": total, "sources": {source: rms}}}}`` [SI]."""
+        rms, parts = self.rms, self.source_rms
+        return {
+            "quantity": self.quantity,
+            "band": [float(self.band[0]), float(self.band[1])],
+            "controller": self.controller,
+            "points": {p: {a: {"rms": float(rms[i, j]),
+                               "sources": {s: float(parts[i, j, k]) for k, s in enumerate(self.sources)}}
+                           for j, a in enumerate(AXES)}
+                       for i, p in enumerate(self.points)},
+        }
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV's columns: ``frequency_hz``, then per point and axis ``<point>:<axis>:<source>`` (ASD
+        [SI/sqrt(Hz)]), ``<point>:<axis>:total`` (ASD) and ``<point>:<axis>:cumulative`` (RMS [SI])."""
+        out = {"frequency_hz": self.frequency}
+        asd, total, cumulative = self.asd, np.sqrt(self.total_psd), self.cumulative
+        for i, p in enumerate(self.points):
+            for j, a in enumerate(AXES):
+                for k, s in enumerate(self.sources):
+                    out[f"{p}:{a}:{s}"] = asd[i, j, k]
+                out[f"{p}:{a}:total"] = total[i, j]
+                out[f"{p}:{a}:cumulative"] = cumulative[i, j]
+        return out
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write :meth:`columns` to ``path`` (numbers at full precision); returns the path."""
+        columns = self.columns()
+        target = Path(path)
+        with open(target, "w", newline="") as handle:
+            writer = csv.writer(handle)
+            writer.writerow(list(columns))
+            for row in np.column_stack(list(columns.values())):
+                writer.writerow([repr(float(v)) for v in row])
+        return target
+
+    def summary_lines(self) -> list[str]:
+        """One line per point and axis: the total RMS and the largest source, in readable units."""
+        scale, unit = display_unit(self.quantity)
+        lines = []
+        rms, parts = self.rms, self.source_rms
+        for i, p in enumerate(self.points):
+            for j, a in enumerate(AXES):
+                k = int(np.argmax(parts[i, j])) if self.sources else -1
+                share = (parts[i, j, k] / rms[i, j]) ** 2 if k >= 0 and rms[i, j] > 0 else math.nan
+                largest = f"; largest {self.sources[k]} ({share:.0%} of the square)" if k >= 0 else ""
+                lines.append(f"{p}:{a}: {rms[i, j] * scale:.4g} {unit} RMS{largest}")
+        return lines
+
+    def plot(self, specification: dict[tuple[str, str], float] | None = None, title: str = "") -> Any:
+        """The budget's figure (:func:`isolator.analysis.budget.figure.budget_figure`); returns it."""
+        from .figure import budget_figure
+
+        return budget_figure(self, specification or {}, title)
+
+
+def display_unit(quantity: str) -> tuple[float, str]:
+    """The factor and unit figures and summaries show a quantity in: nm, µm/s, mm/s^2."""
+    return {"displacement": (1e9, "nm"), "velocity": (1e6, "µm/s"), "acceleration": (1e3, "mm/s²")}[quantity]

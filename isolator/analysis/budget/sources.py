@@ -1,0 +1,108 @@
+"""The random sources of an error budget and where each enters the linear model
+(``docs/scenario-format.md``, "Error budget: random disturbances and noise at the points").
+
+Every source is one scalar random signal, uncorrelated with every other, entering the table through a fixed
+vector of the linear model's inputs (``ground:*``, ``force:* / torque:*``, ``actuator:*``) or, for a sensor's
+noise, added to that sensor's reading at the controller's input.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from isolator.analysis.linear import LinearModel
+from isolator.model.rotations import pose_rotation
+from isolator.scenario.random_sources import SpectralDensity
+
+__all__ = ["Source", "budget_sources"]
+
+
+@dataclass(frozen=True)
+class Source:
+    """One random source.
+
+    Attributes
+    ----------
+    name : str
+        ``floor:x``, ``force:<disturbance>``, ``actuator:<name>`` or ``sensor:<name>``.
+    density : callable
+        Its one-sided PSD at frequencies [Hz], in the units of what it drives: floor translation [m^2/Hz],
+        force [N^2/Hz], sensor reading [SI^2/Hz].
+    corners : ndarray
+        Frequencies [Hz] where the density may jump or bend (grid points of the integration).
+    inputs : ndarray or None
+        The linear model's inputs it drives, one weight per input (None for a sensor's noise).
+    sensor : int or None
+        The sensor whose reading it adds to (a sensor's noise), else None.
+    """
+
+    name: str
+    density: Callable[[np.ndarray], np.ndarray]
+    corners: np.ndarray
+    inputs: np.ndarray | None = None
+    sensor: int | None = None
+
+
+def _floor(lin: LinearModel, axis: int, name: str) -> Source:
+    spectrum = lin.scenario.ground.spectrum  # type: ignore[union-attr]
+    letter = "xyz"[axis]
+
+    def density(f: np.ndarray) -> np.ndarray:  # velocity PSD over (2 pi f)^2: the floor's translation
+        f = np.asarray(f, dtype=float)
+        return np.asarray(spectrum.velocity_psd(letter, f)) / np.maximum(2 * np.pi * f, 1e-300) ** 2  # type: ignore
+
+    weights = np.zeros(len(lin.input_names))
+    weights[lin.input_names.index(f"ground:{letter}")] = 1.0
+    return Source(name, density, spectrum.edges, weights)  # type: ignore[union-attr]
+
+
+def _input(name: str, psd: SpectralDensity, weights: np.ndarray) -> Source:
+    return Source(name, psd, psd.corners, weights)
+
+
+def budget_sources(lin: LinearModel, sample_rate: float | None = None) -> tuple[Source, ...]:
+    """The scenario's random sources: the floor on each axis its ``[ground.spectrum]`` gives, every
+    ``[[disturbances]]`` entry, every actuator with a ``noise_psd`` and, with a controller sampling at
+    ``sample_rate`` [Hz], every sensor with noise (``noise`` or ``noise_psd``).
+
+    Parameters
+    ----------
+    lin : LinearModel
+        The parked table.
+    sample_rate : float, optional
+        The controller's rate [Hz]; None: passive (no sensor sources).
+
+    Returns
+    -------
+    tuple of Source
+        In that order.
+    """
+    scenario = lin.scenario
+    names = lin.input_names
+    out: list[Source] = []
+    spectrum = scenario.ground.spectrum if scenario.ground is not None else None
+    if spectrum is not None:
+        out += [_floor(lin, k, f"floor:{a}") for k, a in enumerate("xyz") if a in spectrum.values]
+    rot0 = pose_rotation(lin.equilibrium.pose[3:6])
+    first_force = names.index("force:x")
+    for d in scenario.disturbances:
+        direction = np.asarray(d.direction, dtype=float)
+        arm = rot0 @ np.asarray(d.position, dtype=float)
+        weights = np.zeros(len(names))
+        weights[first_force:first_force + 3] = direction
+        weights[first_force + 3:first_force + 6] = np.cross(arm, direction)
+        out.append(_input(f"force:{d.name}", d.psd, weights))
+    for act in scenario.actuators:
+        if act.noise_psd is not None:
+            weights = np.zeros(len(names))
+            weights[names.index(f"actuator:{act.name}")] = 1.0
+            out.append(_input(f"actuator:{act.name}", act.noise_psd, weights))
+    if sample_rate is not None:
+        for i, sensor in enumerate(scenario.sensors):
+            psd = sensor.noise_density(sample_rate)
+            if psd is not None:
+                out.append(Source(f"sensor:{sensor.name}", psd, psd.corners, None, i))
+    return tuple(out)
