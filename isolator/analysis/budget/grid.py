@@ -30,7 +30,7 @@ def seed_grid(band: tuple[float, float], poles: np.ndarray, corners: np.ndarray)
     damping, and on both sides of each corner [Hz]."""
     lo, hi = band
     decades = max(math.log10(hi / lo), 1e-3)
-    parts = [np.geomspace(lo, hi, max(int(math.ceil(decades * _PER_DECADE)) + 1, 3))]
+    parts = [np.geomspace(lo, hi, max(math.ceil(decades * _PER_DECADE) + 1, 3))]
     poles = np.asarray(poles, dtype=complex)
     wn = np.abs(poles)
     with np.errstate(invalid="ignore", divide="ignore"):

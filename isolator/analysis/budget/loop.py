@@ -136,7 +136,9 @@ def source_responses(lin: LinearModel, sources: Sequence[Source], outputs: Seque
     """
     f = np.asarray(frequency_hz, dtype=float)
     physical = [k for k, s in enumerate(sources) if s.inputs is not None]
-    w = np.stack([sources[k].inputs for k in physical], axis=1) if physical else np.zeros((len(lin.input_names), 0))
+    w = np.zeros((len(lin.input_names), len(physical)))
+    for column, k in enumerate(physical):
+        w[:, column] = np.asarray(sources[k].inputs)
     h = lin.frequency_response(f, None, outputs)  # (nf, outputs, inputs)
     out = np.zeros((f.size, len(outputs), len(sources)), dtype=complex)
     out[:, :, physical] = h @ w
