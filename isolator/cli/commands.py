@@ -8,6 +8,7 @@ from pathlib import Path
 from typing import Any
 
 from isolator.analysis.linear import LinearModel, linearise
+from isolator.cli.budget_command import register as register_budget
 from isolator.cli.calibrate_command import register as register_calibrate
 from isolator.cli.helpers import (
     check_memory,
@@ -15,6 +16,8 @@ from isolator.cli.helpers import (
     default_output,
     figure_path,
     output_path,
+    parse_positions,
+    read_controller,
     report,
     save_figure,
     scenario_argument,
@@ -111,6 +114,7 @@ def register(sub: Any) -> None:
     sub.add_parser("scenarios", help="list the bundled scenarios").set_defaults(handler=_scenarios)
     register_sequence(sub)
     register_calibrate(sub)
+    register_budget(sub)
 
 
 def _scenarios(args: argparse.Namespace) -> int:
@@ -131,18 +135,7 @@ def _linear_arguments(parser: argparse.ArgumentParser) -> None:
 
 def _linearised(args: argparse.Namespace) -> tuple[Scenario, LinearModel]:
     scenario = load_scenario(args.scenario)
-    positions = None
-    if args.position:
-        positions = {}
-        for item in args.position:
-            name, sep, value = item.partition("=")
-            try:
-                positions[name.strip()] = float(value)
-            except ValueError:
-                raise ParameterError(f"--position: expected NAME=Q with Q in metres, got '{item}'") from None
-            if not sep:
-                raise ParameterError(f"--position: expected NAME=Q with Q in metres, got '{item}'")
-    return scenario, linearise(scenario, positions=positions, time=args.time)
+    return scenario, linearise(scenario, positions=parse_positions(args.position), time=args.time)
 
 
 def _modes(args: argparse.Namespace) -> int:
@@ -226,17 +219,7 @@ def _controller_option(args: argparse.Namespace) -> DiscreteController | None:
         if args.noise:
             raise ParameterError("--noise: adds sensor noise to a controller's readings; give --controller DIR")
         return None
-    source = args.controller if args.controller.is_file() else args.controller / "controller.json"
-    try:
-        return DiscreteController.from_json(source)
-    except ParameterError as exc:
-        raise ParameterError(f"--controller: '{source}': {exc}") from None
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else f"{type(exc).__name__}: {exc}"
-        raise ParameterError(f"--controller: cannot read '{source}': {reason}") from None
-    except (KeyError, TypeError, AttributeError) as exc:
-        raise ParameterError(f"--controller: '{source}' is not a controller.json ({type(exc).__name__}: {exc})"
-                             ) from None
+    return read_controller(args.controller, "--controller")
 
 
 def _simulate(args: argparse.Namespace) -> int:

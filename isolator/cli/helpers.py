@@ -222,3 +222,37 @@ def _silence(prefix: str) -> list[tuple[logging.Logger, int]]:
     for logger in loggers:
         logger.setLevel(logging.CRITICAL + 1)
     return before
+
+
+def parse_positions(items: Sequence[str] | None, option: str = "--position") -> dict[str, float] | None:
+    """Carriage positions [m] from repeated ``NAME=Q`` options (None when none was given)."""
+    if not items:
+        return None
+    positions = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        try:
+            positions[name.strip()] = float(value)
+        except ValueError:
+            raise ParameterError(f"{option}: expected NAME=Q with Q in metres, got '{item}'") from None
+        if not sep:
+            raise ParameterError(f"{option}: expected NAME=Q with Q in metres, got '{item}'")
+    return positions
+
+
+def read_controller(path: Path, option: str) -> Any:
+    """The exported controller of a folder (its ``controller.json``) or a JSON file, every problem one
+    :class:`ParameterError` naming ``option``."""
+    from isolator.simulation.discrete_controller import DiscreteController
+
+    source = path if path.is_file() else path / "controller.json"
+    try:
+        return DiscreteController.from_json(source)
+    except ParameterError as exc:
+        raise ParameterError(f"{option}: '{source}': {exc}") from None
+    except (OSError, UnicodeDecodeError, ValueError) as exc:
+        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else f"{type(exc).__name__}: {exc}"
+        raise ParameterError(f"{option}: cannot read '{source}': {reason}") from None
+    except (KeyError, TypeError, AttributeError) as exc:
+        raise ParameterError(f"{option}: '{source}' is not a controller.json ({type(exc).__name__}: {exc})"
+                             ) from None

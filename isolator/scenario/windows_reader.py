@@ -28,5 +28,7 @@ def _read_window(r: KeyReader) -> Window:
     axes = r.raw("axes", list(WINDOW_AXES))
     if not isinstance(axes, list) or not all(isinstance(a, str) for a in axes):
         raise ScenarioError(f"{r.key('axes')}: must be a list of axis names among \"x\", \"y\", \"z\"")
+    random = number(r.raw("random"), r.key("random"), positive=True) if r.has("random") else None
+    r.used.add("random")
     r.finish()
-    return Window(point=point, translation=translation, axes=tuple(axes))
+    return Window(point=point, translation=translation, axes=tuple(axes), random=random)

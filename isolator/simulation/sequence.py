@@ -37,6 +37,7 @@ from isolator.simulation.stepping import (
     dense_stepper,
     staged_map,
 )
+from isolator.simulation.window_random import with_random_margins
 
 __all__ = ["MoveDesign", "SequenceResult", "StepResult", "run_sequence"]
 
@@ -192,7 +193,7 @@ class _Runner:
             if i not in moved:
                 moved[i] = self._moved(states, i)
             deviations.append(moved[i][axes] - settled[i, axes, None])
-            widths.append(w.translation)
+            widths.append(w.half_widths[:, None])
         return normalised(deviations, widths)
 
     def _moved(self, states: np.ndarray, i: int) -> np.ndarray:
@@ -267,6 +268,7 @@ def run_sequence(
     if not scenario.windows:
         raise ScenarioError("windows: a [sequence] needs at least one [[windows]] to tell when a step has settled")
     runner = _Runner(scenario, model, parameters)
+    runner.scenario = with_random_margins(scenario, runner.p)  # the windows less the random motion's room
     names = runner.names
     runner.check_tipping()
     runner.prepare(sequence.configurations(names))
@@ -328,7 +330,7 @@ def run_sequence(
         guess = max(found - stop, 0.0) * 1.03 + sequence.measure + 0.02
         q = target
         now += end
-    return SequenceResult.stitch(scenario, runner.model.kind, runner.model.variant.signals, runner.start.state,
+    return SequenceResult.stitch(runner.scenario, runner.model.kind, runner.model.variant.signals, runner.start.state,
                                  runner.arms, runner.origin, chunks, timeline, tuple(results),
                                  tuple(settled_points), unsettled)
 

@@ -239,7 +239,8 @@ class SequenceResult:
             "move_time": sum(s.move for s in self.steps if s.settled is not None),
             "settle_time": sum(settles), "settle_time_max": max(settles, default=None),
             "windows": [{"point": w.point, "translation": w.translation, "axes": list(w.axes)} for w in self.windows],
-        }
+        } | ({"window_random": [w.random_margins for w in self.windows]}
+             if any(w.random is not None for w in self.windows) else {})
 
     def write_steps(self, path: str | Path) -> Path:
         """Write ``step,start,stop,settled,end,move,settle`` [s] per step (empty where not settled)."""

@@ -15,7 +15,7 @@ import numpy as np
 __all__ = ["held_from", "normalised"]
 
 
-def normalised(deviations: list[np.ndarray], half_widths: list[float]) -> np.ndarray:
+def normalised(deviations: list[np.ndarray], half_widths: list[float] | list[np.ndarray]) -> np.ndarray:
     """Every window's listed-axis deviations (axes, N) [m] divided by its half-width, stacked (rows, N):
     every window holds where every row is within [-1, 1]."""
     rows = [np.atleast_2d(d) / w for d, w in zip(deviations, half_widths, strict=True)]

@@ -50,6 +50,7 @@ from isolator.simulation.stepping import (
 )
 from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
+from isolator.simulation.window_random import with_random_margins
 from isolator.simulation.window_settling import run_points
 
 __all__ = ["FeedbackLaw", "Method", "Simulator", "get_model", "simulate"]
@@ -261,6 +262,7 @@ class Simulator:
         """One run from the equilibria ``start`` (and ``end``, None if a carriage never stops) with
         ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
         grid = self.grid
+        windowed = with_random_margins(self.scenario, p, controller)  # before the run: a filled window is refused
         final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
@@ -338,7 +340,7 @@ class Simulator:
                                                                start, peaks_all, hold, resolved, fine())
 
         metrics, resolved, pneumatic = remeasure(Band.from_settling(self.scenario.settling) if band is None else band)
-        points, windows = run_points(self.scenario, self.model.kind, start.state, None if end is None else end.state,
+        points, windows = run_points(windowed, self.model.kind, start.state, None if end is None else end.state,
                                      self.stop_time, hold, fine, free)
 
         return Response(

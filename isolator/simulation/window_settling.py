@@ -35,11 +35,12 @@ def moves_per_hour(move_time: float | None, window_settling: float | None) -> fl
 
 
 def window_exit(
-    t: np.ndarray, deviation: np.ndarray, half_width: float, stop_time: float, hold: float = 0.0
+    t: np.ndarray, deviation: np.ndarray, half_width: float | np.ndarray, stop_time: float, hold: float = 0.0
 ) -> tuple[float | None, str]:
     """Window settling time [s] of deviations (axes, N) at times (N,): the last time at or after
-    ``stop_time`` at which ``|deviation| > half_width`` on any axis, minus ``stop_time`` (0 if never
-    outside after the stop), with the exit interpolated linearly between the grid times around it.
+    ``stop_time`` at which ``|deviation| > half_width`` on any axis (one half-width [m], or one per axis),
+    minus ``stop_time`` (0 if never outside after the stop), with the exit interpolated linearly between the
+    grid times around it.
 
     Returns the time and "" , or None and why the run cannot show it: the carriages never stop, the run
     ends before the stop, the point is outside at the end, or inside for less than ``hold`` [s] (the
@@ -53,16 +54,17 @@ def window_exit(
         return None, "the run ends before the carriages stop"
     first = int(np.searchsorted(t, stop_time - 1e-12))
     after = dev[:, first:]
-    outside = np.any(np.abs(after) > half_width, axis=0)
+    widths = np.broadcast_to(np.asarray(half_width, dtype=float), (dev.shape[0],))
+    outside = np.any(np.abs(after) > widths[:, None], axis=0)
     if not outside.any():
         return 0.0, ""
     if outside[-1]:
         return None, "outside the window at the end of the run (longer duration needed)"
     k = first + int(np.flatnonzero(outside)[-1])
     exit_time = float(t[k])
-    for d0, d1 in zip(dev[:, k], dev[:, k + 1], strict=True):
-        if abs(d0) > half_width:
-            edge = math.copysign(half_width, d0)
+    for d0, d1, width in zip(dev[:, k], dev[:, k + 1], widths, strict=True):
+        if abs(d0) > width:
+            edge = math.copysign(width, d0)
             exit_time = max(exit_time, float(t[k] + (t[k + 1] - t[k]) * (d0 - edge) / (d0 - d1)))
     exit_time = max(exit_time, stop_time)
     if t[-1] - exit_time < hold * (1 - 1e-9):
@@ -102,17 +104,22 @@ class WindowResult:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON keys ``window_settling_time`` (list, ``[[windows]]`` order), ``..._max`` and notes."""
-        return {
+        out: dict[str, Any] = {
             "window_settling_time": list(self.settling_time),
             "window_settling_time_max": self.settling_time_max,
             "window_notes": {f"windows[{i}]": r for i, r in enumerate(self.reasons) if r},
         }
+        if any(w.random is not None for w in self.windows):
+            out["window_random"] = [w.random_margins for w in self.windows]
+        return out
 
     def summary_lines(self) -> list[str]:
         lines = []
         for i, (w, st, why) in enumerate(zip(self.windows, self.settling_time, self.reasons, strict=True)):
             value = f"{st:.4g} s after the stop" if st is not None else f"not available ({why})"
-            lines.append(f"window {i} ({w.point}, ±{length_text(w.translation)} on {','.join(w.axes)}): {value}")
+            room = "" if not w.margin else f", less {w.random:g} sigma of random motion: ±" + ", ".join(
+                f"{length_text(h)} on {a}" for a, h in zip(w.axes, w.half_widths, strict=True))
+            lines.append(f"window {i} ({w.point}, ±{length_text(w.translation)} on {','.join(w.axes)}{room}): {value}")
         return lines
 
 
@@ -152,9 +159,9 @@ def window_result(
             st, why = None, "the carriages never stop"
         else:
             deviation = moved[i, axes] - points.settled[i, axes, None]
-            st, why = window_exit(t, deviation, w.translation, stop_time, 0.0 if tail else hold)
+            st, why = window_exit(t, deviation, w.half_widths, stop_time, 0.0 if tail else hold)
             if jacobian is not None and tail is not None and (st is not None or why.startswith("outside")):
-                verdict = tail.outputs(jacobian[i, axes]).judge(np.full(len(axes), w.translation))
+                verdict = tail.outputs(jacobian[i, axes]).judge(w.half_widths)
                 if verdict.leaves.any() or st is None:
                     st, why = None, _after_the_end(w, verdict, st is None, note)
         times.append(st)
@@ -176,6 +183,10 @@ def plot_windows(result: WindowResult, stop_time: float, title: str) -> Any:
             ax.plot(result.t, row * 1e9, lw=1.0, label=f"{w.point}:{axis}")
         h = w.translation * 1e9
         ax.axhspan(-h, h, color="tab:green", alpha=0.15, lw=0, label=f"window ±{length_text(w.translation)}")
+        if w.margin:
+            room = float(np.min(w.half_widths)) * 1e9
+            ax.axhspan(-room, room, color="tab:green", alpha=0.2, lw=0,
+                       label=f"less {w.random:g} sigma of random motion: ±{length_text(room * 1e-9)}")
         if math.isfinite(stop_time):
             ax.axvline(stop_time, color="0.5", ls=":", lw=1, label="carriages stop")
             if st is not None:

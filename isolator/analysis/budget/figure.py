@@ -8,12 +8,12 @@ from typing import Any
 
 import numpy as np
 
-from .result import AXES, ErrorBudget, display_unit
+from .units import AXES, display_unit
 
 __all__ = ["budget_figure"]
 
 
-def budget_figure(budget: ErrorBudget, specification: Mapping[tuple[str, str], float], title: str = "") -> Any:
+def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], title: str = "") -> Any:
     """Draw ``budget``; ``specification`` maps ``(point, axis)`` to an allowed RMS [SI] drawn on the cumulative
     axis. Returns the figure."""
     import matplotlib.pyplot as plt

@@ -36,9 +36,14 @@ __all__ = ["SampledController", "closed_loop_poles", "source_responses"]
 class SampledController(Protocol):
     """What the budget reads of an exported controller (:class:`isolator.DiscreteController`)."""
 
-    sample_rate: float
-    delay: bool
-    method: str
+    @property
+    def sample_rate(self) -> float: ...  # [Hz]
+
+    @property
+    def delay(self) -> bool: ...  # one sample of computation delay
+
+    @property
+    def method(self) -> str: ...  # the design's name
 
     def matrices(self, q: Sequence[float] | np.ndarray | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...

@@ -11,12 +11,10 @@ from typing import Any
 
 import numpy as np
 
+from .units import AXES, QUANTITY_UNITS, display_unit
+
 __all__ = ["AXES", "QUANTITY_UNITS", "ErrorBudget"]
 
-#: the world axes of a point's motion
-AXES = ("x", "y", "z")
-#: SI unit of each quantity
-QUANTITY_UNITS = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
 
 
 @dataclass(frozen=True)
@@ -164,7 +162,3 @@ class ErrorBudget:
 
         return budget_figure(self, specification or {}, title)
 
-
-def display_unit(quantity: str) -> tuple[float, str]:
-    """The factor and unit figures and summaries show a quantity in: nm, µm/s, mm/s^2."""
-    return {"displacement": (1e9, "nm"), "velocity": (1e6, "µm/s"), "acceleration": (1e3, "mm/s²")}[quantity]
