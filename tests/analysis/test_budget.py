@@ -3,13 +3,14 @@
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 
 import numpy as np
 import pytest
-from conftest import asymmetric_3d_dict, base_dict, make
 from scipy.linalg import solve_continuous_lyapunov
 
+from conftest import asymmetric_3d_dict, base_dict, make
 from isolator import linearise
 from isolator.analysis.budget import error_budget
 from isolator.errors import ParameterError, ScenarioError
@@ -34,7 +35,7 @@ def white_floor_acceleration(level: float, axes: str = "z") -> dict:
     of 1e-4 .. 1e6 Hz: a velocity PSD falling as 1/f^2, exact under log-log interpolation."""
     f = [1e-4, 1e6]
     values = [level / (2 * math.pi * x) ** 2 for x in f]
-    return {"spectrum": {"kind": "psd", "frequency": f, **{a: values for a in axes}}}
+    return {"spectrum": {"kind": "psd", "frequency": f, **dict.fromkeys(axes, values)}}
 
 
 def test_heave_under_white_floor_acceleration_matches_the_closed_form():
@@ -106,7 +107,8 @@ def test_shares_cumulative_and_quantities_are_consistent():
                                    rtol=1e-9, atol=0)
     # the JSON of the contract
     out = disp.to_dict()
-    assert out["quantity"] == "displacement" and out["controller"] is None
+    assert out["quantity"] == "displacement"
+    assert out["controller"] is None
     assert out["band"] == [0.1, 1000.0]
     assert out["points"]["lens"]["z"]["rms"] == pytest.approx(disp.value("lens", "z"))
     assert set(out["points"]["probe"]["y"]["sources"]) == set(disp.sources)
@@ -118,8 +120,9 @@ def test_vc_floor_is_the_class_limit_in_each_third_octave_band():
     scenario = make(heave_dict(ground={"spectrum": {"vc": "VC-C"}}))
     spectrum = scenario.ground.spectrum
     edges = spectrum.edges
-    assert edges[0] == pytest.approx(0.891, rel=1e-3) and edges[-1] == pytest.approx(89.1, rel=1e-3)
-    for low, high in zip(edges[:-1], edges[1:], strict=True):
+    assert edges[0] == pytest.approx(0.891, rel=1e-3)
+    assert edges[-1] == pytest.approx(89.1, rel=1e-3)
+    for low, high in itertools.pairwise(edges):
         f = np.linspace(low * (1 + 1e-9), high * (1 - 1e-9), 2001)
         band_rms = math.sqrt(np.trapezoid(spectrum.velocity_psd("z", f), f))
         assert band_rms == pytest.approx(12.5e-6, rel=1e-6)

@@ -8,8 +8,8 @@ import subprocess
 import sys
 
 import pytest
-from conftest import base_dict, make
 
+from conftest import base_dict, make
 from isolator import simulate
 from isolator.analysis.budget import error_budget
 from isolator.errors import ScenarioError
@@ -67,7 +67,8 @@ def test_the_command_refuses_a_filled_window_in_one_line(tmp_path):
     run = subprocess.run([sys.executable, "-m", "isolator.cli", "simulate", str(path), "--out", str(out), "--json"],
                          capture_output=True, text=True, check=False)
     assert run.returncode == 2
-    assert run.stderr.strip().count("\n") == 0 and "windows[0]: the random motion alone fills it" in run.stderr
+    assert run.stderr.strip().count("\n") == 0
+    assert "windows[0]: the random motion alone fills it" in run.stderr
     assert not out.exists()
     run = subprocess.run([sys.executable, "-m", "isolator.cli", "budget", str(path), "--json"],
                          capture_output=True, text=True, check=True)
