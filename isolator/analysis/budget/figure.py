@@ -3,6 +3,7 @@ total on log-log axes, the cumulative RMS on a second axis, and the specificatio
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -11,6 +12,9 @@ import numpy as np
 from .units import AXES, display_unit
 
 __all__ = ["budget_figure"]
+
+#: sources drawn one by one in a panel (the largest); the others as one curve
+_SHOWN = 6
 
 
 def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], title: str = "") -> Any:
@@ -25,7 +29,7 @@ def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], t
     f = budget.frequency
     asd, total, cumulative, rms = budget.asd, np.sqrt(budget.total_psd), budget.cumulative, budget.rms
     parts = budget.source_rms
-    colours = plt.get_cmap("tab10")
+    colours = plt.get_cmap("tab10")  # by rank within a panel
     floor_value = max(float(total.max(initial=0.0)) * scale * 1e-8, 1e-30)
 
     def shown(curve: np.ndarray) -> np.ndarray:  # zero outside a source's range: a gap, not a cliff
@@ -33,11 +37,16 @@ def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], t
     for i, point in enumerate(budget.points):
         for j, axis in enumerate(AXES):
             ax = axes[i, j]
-            for k, source in enumerate(budget.sources):
-                curve = asd[i, j, k] * scale
-                if np.any(curve > floor_value):
-                    ax.loglog(f, shown(curve), lw=1.0, color=colours(k % 10),
-                              label=f"{source} ({parts[i, j, k] * scale:.3g} {unit})")
+            ranked = [int(k) for k in np.argsort(parts[i, j])[::-1] if parts[i, j, k] > 0]
+            for rank, k in enumerate(ranked[:_SHOWN]):
+                ax.loglog(f, shown(asd[i, j, k] * scale), lw=1.0, color=colours(rank % 10),
+                          label=f"{budget.sources[k]} ({parts[i, j, k] * scale:.3g} {unit})")
+            rest = ranked[_SHOWN:]
+            if rest:
+                lumped = np.sqrt(np.sum(budget.psd[i, j, rest], axis=0))
+                share = math.sqrt(float(np.sum(parts[i, j, rest] ** 2)))
+                ax.loglog(f, shown(lumped * scale), lw=1.0, color="0.55", ls="-.",
+                          label=f"{len(rest)} other sources together ({share * scale:.3g} {unit})")
             ax.loglog(f, shown(total[i, j] * scale), color="k", lw=2.0,
                       label=f"total ({rms[i, j] * scale:.3g} {unit} RMS)")
             ax.set_xlabel("frequency [Hz]")
@@ -56,7 +65,9 @@ def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], t
             ax.set_title(f"{point}: {axis}", fontsize=10)
             handles, labels = ax.get_legend_handles_labels()
             more, more_labels = twin.get_legend_handles_labels()
-            ax.legend(handles + more, labels + more_labels, fontsize=7, loc="lower left")
+            ax.legend(handles + more, labels + more_labels, fontsize=7, loc="upper right")
+            top = float(np.nanmax(total[i, j])) * scale if total[i, j].size else 1.0
+            ax.set_ylim(max(top * 1e-7, floor_value), top * 30)
     loop = "passive table" if budget.controller is None else f"closed loop ({budget.controller})"
     fig.suptitle(title or f"Error budget: {budget.quantity} at the points, {loop}, "
                           f"{budget.band[0]:g} to {budget.band[1]:g} Hz")
