@@ -3,7 +3,6 @@ total on log-log axes, the cumulative RMS on a second axis, and the specificatio
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from typing import Any
 
@@ -13,7 +12,7 @@ from .units import AXES, display_unit
 
 __all__ = ["budget_figure"]
 
-#: sources drawn one by one in a panel (the largest); the others as one curve
+#: sources of a panel drawn in colour with their own legend entry (the largest); the others thin and grey
 _SHOWN = 6
 
 
@@ -42,11 +41,9 @@ def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], t
                 ax.loglog(f, shown(asd[i, j, k] * scale), lw=1.0, color=colours(rank % 10),
                           label=f"{budget.sources[k]} ({parts[i, j, k] * scale:.3g} {unit})")
             rest = ranked[_SHOWN:]
-            if rest:
-                lumped = np.sqrt(np.sum(budget.psd[i, j, rest], axis=0))
-                share = math.sqrt(float(np.sum(parts[i, j, rest] ** 2)))
-                ax.loglog(f, shown(lumped * scale), lw=1.0, color="0.55", ls="-.",
-                          label=f"{len(rest)} other sources together ({share * scale:.3g} {unit})")
+            for n, k in enumerate(rest):  # every source is drawn; the smaller ones thin and grey, one legend entry
+                ax.loglog(f, shown(asd[i, j, k] * scale), lw=0.6, color="0.6",
+                          label=f"{len(rest)} smaller sources, each" if n == 0 else None)
             ax.loglog(f, shown(total[i, j] * scale), color="k", lw=2.0,
                       label=f"total ({rms[i, j] * scale:.3g} {unit} RMS)")
             ax.set_xlabel("frequency [Hz]")
@@ -69,6 +66,6 @@ def budget_figure(budget: Any, specification: Mapping[tuple[str, str], float], t
             top = float(np.nanmax(total[i, j])) * scale if total[i, j].size else 1.0
             ax.set_ylim(max(top * 1e-7, floor_value), top * 30)
     loop = "passive table" if budget.controller is None else f"closed loop ({budget.controller})"
-    fig.suptitle(title or f"Error budget: {budget.quantity} at the points, {loop}, "
-                          f"{budget.band[0]:g} to {budget.band[1]:g} Hz")
+    fig.suptitle(f"{title or 'Error budget'}: {budget.quantity} at the points, {loop}, "
+                 f"{budget.band[0]:g} to {budget.band[1]:g} Hz")
     return fig
