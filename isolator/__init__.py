@@ -15,6 +15,7 @@ and vibration-criteria class.
 
 from __future__ import annotations
 
+from isolator.analysis.budget import ErrorBudget, error_budget
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.modes import Modes, modes, modes_over_travel
 from isolator.analysis.pneumatic import EquivalentSpringDamper, equivalent_spring_damper
@@ -81,6 +82,7 @@ __all__ = [
     "Carriage",
     "Equilibrium",
     "EquivalentSpringDamper",
+    "ErrorBudget",
     "FloorSpectrum",
     "FrequencyResponse",
     "Ground",
@@ -124,6 +126,7 @@ __all__ = [
     "calibrate",
     "compliance",
     "equivalent_spring_damper",
+    "error_budget",
     "get_model",
     "linearise",
     "load_scenario",

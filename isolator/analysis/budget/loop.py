@@ -34,7 +34,8 @@ __all__ = ["SampledController", "closed_loop_poles", "source_responses"]
 
 
 class SampledController(Protocol):
-    """What the budget reads of an exported controller (:class:`isolator.DiscreteController`)."""
+    """What the budget reads of an exported controller
+    (:class:`~isolator.simulation.discrete_controller.DiscreteController`)."""
 
     @property
     def sample_rate(self) -> float: ...  # [Hz]
