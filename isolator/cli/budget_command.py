@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 from pathlib import Path
 from typing import Any
 
@@ -20,6 +21,10 @@ from isolator.cli.helpers import (
 from isolator.errors import ParameterError
 
 __all__ = ["parse_band", "register"]
+
+#: an error's leading argument name and the option that gave it
+_OPTIONS = {"band": "--band", "points": "--points", "positions": "--position", "controller": "--controller"}
+_OPTION = re.compile(r"^(band|points|positions|controller)(?:\.([^:\s]+))?(?=[:.\[])")
 
 
 def register(sub: Any) -> None:
@@ -75,14 +80,9 @@ def _budget(args: argparse.Namespace) -> int:
     controller = None if args.controller is None else read_controller(args.controller, "--controller")
     try:
         budget = error_budget(scenario, controller, points, args.quantity, band, parse_positions(args.position))
-    except ParameterError as exc:
-        message = str(exc)
-        for key, option in (("band:", "--band:"), ("points:", "--points:"), ("positions", "--position"),
-                            ("controller", "--controller")):
-            if message.startswith(key):
-                raise ParameterError(option + message[len(key.rstrip(":")) + (1 if key.endswith(":") else 0):]
-                                     ) from None
-        raise
+    except ParameterError as exc:  # the API's argument names as the command's options
+        raise ParameterError(_OPTION.sub(lambda m: _OPTIONS[m.group(1)] + (f" {m.group(2)}" if m.group(2) else ""),
+                                         str(exc), count=1)) from None
     if out:
         budget.to_csv(out)
     if plot is not None:
