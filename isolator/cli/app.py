@@ -26,6 +26,7 @@ import numpy as np
 
 from isolator.cli import commands, sweep_command
 from isolator.errors import IsolatorError
+from isolator.scenario.names import escaped
 
 __all__ = ["ENTRY_POINT_GROUP", "build_parser", "main"]
 
@@ -37,7 +38,7 @@ class _Parser(argparse.ArgumentParser):
     """A parser whose errors are one line naming the subcommand's help (its subparsers are of this class)."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"isolator: error: {message} (see '{self.prog} --help')\n")
+        self.exit(2, f"isolator: error: {escaped(message)} (see '{self.prog} --help')\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -62,7 +63,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:  # an option of another subcommand (or none): name the subcommand whose help lists the real ones
         prog = " ".join(["isolator", args.command, *([args.study] if getattr(args, "study", None) else [])])
-        parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {' '.join(extra)} "
+        parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {escaped(' '.join(extra))} "
                     f"(see '{prog} --help')\n")
     with warnings.catch_warnings(record=True) as caught:  # the filters as they are (deprecations stay hidden)
         warnings.simplefilter("always", RuntimeWarning)
@@ -95,17 +96,17 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _error(message: str) -> int:
-    print(f"isolator: error: {message}", file=sys.stderr)
+    print(f"isolator: error: {escaped(message)}", file=sys.stderr)  # what an input put there cannot drive the terminal
     return 2
 
 
 def _summarise(caught: list[warnings.WarningMessage]) -> None:
     """One line per distinct warning; numpy's floating-point warnings summed up in one line."""
     numeric = [w for w in caught if issubclass(w.category, RuntimeWarning) and "encountered" in str(w.message)]
-    for text in dict.fromkeys(str(w.message) for w in caught if w not in numeric):
+    for text in dict.fromkeys(escaped(w.message) for w in caught if w not in numeric):
         print(f"isolator: warning: {text}", file=sys.stderr)
     if numeric:
-        first = str(numeric[0].message)
+        first = escaped(numeric[0].message)
         print(f"isolator: warning: numpy warned {len(numeric)} time(s) ('{first}'): some inputs are of extreme "
               "magnitude; check the results", file=sys.stderr)
 

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from isolator.errors import ParameterError
+from isolator.scenario.names import escaped
 from isolator.scenario.reader import DEFAULT_SCENARIO
 from isolator.simulation.resources import available_memory, check_memory, check_run_memory
 
@@ -203,7 +204,7 @@ def scheduler_client(args: argparse.Namespace) -> Iterator[Any]:
             warnings.simplefilter("always")
             client = connect(args.scheduler, security, names=CLI_NAMES)
         for w in caught:
-            print(f"isolator: warning: {w.message}", file=sys.stderr, flush=True)
+            print(f"isolator: warning: {escaped(w.message)}", file=sys.stderr, flush=True)
         try:
             yield client
         finally:

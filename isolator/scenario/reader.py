@@ -32,6 +32,7 @@ from isolator.scenario.definitions import (
 )
 from isolator.scenario.field_checks import register_field_checks
 from isolator.scenario.keys import KeyReader, load_toml, number, number_list, table_of_tables
+from isolator.scenario.names import MAX_NAME, escaped
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
@@ -115,7 +116,7 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     7.9
     """
     path = resolve_scenario_path(spec)
-    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=path.stem)
+    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=escaped(path.stem)[:MAX_NAME].strip())
 
 
 def scenario_from_dict(
@@ -138,7 +139,7 @@ def scenario_from_dict(
 
 def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: str) -> Scenario:
     top = KeyReader(data, "")
-    name = top.string("name", default_name)
+    name = top.string("name", default_name or "scenario")
     gravity = top.number("gravity", 9.81, nonnegative=True)
     table = _read_table(KeyReader(top.raw("table"), "table"))
     read = tuple(

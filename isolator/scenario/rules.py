@@ -29,6 +29,7 @@ import numpy as np
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
+from isolator.scenario.names import check_scenario_names
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 
 __all__ = [
@@ -356,10 +357,12 @@ _VECTOR_LENGTHS = {"table.inertia": 3, "table.size": 3, "carriages.axis": 3, "ca
 
 
 def check_scenario_values(scenario: Scenario) -> None:
-    """Every number of a scenario (however it was built) by :data:`RULES`; one :class:`ScenarioError` naming the key.
+    """Every name (:func:`check_scenario_names`) and number (by :data:`RULES`) of a scenario, however it was built;
+    one :class:`ScenarioError` naming the key.
 
     For scenarios built from the dataclasses directly: the file reader checks the same rules key by key.
     """
+    check_scenario_names(scenario)
     vectors: dict[str, list[float]] = {}
     for key, value in scenario_values(scenario):
         x = check_value(key, value)
