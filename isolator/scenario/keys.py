@@ -15,6 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from isolator.errors import ScenarioError
+from isolator.scenario.files import read_input
 
 __all__ = ["TOP_LEVEL_KEYS", "KeyReader", "load_toml", "number", "number_list", "table_of_tables"]
 
@@ -27,15 +28,13 @@ TOP_LEVEL_KEYS = ("name", "gravity", "table", "isolators", "air", "leveling", "s
                   "sensors")
 
 
-def load_toml(path: Path) -> dict[str, Any]:
-    """A TOML file's keys; a file that is not UTF-8, has a byte-order mark, is empty, is not valid TOML
-    or nests too deeply is a :class:`ScenarioError` naming the file (and the line)."""
-    try:
-        raw = path.read_bytes()
-    except IsADirectoryError:
-        raise ScenarioError(f"{path}: is a folder, not a scenario file") from None
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot be read ({exc.strerror})") from None
+def load_toml(path: Path, what: str = "scenario file") -> dict[str, Any]:
+    """A TOML file's keys; a file that is not a regular one (:func:`~isolator.scenario.files.read_input`, named
+    as ``what``), is not UTF-8, has a byte-order mark, is empty, is not valid TOML or nests too deeply is a
+    :class:`ScenarioError` naming the file (and the line)."""
+    if path.is_dir():
+        raise ScenarioError(f"{path}: is a folder, not a {what}")
+    raw = read_input(path, what)
     if raw.startswith(b"\xef\xbb\xbf"):
         raise ScenarioError(f"{path}: starts with a byte-order mark (BOM), which TOML does not allow; "
                             "save it as UTF-8 without BOM")

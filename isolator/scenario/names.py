@@ -19,10 +19,12 @@ from typing import Any
 
 from isolator.errors import ScenarioError
 
-__all__ = ["MAX_NAME", "check_name", "check_names", "check_scenario_names", "escaped"]
+__all__ = ["EXCERPT", "MAX_NAME", "check_name", "check_names", "check_scenario_names", "escaped", "excerpt"]
 
 #: the longest name [characters]
 MAX_NAME = 100
+#: the most of a file's text (a header, a cell) a message quotes [characters]
+EXCERPT = 24
 
 
 def escaped(text: object, limit: int | None = None) -> str:
@@ -42,6 +44,12 @@ def escaped(text: object, limit: int | None = None) -> str:
         text = text[:limit]
     out = text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
     return out + "..." if cut else out
+
+
+def excerpt(text: object) -> str:
+    """What a message quotes of a file's text (a header, a cell): at most :data:`EXCERPT` characters,
+    escaped (:func:`escaped`)."""
+    return escaped(text, EXCERPT)
 
 
 def check_name(name: object, key: str, *, optional: bool = False) -> str:

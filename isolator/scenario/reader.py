@@ -78,7 +78,7 @@ def resolve_scenario_path(spec: str | Path | None) -> Path:
     if spec is None:
         spec = DEFAULT_SCENARIO
     path = Path(spec)
-    if path.is_file():
+    if path.exists() and not path.is_dir():  # a FIFO or a device too: load_toml refuses it, naming what it is
         return path
     if path.is_dir():
         raise ScenarioError(f"{spec}: is a folder, not a scenario file")

@@ -28,8 +28,8 @@ import numpy as np
 
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.definitions import Isolator, Scenario
-from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.names import check_scenario_names
+from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 
 __all__ = [
