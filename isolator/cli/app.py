@@ -16,9 +16,12 @@ is one error line as well, never a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
+import threading
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from importlib.metadata import entry_points, version
 from typing import NoReturn
 
@@ -65,8 +68,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         prog = " ".join(["isolator", args.command, *([args.study] if getattr(args, "study", None) else [])])
         parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {escaped(' '.join(extra))} "
                     f"(see '{prog} --help')\n")
-    with warnings.catch_warnings(record=True) as caught:  # the filters as they are (deprecations stay hidden)
-        warnings.simplefilter("always", RuntimeWarning)
+    with warnings.catch_warnings(record=True) as caught, _terminated_as_interrupted():  # the filters as they
+        warnings.simplefilter("always", RuntimeWarning)  # are (deprecations stay hidden)
         status = _run(args)
     if status in (0, 3):
         _summarise(caught)
@@ -90,9 +93,34 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     except OSError as exc:  # writing an output (the paths were checked before any work)
         return _error(f"{exc.filename or 'output'}: {exc.strerror or exc}")
+    except Terminated:
+        print("isolator: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         print("isolator: interrupted", file=sys.stderr)
         return 130
+
+
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, so that it ends as an interrupt (Ctrl-C) does: a sweep stops its
+    workers and keeps its rows."""
+
+
+@contextlib.contextmanager
+def _terminated_as_interrupted() -> Iterator[None]:
+    """SIGTERM raises :class:`Terminated` while a command runs (in the main thread only: signals go there)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def raise_terminated(signum: int, frame: object) -> None:
+        raise Terminated
+
+    before = signal.signal(signal.SIGTERM, raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
 
 
 def _error(message: str) -> int:

@@ -18,6 +18,7 @@ from isolator.cli.helpers import (
     report,
     save_figure,
     scenario_argument,
+    seed,
     use_agg,
 )
 from isolator.cli.sequence_command import register as register_sequence
@@ -55,7 +56,7 @@ def register(sub: Any) -> None:
                      "scenario's sensors and actuators")
     sim.add_argument("--noise", action="store_true",
                      help="with --controller: add each sensor's noise (its 'noise' RMS per sample) to its readings")
-    sim.add_argument("--seed", type=int, default=0, metavar="N", help="seed of --noise (default 0)")
+    sim.add_argument("--seed", type=seed, default=0, metavar="N", help="seed of --noise (default 0)")
     band = sim.add_mutually_exclusive_group()
     band.add_argument("--band", metavar="x=M,y=M,z=M,rx=RAD,ry=RAD,rz=RAD",
                       help="settling band: six absolute half-widths [m, rad], e.g. a study's 'band' column "

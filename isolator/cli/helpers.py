@@ -41,6 +41,7 @@ __all__ = [
     "scenario_argument",
     "scheduler_arguments",
     "scheduler_client",
+    "seed",
     "use_agg",
 ]
 
@@ -87,6 +88,14 @@ def count(text: str) -> int:
     if not math.isfinite(value) or value != int(value):
         raise argparse.ArgumentTypeError(f"expected a whole number, got '{text}'")
     return int(value)
+
+
+def seed(text: str) -> int:
+    """An argparse type: a random seed, a whole number from 0 to 2**32 - 1 (numpy's seeds are not negative)."""
+    value = count(text)
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 0 to {2**32 - 1}, got '{text}'")
+    return value
 
 
 def use_agg() -> None:

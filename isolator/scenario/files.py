@@ -15,7 +15,6 @@ import contextlib
 import os
 import stat
 from collections.abc import Iterator
-from pathlib import Path
 from typing import BinaryIO
 
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
