@@ -233,8 +233,9 @@ def _controller_option(args: argparse.Namespace) -> DiscreteController | None:
     source = args.controller if args.controller.is_file() else args.controller / "controller.json"
     try:
         return DiscreteController.from_json(source)
-    except ParameterError as exc:
-        raise ParameterError(f"--controller: '{source}': {exc}") from None
+    except ParameterError as exc:  # the reading's own errors start with the path
+        named = str(exc).startswith(escaped(source, 120))
+        raise ParameterError(f"--controller: {exc}" if named else f"--controller: '{source}': {exc}") from None
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else f"{type(exc).__name__}: {exc}"
         raise ParameterError(f"--controller: cannot read '{source}': {reason}") from None

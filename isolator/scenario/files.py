@@ -78,7 +78,7 @@ def _opened(path: str | os.PathLike[str], key: str, error: type[IsolatorError], 
     try:  # O_NONBLOCK: opening a FIFO with no writer returns at once rather than waiting for one
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
-        raise error(f"{where}: no such file") from None
+        raise error(f"{where}: cannot read (no such file)") from None
     except IsADirectoryError:
         raise error(f"{where}: is a folder, not a file") from None
     except OSError as exc:
