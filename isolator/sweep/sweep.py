@@ -25,7 +25,7 @@ from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
 from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
 from isolator.sweep.pool import SweepPool
-from isolator.sweep.progress import progress_bar
+from isolator.sweep.progress import progress_bar, worker_notice
 from isolator.sweep.result import SweepResult, Tally
 from isolator.sweep.runner import run_chunks
 from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key, simulator_for
@@ -262,7 +262,7 @@ def sweep(
         complete = False
         try:
             run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew,
-                       _alive(pool))
+                       _alive(pool, worker_notice(progress)))
             complete = True
         except ExecutorError as exc:
             kept = f"the {tally.resumed + tally.runs} rows done are kept in '{path}'" if path is not None else \
@@ -340,12 +340,18 @@ def _close(client: Any) -> None:
         client.close(timeout=2)
 
 
-def _alive(executor: Executor | None) -> Callable[[], bool] | None:
-    """Whether a Dask executor's client still talks to its scheduler (None: an executor that cannot tell)."""
+def _alive(executor: Executor | None, notice: Callable[[Any], None]) -> Callable[[], bool] | None:
+    """Whether a Dask executor's client still talks to its scheduler (None: an executor that cannot tell);
+    ``notice`` is told of the client each time (a cluster without workers, said once)."""
     client = getattr(executor, "_client", None)
     if client is None or not hasattr(client, "status"):
         return None
-    return lambda: str(client.status) in ("running", "connecting", "newly-created")
+
+    def alive() -> bool:
+        notice(client)
+        return str(client.status) in ("running", "connecting", "newly-created")
+
+    return alive
 
 
 def _workers(workers: int | None, executor: Executor | Callable[[], Executor] | None) -> int:
