@@ -110,9 +110,15 @@ class KeyReader:
         positive: bool = False,
         nonnegative: bool = False,
         below: float | None = None,
+        rule: Any = None,
     ) -> float:
-        value = self.raw(name, default)
-        return number(value, self.key(name), positive=positive, nonnegative=nonnegative, below=below)
+        """The number at ``name``: finite, and as asked (``rule``: a :class:`~isolator.scenario.rules.Rule`)."""
+        value = number(self.raw(name, default), self.key(name), positive=positive, nonnegative=nonnegative,
+                       below=below)
+        problem = None if rule is None else rule.problem(value)
+        if problem is not None:
+            raise ScenarioError(f"{self.key(name)}: {problem}")
+        return value
 
     def vector(
         self, name: str, default: Any = ..., *, positive: bool = False, nonnegative: bool = False

@@ -37,7 +37,7 @@ from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
-from isolator.scenario.rules import check_scenario_values
+from isolator.scenario.rules import MOTION, check_scenario_values
 from isolator.scenario.sensors import read_sensors
 from isolator.scenario.sequence import StepSequence, held, read_sequence
 from isolator.scenario.tables import (
@@ -266,20 +266,20 @@ def _read_profile(r: KeyReader, base_dir: Path) -> Profile:
         common = {
             "start": r.number("start"),
             "stroke": r.number("stroke"),
-            "velocity": r.number("velocity", positive=True),
-            "acceleration": r.number("acceleration", positive=True),
+            "velocity": r.number("velocity", rule=MOTION),
+            "acceleration": r.number("acceleration", rule=MOTION),
             "t0": r.number("t0", 0.0, nonnegative=True),
         }
         if kind == "trapezoid":
-            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
+            dec = r.number("deceleration", rule=MOTION) if r.has("deceleration") else None
             r.used.add("deceleration")
             prof = trapezoid(deceleration=dec, **common)
         else:
-            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
-            jerk_down = r.number("deceleration_jerk", positive=True) if r.has("deceleration_jerk") else None
+            dec = r.number("deceleration", rule=MOTION) if r.has("deceleration") else None
+            jerk_down = r.number("deceleration_jerk", rule=MOTION) if r.has("deceleration_jerk") else None
             r.used.update(("deceleration", "deceleration_jerk"))
             prof = scurve(
-                jerk=r.number("jerk", positive=True), deceleration=dec, deceleration_jerk=jerk_down, **common
+                jerk=r.number("jerk", rule=MOTION), deceleration=dec, deceleration_jerk=jerk_down, **common
             )
     elif kind == "samples":
         t, q = read_samples(r, base_dir)
@@ -316,7 +316,7 @@ def _read_carriage(r: KeyReader, base_dir: Path, sequence: StepSequence | None) 
 
 def _read_limits(r: KeyReader) -> MotionLimits:
     keys = ("velocity", "acceleration", "jerk")
-    values = {k: r.number(k, positive=True) if r.has(k) else None for k in keys}
+    values = {k: r.number(k, rule=MOTION) if r.has(k) else None for k in keys}
     r.used.update(keys)
     r.finish()
     return MotionLimits(**values)
