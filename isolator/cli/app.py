@@ -28,6 +28,7 @@ from typing import NoReturn
 import numpy as np
 
 from isolator.cli import commands, sweep_command
+from isolator.cli.helpers import MADE_FOLDERS, remove_made_folders
 from isolator.errors import IsolatorError
 from isolator.scenario.names import escaped
 
@@ -68,9 +69,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         prog = " ".join(["isolator", args.command, *([args.study] if getattr(args, "study", None) else [])])
         parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {escaped(' '.join(extra))} "
                     f"(see '{prog} --help')\n")
+    MADE_FOLDERS.clear()
     with warnings.catch_warnings(record=True) as caught, _terminated_as_interrupted():  # the filters as they
         warnings.simplefilter("always", RuntimeWarning)  # are (deprecations stay hidden)
         status = _run(args)
+    if status not in (0, 3):  # a refused command leaves no folder behind it made for its outputs
+        remove_made_folders()
+    MADE_FOLDERS.clear()
     if status in (0, 3):
         _summarise(caught)
     return status

@@ -27,6 +27,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CLI_NAMES",
+    "MADE_FOLDERS",
     "Handler",
     "available_memory",
     "check_memory",
@@ -36,6 +37,7 @@ __all__ = [
     "figure_path",
     "output_folder",
     "output_path",
+    "remove_made_folders",
     "report",
     "save_figure",
     "scenario_argument",
@@ -51,6 +53,16 @@ Handler = Callable[[argparse.Namespace], int]
 NAME_LENGTH = 100
 #: how much of a path an error message quotes
 QUOTED = 60
+#: the folders :func:`output_folder` made for the command running now, deepest first
+MADE_FOLDERS: list[Path] = []
+
+
+def remove_made_folders() -> None:
+    """Remove the folders the failed command made (those still empty), deepest first; forget them all."""
+    for folder in MADE_FOLDERS:
+        with contextlib.suppress(OSError):
+            folder.rmdir()  # only an empty one: nothing the command or anyone else wrote is removed
+    MADE_FOLDERS.clear()
 
 
 def default_output(name: str, suffix: str) -> Path:
@@ -106,11 +118,14 @@ def use_agg() -> None:
 
 
 def output_folder(path: Path, option: str) -> Path:
-    """A folder to write into, made if missing; a :class:`ParameterError` naming ``option`` if it cannot be."""
+    """A folder to write into, made if missing (recorded in :data:`MADE_FOLDERS`: a command that fails removes
+    them again, :func:`remove_made_folders`); a :class:`ParameterError` naming ``option`` if it cannot be."""
     if path.exists() and not path.is_dir():
         raise ParameterError(f"{option}: '{path}' is a file, not a folder")
+    missing = [folder for folder in (path, *path.parents) if not folder.exists()]  # deepest first
     try:
         path.mkdir(parents=True, exist_ok=True)
+        MADE_FOLDERS.extend(missing)
     except OSError as exc:
         raise ParameterError(f"{option}: cannot make the folder '{path}' ({exc.strerror})") from None
     if not os.access(path, os.W_OK | os.X_OK):

@@ -77,12 +77,11 @@ def _opened(path: str | os.PathLike[str], key: str, error: type[IsolatorError], 
     where = f"{key}: '{escaped(path, _PATH)}'" if key else escaped(path, _PATH)
     try:  # O_NONBLOCK: opening a FIFO with no writer returns at once rather than waiting for one
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
-    except FileNotFoundError:
-        raise error(f"{where}: cannot read (no such file)") from None
-    except IsADirectoryError:
-        raise error(f"{where}: is a folder, not a file") from None
-    except OSError as exc:
-        raise error(f"{where}: cannot be read ({exc.strerror or type(exc).__name__})") from None
+    except OSError as exc:  # as "key: cannot read 'path' (reason)"
+        reason = "no such file" if isinstance(exc, FileNotFoundError) else \
+            "a folder, not a file" if isinstance(exc, IsADirectoryError) else exc.strerror or type(exc).__name__
+        shown = escaped(path, _PATH)
+        raise error(f"{key}: cannot read '{shown}' ({reason})" if key else f"{shown}: cannot read ({reason})") from None
     with os.fdopen(fd, "rb") as handle:
         info = os.fstat(fd)  # of what was opened, not of what the name points at now
         if not stat.S_ISREG(info.st_mode):

@@ -16,6 +16,7 @@ from typing import Any
 
 from isolator.errors import ScenarioError
 from isolator.scenario.files import read_input
+from isolator.scenario.names import escaped
 
 __all__ = ["TOP_LEVEL_KEYS", "KeyReader", "load_toml", "number", "number_list", "table_of_tables"]
 
@@ -164,8 +165,11 @@ def number(
     below: float | None = None,
 ) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ScenarioError(f"{key}: must be a number, got {value!r}")
-    value = float(value)
+        raise ScenarioError(f"{key}: must be a number, got {escaped(repr(value), 40)}")
+    try:
+        value = float(value)
+    except OverflowError:  # a TOML integer beyond any float (10**400)
+        raise ScenarioError(f"{key}: must be finite, got an integer of {len(str(abs(value)))} digits") from None
     if not math.isfinite(value):
         raise ScenarioError(f"{key}: must be finite, got {value}")
     if positive and value <= 0:

@@ -52,7 +52,7 @@ def excerpt(text: object) -> str:
     return escaped(text, EXCERPT)
 
 
-def check_name(name: object, key: str, *, optional: bool = False) -> str:
+def check_name(name: object, key: str, *, optional: bool = False, longest: int | None = MAX_NAME) -> str:
     """``name`` if it follows the rule for names; else a :class:`ScenarioError` naming ``key``.
 
     Parameters
@@ -63,6 +63,9 @@ def check_name(name: object, key: str, *, optional: bool = False) -> str:
         The scenario key it came from (``carriages[0].name``).
     optional : bool
         Whether the empty string is allowed (a name the section does not need, such as an isolator's).
+    longest : int or None
+        The most characters (None: any length; the scenario's own name, which never enters code or a
+        column, and whose default output names are cut to 100 characters).
 
     Returns
     -------
@@ -72,7 +75,7 @@ def check_name(name: object, key: str, *, optional: bool = False) -> str:
     Raises
     ------
     ScenarioError
-        Not a string, empty (unless ``optional``), longer than :data:`MAX_NAME`, with a character that is
+        Not a string, empty (unless ``optional``), longer than ``longest``, with a character that is
         not printable, or with leading or trailing spaces; the name quoted escaped.
 
     Examples
@@ -91,9 +94,10 @@ def check_name(name: object, key: str, *, optional: bool = False) -> str:
     if not name.strip() or name != name.strip():
         raise ScenarioError(f"{key}: must be a non-empty name without leading or trailing spaces, "
                             f"got '{escaped(name, 40)}'")
-    if len(name) > MAX_NAME or not name.isprintable():
-        raise ScenarioError(f"{key}: must be at most {MAX_NAME} printable characters (no control characters, "
-                            f"line breaks or invisible formatting), got '{escaped(name, 40)}'")
+    if (longest is not None and len(name) > longest) or not name.isprintable():
+        most = "" if longest is None else f"at most {longest} "
+        raise ScenarioError(f"{key}: must be {most}printable characters (no control characters, line breaks or "
+                            f"invisible formatting), got '{escaped(name, 40)}'")
     return name
 
 
@@ -115,15 +119,15 @@ def check_names(names: Iterable[object], section: str, *, optional: bool = False
 
 def check_scenario_names(scenario: Any) -> None:
     """Every name a :class:`~isolator.scenario.definitions.Scenario` defines, by :func:`check_names`: its own
-    (key ``name``), and those of its isolators (optional), carriages, actuators, points, sensors, leveling
-    groups and disturbances (where the scenario has them).
+    (key ``name``, of any length), and those of its isolators (optional), carriages, actuators, points,
+    sensors, leveling groups and disturbances (where the scenario has them).
 
     Raises
     ------
     ScenarioError
         The first name that breaks the rule or is used twice in its section, named by its key.
     """
-    check_name(scenario.name, "name")
+    check_name(scenario.name, "name", longest=None)
     check_names([iso.name for iso in scenario.isolators], "isolators", optional=True)
     for section in ("carriages", "actuators", "points", "sensors", "leveling", "disturbances"):
         check_names([item.name for item in getattr(scenario, section, ())], section)

@@ -34,7 +34,7 @@ from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, Sine
 
 __all__ = [
     "MAGNITUDE",
-    "MOTION_FLOOR",
+    "MOVE_FLOOR",
     "RULES",
     "UNIT_TOLERANCE",
     "Rule",
@@ -105,14 +105,14 @@ POSITIVE = Rule(low=0.0, low_open=True)
 NONNEGATIVE = Rule(low=0.0)
 #: the least speed, acceleration or jerk of a move (SI units): slower is no stage's move, and the products of
 #: smaller ones underflow (a move of acceleration 1e-300 vanished)
-MOTION_FLOOR = 1e-9
-#: a move's speed, acceleration, jerk: at least MOTION_FLOOR
-MOTION = Rule(low=MOTION_FLOOR, why=" (slower than any stage moves: 1 nm/s, 1 nm/s^2, 1 nm/s^3)")
+MOVE_FLOOR = 1e-9
+#: a move's speed, acceleration, jerk: at least MOVE_FLOOR
+MOTION = Rule(low=MOVE_FLOOR, why=" (slower than any stage moves: 1 nm/s, 1 nm/s^2, 1 nm/s^3)")
 
 #: the rule of every numeric field of a scenario, by field (keys without indices and components)
 RULES: dict[str, Rule] = {
     "gravity": NONNEGATIVE,
-    "table.mass": POSITIVE,
+    "table.mass": Rule(low=1e-3, why=" kg (lighter than any table; its inertia from table.size would underflow)"),
     "table.inertia": Rule(low=0.0, low_open=True, triangle=True),
     "table.size": POSITIVE,
     "carriages.mass": POSITIVE,

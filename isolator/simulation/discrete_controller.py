@@ -247,8 +247,13 @@ class DiscreteController:
 
         ``u = C x + D y`` [N] is the command from ``t_k``; ``x_next = A x + B y``.
         """
+        if q is not None and np.size(q) != len(self.carriages):
+            raise ParameterError(f"q: must hold one position per carriage ({len(self.carriages)}), got {np.size(q)}")
         A, B, C, D = self.matrices(q)
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        for name, value, size, what in (("x", x, self.states, "states"), ("y", y, len(self.sensors), "sensors")):
+            if value.shape != (size,):
+                raise ParameterError(f"{name}: must be ({size},), one value per {what[:-1]}, got shape {value.shape}")
         return A @ x + B @ y, C @ x + D @ y
 
     def to_dict(self) -> dict[str, Any]:

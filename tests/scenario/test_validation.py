@@ -98,7 +98,7 @@ def test_samples_profile_errors(tmp_path: Path):
     with pytest.raises(ScenarioError, match=r"profile\.t: sample times must be strictly increasing"):
         make(data)
     data["carriages"][0]["profile"] = {"type": "samples", "file": "missing.csv"}
-    with pytest.raises(ScenarioError, match=r"^carriages\[0\]\.profile\.file: .missing.csv.: cannot read \(no such"):
+    with pytest.raises(ScenarioError, match=r"^carriages\[0\]\.profile\.file: cannot read"):
         make(data)
     (tmp_path / "bad.csv").write_text("t,q\n0,0\n1,nan\n")
     data["carriages"][0]["profile"] = {"type": "samples", "file": "bad.csv"}
