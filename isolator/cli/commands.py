@@ -230,7 +230,7 @@ def _controller_option(args: argparse.Namespace) -> DiscreteController | None:
         if args.noise:
             raise ParameterError("--noise: adds sensor noise to a controller's readings; give --controller DIR")
         return None
-    source = args.controller if args.controller.is_file() else args.controller / "controller.json"
+    source = args.controller / "controller.json" if args.controller.is_dir() else args.controller
     try:
         return DiscreteController.from_json(source)
     except ParameterError as exc:  # the reading's own errors start with the path
