@@ -1,12 +1,13 @@
 """``controller.json`` checked against its schema before a :class:`DiscreteController` is made of it.
 
 A controller folder travels (from a colleague, a vendor, a CI job), so its JSON is read strictly: a JSON
-object with known keys only; ``sample_rate`` a number, ``delay`` a JSON boolean (``"false"`` is no
-boolean), ``method`` a string, ``settings`` an object, names lists of strings (by the rule for names of
-:mod:`isolator.scenario.names`); every matrix a list of rows of JSON numbers (not strings, not booleans),
-each row as long as the first; each ``schedule`` entry an object with ``q``, ``A``, ``B``, ``C``, ``D``;
-``schedule_carriage`` a whole number. Shapes and finiteness are then the :class:`DiscreteController`'s own
-checks. Every problem is one :class:`ParameterError` naming ``controller.<key>``.
+object (a key it does not know is warned about and ignored: the contract lists what it holds at least);
+``sample_rate`` a number, ``delay`` a JSON boolean (``"false"`` is no boolean), ``method`` a string,
+``settings`` an object, names lists of strings (by the rule for names of :mod:`isolator.scenario.names`);
+every matrix a list of rows of JSON numbers (not strings, not booleans), each row as long as the first;
+each ``schedule`` entry an object with ``q``, ``A``, ``B``, ``C``, ``D``; ``schedule_carriage`` a whole
+number. Shapes and finiteness are then the :class:`DiscreteController`'s own checks. Every problem is one
+:class:`ParameterError` naming ``controller.<key>``.
 
 :func:`spectral_radius` and :func:`warn_if_unstable` tell of a controller unstable on its own (``A`` with an
 eigenvalue outside the unit circle): allowed (a design may need one), but worth a warning when it comes
@@ -22,7 +23,7 @@ from typing import Any
 
 import numpy as np
 
-from isolator.errors import ParameterError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.names import check_name, escaped
 
 __all__ = ["CONTROLLER_KEYS", "check_controller_data", "spectral_radius", "warn_if_unstable"]
@@ -68,8 +69,11 @@ def _kind(value: object) -> str:
 def _names(value: object, key: str) -> list[str]:
     if not isinstance(value, list):
         raise ParameterError(f"{key}: must be a list of names, got {_kind(value)}")
-    return [check_name(name, f"{key}[{i}]") if isinstance(name, str) else _not_a_name(name, f"{key}[{i}]")
-            for i, name in enumerate(value)]
+    try:  # by the rule for names; a bad controller is a bad argument (ParameterError), not a bad scenario
+        return [check_name(name, f"{key}[{i}]") if isinstance(name, str) else _not_a_name(name, f"{key}[{i}]")
+                for i, name in enumerate(value)]
+    except ScenarioError as error:
+        raise ParameterError(str(error)) from None
 
 
 def _not_a_name(value: object, key: str) -> str:
@@ -83,13 +87,14 @@ def check_controller_data(data: object) -> dict[str, Any]:
     Raises
     ------
     ParameterError
-        Naming ``controller.<key>``: not an object, an unknown or missing key, a value of the wrong type.
+        Naming ``controller.<key>``: not an object, a missing key, a value of the wrong type.
     """
     if not isinstance(data, Mapping):
         raise ParameterError(f"controller: must be a JSON object, got {_kind(data)}")
-    for key in data:
+    for key in data:  # warned about, not refused: a newer writer may record more (the contract says "at least")
         if key not in CONTROLLER_KEYS:
-            raise ParameterError(f"controller.{escaped(key, 40)}: unknown key (known: {', '.join(CONTROLLER_KEYS)})")
+            warnings.warn(f"controller.{escaped(key, 40)}: unknown key, ignored (known: {', '.join(CONTROLLER_KEYS)})",
+                          RuntimeWarning, stacklevel=3)
     if missing := [key for key in ("sample_rate", "sensors", "actuators") if key not in data]:
         raise ParameterError(f"controller.{missing[0]}: missing from the controller's JSON")
     rate = data["sample_rate"]

@@ -275,7 +275,7 @@ class DiscreteController:
     def from_dict(cls, data: Mapping[str, Any]) -> DiscreteController:
         """The controller of :meth:`to_dict`'s data (with a ``schedule``, its top-level ``A .. D`` are ignored),
         checked against the schema first (:func:`~isolator.simulation.controller_schema.check_controller_data`:
-        strict types, known keys; one :class:`ParameterError` naming ``controller.<key>``)."""
+        strict types, unknown keys warned about; one :class:`ParameterError` naming ``controller.<key>``)."""
         checked = check_controller_data(data)
         schedule = checked.pop("schedule", None)
         if schedule:

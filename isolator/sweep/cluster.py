@@ -204,13 +204,13 @@ def _probe(distributed: Any, address: str, security: Any, timeout: float, names:
 
     def run() -> None:  # its own event loop, in a thread: the caller may be running one (a notebook)
         try:
-            asyncio.run(asyncio.wait_for(handshake(), timeout))
+            asyncio.run(asyncio.wait_for(handshake(), timeout + 1.0))  # Dask's own connect error first
         except BaseException as exc:  # reported in the caller's thread
             failure.append(exc)
 
     thread = threading.Thread(target=run, name="isolator-scheduler-probe", daemon=True)
     thread.start()
-    thread.join(timeout + 1.0)
+    thread.join(timeout + 2.0)
     if thread.is_alive() or (failure and isinstance(failure[0], asyncio.TimeoutError | TimeoutError)):
         raise ParameterError(f"{names['scheduler']}: {address} accepted the connection but did not answer as a "
                              f"Dask scheduler within {timeout:g} s (another service on that port, or a scheduler "
