@@ -8,7 +8,7 @@ import math
 from pathlib import Path
 from typing import Any
 
-from isolator.cli.helpers import check_run_memory, output_folder, scheduler_arguments, scheduler_client, use_agg
+from isolator.cli.helpers import check_run_memory, output_folder, scheduler_arguments, scheduler_client, seed, use_agg
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -67,7 +67,7 @@ def register(sub: Any) -> None:
                             "absolute (+-0.002, its unit) tolerance; repeat for more (default: masses +-5%%, "
                             "stiffness +-10%%, damping +-20%%, isolator positions +-2 mm)")
     robustness.add_argument("--samples", type=int, default=200, metavar="N", help="machines drawn (default 200)")
-    robustness.add_argument("--seed", type=int, default=0, help="of the Latin-hypercube sampling (default 0)")
+    robustness.add_argument("--seed", type=seed, default=0, help="of the Latin-hypercube sampling (default 0)")
     where = robustness.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, metavar="N",
                        help="processes of the sweeps (default: the machine's cores)")

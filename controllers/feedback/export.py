@@ -48,7 +48,10 @@ def write_c(controller: DiscreteController, folder: str | Path) -> tuple[Path, P
     if not isinstance(controller, DiscreteController):
         raise ParameterError(f"controller: must be a DiscreteController, got {type(controller).__name__}")
     out = Path(folder)
-    out.mkdir(parents=True, exist_ok=True)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise ParameterError(f"folder: cannot make '{out}' ({exc.strerror or type(exc).__name__})") from None
     header, source = out / "controller.h", out / "controller.c"
     header.write_text(_header(controller), encoding="utf-8")
     source.write_text(_source(controller), encoding="utf-8")

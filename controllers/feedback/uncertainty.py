@@ -25,6 +25,7 @@ from isolator.errors import ParameterError
 from isolator.model.names import expand_changes
 from isolator.model.parameters import ParameterLayout
 from isolator.scenario.arguments import check_public
+from isolator.scenario.files import read_input_text
 from isolator.scenario.rules import closest
 from isolator.simulation.scaling import scaled_parameter_sets
 
@@ -199,12 +200,12 @@ def uncertainty_from_calibration(path: str | Path, unidentified: bool = False) -
         One line naming the file: unreadable, not JSON, without valid ``parameters``, or (without
         ``unidentified``) none with a finite ``std``.
     """
+    text = read_input_text(path, "calibration JSON", error=ParameterError, bom=False)
     try:
-        data = json.loads(Path(path).read_text(encoding="utf-8"))
-    except OSError as error:
-        raise ParameterError(f"{path}: cannot read the calibration JSON ({error.strerror or error})") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise ParameterError(f"{path}: not a calibration JSON ({error})".replace("\n", " ")) from None
+        data = json.loads(text)
+    except json.JSONDecodeError as error:  # its position only: the message of the decoder quotes no content
+        raise ParameterError(f"{path}: not a calibration JSON (line {error.lineno}, column {error.colno}: "
+                             f"{error.msg})") from None
     parameters = data.get("parameters") if isinstance(data, dict) else None
     if not isinstance(parameters, dict) or not parameters:
         raise ParameterError(f"{path}: no 'parameters' in the calibration JSON (as isolator calibrate --json "

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 
@@ -35,7 +36,13 @@ def reaction_wrench(scenario: Scenario, t: np.ndarray, piece_time: np.ndarray | 
     positions and ``a_i`` their accelerations relative to the table, about its
     mass centre, turned by the table's orientation ``rot`` (N, 3, 3).
     """
-    t = np.asarray(t, dtype=float)
+    t, rot = np.asarray(t, dtype=float), np.asarray(rot, dtype=float)
+    if t.ndim != 1:
+        raise ParameterError(f"t: must be a 1-D array of times [s], got shape {t.shape}")
+    if rot.shape != (t.size, 3, 3):
+        raise ParameterError(f"rot: must be one rotation matrix per time, shape ({t.size}, 3, 3), got {rot.shape}")
+    if piece_time is not None and np.shape(piece_time) != t.shape:
+        raise ParameterError(f"piece_time: must be one time per t, shape {t.shape}, got {np.shape(piece_time)}")
     n = len(scenario.carriages)
     q = np.zeros((n, t.size))
     qdd = np.zeros((n, t.size))

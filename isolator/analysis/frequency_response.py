@@ -9,6 +9,7 @@ import numpy as np
 from scipy.linalg import matrix_balance
 
 from isolator.errors import ParameterError
+from isolator.scenario.files import check_memory
 
 __all__ = ["state_space_response"]
 
@@ -40,11 +41,20 @@ def state_space_response(
     -------
     ndarray (nf, n_outputs, n_inputs)
     """
-    f = np.asarray(frequency_hz, dtype=float).ravel()
+    try:
+        f = np.asarray(frequency_hz, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"frequency_hz: must be numbers [Hz], got {type(frequency_hz).__name__}") from None
+    if f.ndim > 1:
+        raise ParameterError(f"frequency_hz: must be one frequency or a 1-D array of them, got shape {f.shape}")
+    f = f.ravel()
     if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
         raise ParameterError("frequency_hz: must be finite frequencies >= 0 Hz")
     iu = _index(inputs, list(system.input_labels), "inputs")
     iy = _index(outputs, list(system.output_labels), "outputs")
+    n_states = np.asarray(system.A).shape[0]  # each frequency's resolvent, states and response (complex)
+    check_memory(16.0 * f.size * (2 * n_states * n_states + n_states * len(iu) + len(iy) * len(iu)),
+                 f"frequency_hz: {f.size} frequencies", "ask for fewer frequencies")
     a, b = np.asarray(system.A), np.asarray(system.B)[:, iu]
     c, d = np.asarray(system.C)[iy], np.asarray(system.D)[np.ix_(iy, iu)]
     s = 2j * np.pi * f

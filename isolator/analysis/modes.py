@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from isolator.analysis.linear import LinearModel, linearise
+from isolator.errors import ParameterError
 from isolator.model.equilibrium import DOF_NAMES
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -240,8 +241,8 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
     ('x-stage', 'y-stage')
     >>> fig = travel.plot()
     """
-    if samples < 2:
-        raise ValueError(f"samples: must be >= 2, got {samples}")
+    if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or not 2 <= samples <= 100_000:
+        raise ParameterError(f"samples: must be a whole number from 2 to 100000, got {samples!r}")
     t_end = scenario.simulation.duration
     names, positions, freqs, zetas = [], [], [], []
     for carriage in scenario.carriages:

@@ -11,6 +11,7 @@ band's RMS is the square root of its integral over the band.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any
 
@@ -36,7 +37,14 @@ def third_octave_bands(low: float = 1.0, high: float = 80.0) -> tuple[np.ndarray
     centres, lower, upper : ndarray
         [Hz]; exact centres ``10^(n/10)``, edges a factor ``10^(1/20)`` either side.
     """
+    for name, value in (("low", low), ("high", high)):
+        if isinstance(value, bool) or not isinstance(value, int | float | np.floating) \
+                or not (math.isfinite(value) and 0 < value <= 1e6):
+            raise ParameterError(f"{name}: must be a band centre in (0, 1e6] Hz, got {value!r}")
     n = np.arange(int(np.ceil(10 * np.log10(low) - 1e-9)), int(np.floor(10 * np.log10(high) + 1e-9)) + 1)
+    if n.size == 0:
+        raise ParameterError(f"low, high: no one-third-octave band centre between low = {low:g} Hz and high = "
+                             f"{high:g} Hz (low must be at most high)")
     centres = 10.0 ** (n / 10)
     return centres, centres * 10 ** (-1 / 20), centres * 10 ** (1 / 20)
 

@@ -153,7 +153,7 @@ def load_calibration(path: str | Path) -> Calibration:
         path = bundled[str(path)]
     if not path.exists():
         raise ScenarioError(f"{path}: no such calibration file (bundled: {', '.join(bundled) or 'none'})")
-    data = load_toml(path)
+    data = load_toml(path, "calibration file")
     try:
         return calibration_from_dict(data, path.parent, path)
     except ScenarioError as exc:

@@ -21,10 +21,11 @@ from isolator.numerics.dop853 import DenseStepper
 from isolator.scenario.definitions import Scenario, SimulationSettings
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.batch import LANES
+from isolator.simulation.resources import check_run_memory
 from isolator.simulation.sensors import sensor_signals
 from isolator.simulation.simulator import Simulator
 from isolator.simulation.stepping import Method, dense_stepper, staged_parameters
-from isolator.simulation.time_grid import inputs_at
+from isolator.simulation.time_grid import inputs_at, internal_rate
 
 __all__ = ["MoveModel"]
 
@@ -61,6 +62,8 @@ class MoveModel:
         self.count = t.size
         settings = SimulationSettings(duration=(self.first + t.size - 1) / rate, sample_rate=rate)
         self.scenario = replace(scenario, simulation=settings, ground=None)  # the floor is still (the contract)
+        check_run_memory(self.scenario, f"{key}: the record's {settings.duration:g} s, simulated at "
+                                        f"{internal_rate(settings)[0]:g} Hz,")
         self.sensors = sensors
         self.sim = Simulator(self.scenario)
         samples = self.sim.grid.samples

@@ -20,6 +20,8 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.files import check_input, read_input_text
+from isolator.scenario.names import escaped, excerpt
 from isolator.scenario.rules import closest
 
 __all__ = ["DIRECTIONS", "UFF_SUFFIXES", "UNIFORM_TOLERANCE", "Record", "read_record"]
@@ -30,6 +32,8 @@ UFF_SUFFIXES = (".uff", ".unv")
 UNIFORM_TOLERANCE = 1e-6
 #: a UFF channel's direction as given in ``uff`` -> pyuff's ``rsp_dir`` (1, 2, 3 = X, Y, Z; negative = minus)
 DIRECTIONS = {"+X": 1, "X": 1, "-X": -1, "+Y": 2, "Y": 2, "-Y": -2, "+Z": 3, "Z": 3, "-Z": -3}
+#: memory reading a UFF file takes per byte of it (pyuff holds its text and the values)
+_UFF_FACTOR = 8.0
 _AXES = {1: "X", 2: "Y", 3: "Z", 4: "RX", 5: "RY", 6: "RZ"}
 
 
@@ -98,7 +102,7 @@ def read_record(
     if "t" in sensors:
         raise ParameterError("sensors: 't' is the time column of a record, not a sensor name")
     file = Path(path)
-    where = str(path)
+    where = escaped(path, 120)
     if not file.exists():
         raise ScenarioError(f"{where}: no such file")
     if file.is_dir():
@@ -120,14 +124,7 @@ def _read_csv(file: Path, where: str, sensors: Sequence[str]) -> tuple[np.ndarra
     ``numpy.loadtxt``; anything else, and any file that fails a check, is read again row by row
     with :mod:`csv` so that the error names its line and column.
     """
-    try:
-        with open(file, newline="", encoding="utf-8-sig") as handle:
-            text = handle.read()
-    except OSError as exc:
-        raise ScenarioError(f"{where}: cannot read ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(f"{where}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset "
-                            f"{exc.start}); save it as UTF-8") from None
+    text = read_input_text(file, "")
     lines = text.splitlines()
     head = next((i for i, line in enumerate(lines) if line.strip()), None)
     if head is None:
@@ -153,7 +150,7 @@ def _csv_rows(
         reader = csv.reader(io.StringIO(text, newline=""))
         rows = [(reader.line_num, row) for row in reader if "".join(row).strip()]
     except csv.Error as exc:
-        raise ScenarioError(f"{where}: not a CSV file ({exc})") from None
+        raise ScenarioError(f"{where}: not a CSV file ({excerpt(exc)})") from None
     head_line, header = rows[0][0], [cell.strip() for cell in rows[0][1]]
     _check_header(f"{where}: line {head_line}", header, sensors)
     data = rows[1:]
@@ -172,8 +169,8 @@ def _csv_rows(
     finite = np.isfinite(values)
     if not finite.all():
         i, j = np.argwhere(~finite)[0]
-        raise ScenarioError(f"{where}: line {data[i][0]}, column '{header[j]}': {data[i][1][j].strip()} "
-                            "(samples must be finite numbers)")
+        raise ScenarioError(f"{where}: line {data[i][0]}, column '{excerpt(header[j])}': "
+                            f"{excerpt(data[i][1][j].strip())} (samples must be finite numbers)")
     return header, data, values
 
 
@@ -188,19 +185,19 @@ def _columns(
 
 def _check_header(where: str, header: list[str], sensors: Sequence[str]) -> None:
     """Refuse a header without ``t``, with a column naming no sensor, repeated or without a sensor column."""
-    got = ",".join(header)
+    got = excerpt(",".join(header))
     if "t" not in header:
         raise ScenarioError(f"{where}: no column 't' (the time [s]); header: '{got}'")
     for j, name in enumerate(header):
         if not name:
             raise ScenarioError(f"{where}: column {j + 1} has no name (header: '{got}')")
         if header.count(name) > 1:
-            raise ScenarioError(f"{where}: column '{name}' appears {header.count(name)} times")
+            raise ScenarioError(f"{where}: column '{excerpt(name)}' appears {header.count(name)} times")
         if name != "t" and name not in sensors:
             near = closest(name, list(sensors))
             hint = f"; did you mean '{near}'?" if near else ""
             known = ", ".join(sensors) if sensors else "none"
-            raise ScenarioError(f"{where}: column '{name}' names no sensor (the sensors: {known}){hint}")
+            raise ScenarioError(f"{where}: column '{excerpt(name)}' names no sensor (the sensors: {known}){hint}")
     if len(header) == 1:
         raise ScenarioError(f"{where}: only the column 't'; a record needs at least one sensor column")
 
@@ -212,8 +209,8 @@ def _first_bad_cell(where: str, data: list[tuple[int, list[str]]], header: list[
             try:
                 float(cell)
             except ValueError:
-                raise ScenarioError(f"{where}: line {line}, column '{name}': '{cell.strip()}' is not a "
-                                    "number") from None
+                raise ScenarioError(f"{where}: line {line}, column '{excerpt(name)}': '{excerpt(cell.strip())}' is "
+                                    "not a number") from None
     raise ScenarioError(f"{where}: a cell is not a number")  # numpy and float() disagree: still one line
 
 
@@ -272,7 +269,7 @@ def _read_uff(
     except ImportError:
         raise ScenarioError(f"{where}: reading UFF needs pyuff: pip install 'isolator[uff]'") from None
     try:
-        if file.stat().st_size == 0:
+        if not check_input(file, "", factor=_UFF_FACTOR):  # a regular file, checked before pyuff opens it
             raise ScenarioError(f"{where}: is empty (a UFF record needs datasets 58)")
         handle = pyuff.UFF(str(file))
         indices = [i for i, kind in enumerate(handle.get_set_types()) if int(kind) == 58]
@@ -280,7 +277,7 @@ def _read_uff(
     except ScenarioError:
         raise
     except Exception as exc:  # pyuff raises bare Exceptions on malformed files
-        reason = " ".join(str(exc).split()) or type(exc).__name__
+        reason = excerpt(" ".join(str(exc).split())) or type(exc).__name__
         raise ScenarioError(f"{where}: cannot be read as a universal file ({reason})") from None
     sets = [sets] if isinstance(sets, dict) else list(sets)
     found: dict[str, tuple[np.ndarray, int, float, float, str]] = {}

@@ -16,16 +16,21 @@ is one error line as well, never a traceback.
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
+import threading
 import warnings
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 from importlib.metadata import entry_points, version
 from typing import NoReturn
 
 import numpy as np
 
 from isolator.cli import commands, sweep_command
+from isolator.cli.helpers import MADE_FOLDERS, remove_made_folders
 from isolator.errors import IsolatorError
+from isolator.scenario.names import escaped
 
 __all__ = ["ENTRY_POINT_GROUP", "build_parser", "main"]
 
@@ -37,7 +42,7 @@ class _Parser(argparse.ArgumentParser):
     """A parser whose errors are one line naming the subcommand's help (its subparsers are of this class)."""
 
     def error(self, message: str) -> NoReturn:
-        self.exit(2, f"isolator: error: {message} (see '{self.prog} --help')\n")
+        self.exit(2, f"isolator: error: {escaped(message)} (see '{self.prog} --help')\n")
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -62,11 +67,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     args, extra = parser.parse_known_args(argv)
     if extra:  # an option of another subcommand (or none): name the subcommand whose help lists the real ones
         prog = " ".join(["isolator", args.command, *([args.study] if getattr(args, "study", None) else [])])
-        parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {' '.join(extra)} "
+        parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {escaped(' '.join(extra))} "
                     f"(see '{prog} --help')\n")
-    with warnings.catch_warnings(record=True) as caught:  # the filters as they are (deprecations stay hidden)
-        warnings.simplefilter("always", RuntimeWarning)
+    MADE_FOLDERS.clear()
+    with warnings.catch_warnings(record=True) as caught, _terminated_as_interrupted():  # the filters as they
+        warnings.simplefilter("always", RuntimeWarning)  # are (deprecations stay hidden)
         status = _run(args)
+    if status not in (0, 3):  # a refused command leaves no folder behind it made for its outputs
+        remove_made_folders()
+    MADE_FOLDERS.clear()
     if status in (0, 3):
         _summarise(caught)
     return status
@@ -89,23 +98,48 @@ def _run(args: argparse.Namespace) -> int:
         return 0
     except OSError as exc:  # writing an output (the paths were checked before any work)
         return _error(f"{exc.filename or 'output'}: {exc.strerror or exc}")
+    except Terminated:
+        print("isolator: terminated", file=sys.stderr)
+        return 128 + signal.SIGTERM
     except KeyboardInterrupt:
         print("isolator: interrupted", file=sys.stderr)
         return 130
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the command is, so that it ends as an interrupt (Ctrl-C) does: a sweep stops its
+    workers and keeps its rows."""
+
+
+@contextlib.contextmanager
+def _terminated_as_interrupted() -> Iterator[None]:
+    """SIGTERM raises :class:`Terminated` while a command runs (in the main thread only: signals go there)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def raise_terminated(signum: int, frame: object) -> None:
+        raise Terminated
+
+    before = signal.signal(signal.SIGTERM, raise_terminated)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, before)
+
+
 def _error(message: str) -> int:
-    print(f"isolator: error: {message}", file=sys.stderr)
+    print(f"isolator: error: {escaped(message)}", file=sys.stderr)  # what an input put there cannot drive the terminal
     return 2
 
 
 def _summarise(caught: list[warnings.WarningMessage]) -> None:
     """One line per distinct warning; numpy's floating-point warnings summed up in one line."""
     numeric = [w for w in caught if issubclass(w.category, RuntimeWarning) and "encountered" in str(w.message)]
-    for text in dict.fromkeys(str(w.message) for w in caught if w not in numeric):
+    for text in dict.fromkeys(escaped(w.message) for w in caught if w not in numeric):
         print(f"isolator: warning: {text}", file=sys.stderr)
     if numeric:
-        first = str(numeric[0].message)
+        first = escaped(numeric[0].message)
         print(f"isolator: warning: numpy warned {len(numeric)} time(s) ('{first}'): some inputs are of extreme "
               "magnitude; check the results", file=sys.stderr)
 

@@ -21,12 +21,15 @@ from isolator.cli.helpers import (
     report,
     save_figure,
     scenario_argument,
+    seed,
     use_agg,
 )
 from isolator.cli.sequence_command import register as register_sequence
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.files import read_input_text
+from isolator.scenario.names import escaped
 from isolator.scenario.reader import bundled_scenarios, load_scenario
 from isolator.simulation.band import Band, parse_half_widths
 from isolator.simulation.discrete_controller import DiscreteController
@@ -56,7 +59,7 @@ def register(sub: Any) -> None:
                      "scenario's sensors and actuators")
     sim.add_argument("--noise", action="store_true",
                      help="with --controller: add each sensor's noise (its 'noise' RMS per sample) to its readings")
-    sim.add_argument("--seed", type=int, default=0, metavar="N", help="seed of --noise (default 0)")
+    sim.add_argument("--seed", type=seed, default=0, metavar="N", help="seed of --noise (default 0)")
     band = sim.add_mutually_exclusive_group()
     band.add_argument("--band", metavar="x=M,y=M,z=M,rx=RAD,ry=RAD,rz=RAD",
                       help="settling band: six absolute half-widths [m, rad], e.g. a study's 'band' column "
@@ -203,11 +206,12 @@ def _band_option(args: argparse.Namespace) -> Band | None:
         return parse_half_widths(args.band, "--band")
     if args.band_json is None:
         return None
+    text = read_input_text(args.band_json, "--band-json", error=ParameterError)
     try:
-        data = json.loads(Path(args.band_json).read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, ValueError) as exc:
-        reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else type(exc).__name__
-        raise ParameterError(f"--band-json: cannot read '{args.band_json}': {reason}") from None
+        data = json.loads(text)
+    except ValueError as exc:
+        raise ParameterError(f"--band-json: '{escaped(args.band_json, 120)}' is not JSON "
+                             f"({type(exc).__name__})") from None
     if isinstance(data, dict) and isinstance(data.get("band"), dict):
         data = data["band"]
     return Band.from_dict(data, "--band-json")

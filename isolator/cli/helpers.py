@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from isolator.errors import ParameterError
+from isolator.scenario.names import escaped
 from isolator.scenario.reader import DEFAULT_SCENARIO
 from isolator.simulation.resources import available_memory, check_memory, check_run_memory
 
@@ -26,6 +27,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     "CLI_NAMES",
+    "MADE_FOLDERS",
     "Handler",
     "available_memory",
     "check_memory",
@@ -35,11 +37,13 @@ __all__ = [
     "figure_path",
     "output_folder",
     "output_path",
+    "remove_made_folders",
     "report",
     "save_figure",
     "scenario_argument",
     "scheduler_arguments",
     "scheduler_client",
+    "seed",
     "use_agg",
 ]
 
@@ -49,6 +53,16 @@ Handler = Callable[[argparse.Namespace], int]
 NAME_LENGTH = 100
 #: how much of a path an error message quotes
 QUOTED = 60
+#: the folders :func:`output_folder` made for the command running now, deepest first
+MADE_FOLDERS: list[Path] = []
+
+
+def remove_made_folders() -> None:
+    """Remove the folders the failed command made (those still empty), deepest first; forget them all."""
+    for folder in MADE_FOLDERS:
+        with contextlib.suppress(OSError):
+            folder.rmdir()  # only an empty one: nothing the command or anyone else wrote is removed
+    MADE_FOLDERS.clear()
 
 
 def default_output(name: str, suffix: str) -> Path:
@@ -88,6 +102,14 @@ def count(text: str) -> int:
     return int(value)
 
 
+def seed(text: str) -> int:
+    """An argparse type: a random seed, a whole number from 0 to 2**32 - 1 (numpy's seeds are not negative)."""
+    value = count(text)
+    if not 0 <= value < 2**32:
+        raise argparse.ArgumentTypeError(f"expected a whole number from 0 to {2**32 - 1}, got '{text}'")
+    return value
+
+
 def use_agg() -> None:
     """Draw figures without a display (files only)."""
     import matplotlib
@@ -96,11 +118,14 @@ def use_agg() -> None:
 
 
 def output_folder(path: Path, option: str) -> Path:
-    """A folder to write into, made if missing; a :class:`ParameterError` naming ``option`` if it cannot be."""
+    """A folder to write into, made if missing (recorded in :data:`MADE_FOLDERS`: a command that fails removes
+    them again, :func:`remove_made_folders`); a :class:`ParameterError` naming ``option`` if it cannot be."""
     if path.exists() and not path.is_dir():
         raise ParameterError(f"{option}: '{path}' is a file, not a folder")
+    missing = [folder for folder in (path, *path.parents) if not folder.exists()]  # deepest first
     try:
         path.mkdir(parents=True, exist_ok=True)
+        MADE_FOLDERS.extend(missing)
     except OSError as exc:
         raise ParameterError(f"{option}: cannot make the folder '{path}' ({exc.strerror})") from None
     if not os.access(path, os.W_OK | os.X_OK):
@@ -203,7 +228,7 @@ def scheduler_client(args: argparse.Namespace) -> Iterator[Any]:
             warnings.simplefilter("always")
             client = connect(args.scheduler, security, names=CLI_NAMES)
         for w in caught:
-            print(f"isolator: warning: {w.message}", file=sys.stderr, flush=True)
+            print(f"isolator: warning: {escaped(w.message)}", file=sys.stderr, flush=True)
         try:
             yield client
         finally:
@@ -245,11 +270,12 @@ def read_controller(path: Path, option: str) -> Any:
     :class:`ParameterError` naming ``option``."""
     from isolator.simulation.discrete_controller import DiscreteController
 
-    source = path if path.is_file() else path / "controller.json"
+    source = path / "controller.json" if path.is_dir() else path
     try:
         return DiscreteController.from_json(source)
-    except ParameterError as exc:
-        raise ParameterError(f"{option}: '{source}': {exc}") from None
+    except ParameterError as exc:  # the reading's own errors start with the path
+        named = str(exc).startswith(escaped(source, 120))
+        raise ParameterError(f"{option}: {exc}" if named else f"{option}: '{source}': {exc}") from None
     except (OSError, UnicodeDecodeError, ValueError) as exc:
         reason = exc.strerror if isinstance(exc, OSError) and exc.strerror else f"{type(exc).__name__}: {exc}"
         raise ParameterError(f"{option}: cannot read '{source}': {reason}") from None

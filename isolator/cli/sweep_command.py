@@ -19,12 +19,14 @@ from isolator.cli.helpers import (
     scenario_argument,
     scheduler_arguments,
     scheduler_client,
+    seed,
     use_agg,
 )
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.sweep import METHODS, sweep
 from isolator.sweep.output import SUFFIXES, staging_path
+from isolator.sweep.sweep import check_workers
 
 __all__ = ["parse_values", "register"]
 
@@ -63,7 +65,7 @@ def register(sub: Any) -> None:
     p.add_argument("--zip", action="store_true", help="pair the lists (one length) instead of crossing them")
     p.add_argument("--samples", type=count, metavar="N", help="draw N designs over the ranges instead of a grid")
     p.add_argument("--method", choices=METHODS, default="sobol", help="sampling method (default: sobol)")
-    p.add_argument("--seed", type=count, default=0, help="seed of the sampling (default: 0)")
+    p.add_argument("--seed", type=seed, default=0, help="seed of the sampling (default: 0)")
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=count, metavar="N", help="local worker processes (default: the cores)")
     scheduler_arguments(p, where)
@@ -142,6 +144,8 @@ def _swept(args: argparse.Namespace) -> dict[str, dict[str, list[float]]]:
 
 def _sweep(args: argparse.Namespace) -> int:
     swept = _swept(args)
+    if args.workers is not None:
+        check_workers(args.workers, "--workers")
     out = output_path(args.out, "--out", SUFFIXES)
     figure = figure_path(args.plot, "--plot")
     if (out.exists() or staging_path(out).exists()) and not (args.resume or args.force):

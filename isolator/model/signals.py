@@ -13,6 +13,7 @@ from typing import Any, Protocol
 import casadi as ca
 import numpy as np
 
+from isolator.errors import ParameterError
 from isolator.model.rotations import quaternion_to_matrix
 from isolator.scenario.arguments import check_public
 
@@ -62,7 +63,13 @@ def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
     Displacement of the mass centre [m] and rotation vector of R R_ref^T [rad],
     relative to the state ``reference`` (one state, or one per row).
     """
-    reference = np.asarray(reference, dtype=float)
+    states, reference = np.asarray(states, dtype=float), np.asarray(reference, dtype=float)
+    if states.ndim != 2 or states.shape[1] < 7:
+        raise ParameterError(f"states: must be (N, >= 7) (position, then the quaternion w, x, y, z), got shape "
+                             f"{states.shape}")
+    if reference.shape not in ((states.shape[1],), states.shape):
+        raise ParameterError(f"reference: must be one state ({states.shape[1]},) or one per row {states.shape}, got "
+                             f"shape {reference.shape}")
     angles = relative_rotation_vector(states[:, 3:7], reference[..., 3:7])
     return np.ascontiguousarray(np.vstack([(states[:, 0:3] - reference[..., 0:3]).T, angles.T]))
 

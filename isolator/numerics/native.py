@@ -1,8 +1,9 @@
 """Compiling casadi functions to native code, cached on disk, called through ctypes.
 
 casadi generates C for a function; it is compiled once with the system C
-compiler into ``$ISOLATOR_CACHE`` (default ``~/.cache/isolator``) under a name
-derived from the source's hash, and loaded with ctypes; while it compiles, one line on stderr says so
+compiler into ``$ISOLATOR_CACHE`` (default ``~/.cache/isolator``; a folder of the user's own, made 0700,
+refused if others may write into it) under a name derived from the source's hash, and loaded with ctypes
+once its own hash is the one recorded when it was built; while it compiles, one line on stderr says so
 (``ISOLATOR_QUIET=1`` silences it). Calls pass numpy
 buffers without copies and release the GIL, so threads run in parallel. When no
 compiler is available the casadi function itself is evaluated instead (slower,
@@ -26,6 +27,8 @@ from pathlib import Path
 import casadi as ca
 import numpy as np
 
+from isolator.numerics.native_cache import cache_dir, private_cache, record_hash, verified
+
 __all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library"]
 
 #: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
@@ -48,13 +51,6 @@ def _cpu_identity() -> str:
 
 
 _LOCK = threading.Lock()
-
-
-def cache_dir() -> Path:
-    """Folder holding compiled models (``$ISOLATOR_CACHE`` or ``~/.cache/isolator``)."""
-    env = os.environ.get("ISOLATOR_CACHE")
-    base = Path(env) if env else Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "isolator"
-    return base
 
 
 def _compiler(language: str = "c") -> str | None:
@@ -88,6 +84,14 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     ------
     RuntimeError
         No compiler for the language, or it failed (its first error line is in the message).
+    ParameterError
+        A cache folder others may write into (:func:`private_cache`).
+
+    Notes
+    -----
+    The cache folder is made private (0700) and refused if others may write into it; each library's
+    SHA-256 is recorded beside it when it is built, and a library whose hash is not the one recorded (one
+    planted in the folder, or damaged) is built again rather than loaded.
     """
     compiler = _compiler(language)
     if compiler is None:
@@ -95,11 +99,10 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     digest = hashlib.sha256(
         (source + " ".join(flags) + ca.CasadiMeta.version() + compiler + _cpu_identity() + LINK).encode()
     ).hexdigest()[:20]
-    folder = cache_dir()
-    folder.mkdir(parents=True, exist_ok=True)
+    folder = private_cache()
     target = folder / f"{name}-{digest}.so"
     with _LOCK:
-        if not target.exists():
+        if not verified(target):  # missing, or not the library built here (planted, damaged): built again
             _announce(language)
             suffix = ".c" if language == "c" else ".cpp"
             src = folder / f"{name}-{digest}{suffix}"
@@ -118,6 +121,7 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
                         lines = done.stderr.splitlines()
                         errors = [ln for ln in lines if "error" in ln] or lines or [""]
                         raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
+                record_hash(target, Path(tmp_so))
                 os.replace(tmp_so, target)
             finally:
                 if os.path.exists(tmp_so):

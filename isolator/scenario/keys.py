@@ -15,6 +15,8 @@ from pathlib import Path
 from typing import Any
 
 from isolator.errors import ScenarioError
+from isolator.scenario.files import read_input
+from isolator.scenario.names import escaped
 
 __all__ = ["TOP_LEVEL_KEYS", "KeyReader", "load_toml", "number", "number_list", "table_of_tables"]
 
@@ -27,15 +29,13 @@ TOP_LEVEL_KEYS = ("name", "gravity", "table", "isolators", "air", "leveling", "s
                   "sensors", "disturbances")
 
 
-def load_toml(path: Path) -> dict[str, Any]:
-    """A TOML file's keys; a file that is not UTF-8, has a byte-order mark, is empty, is not valid TOML
-    or nests too deeply is a :class:`ScenarioError` naming the file (and the line)."""
-    try:
-        raw = path.read_bytes()
-    except IsADirectoryError:
-        raise ScenarioError(f"{path}: is a folder, not a scenario file") from None
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot be read ({exc.strerror})") from None
+def load_toml(path: Path, what: str = "scenario file") -> dict[str, Any]:
+    """A TOML file's keys; a file that is not a regular one (:func:`~isolator.scenario.files.read_input`, named
+    as ``what``), is not UTF-8, has a byte-order mark, is empty, is not valid TOML or nests too deeply is a
+    :class:`ScenarioError` naming the file (and the line)."""
+    if path.is_dir():
+        raise ScenarioError(f"{path}: is a folder, not a {what}")
+    raw = read_input(path, what)
     if raw.startswith(b"\xef\xbb\xbf"):
         raise ScenarioError(f"{path}: starts with a byte-order mark (BOM), which TOML does not allow; "
                             "save it as UTF-8 without BOM")
@@ -112,9 +112,15 @@ class KeyReader:
         positive: bool = False,
         nonnegative: bool = False,
         below: float | None = None,
+        rule: Any = None,
     ) -> float:
-        value = self.raw(name, default)
-        return number(value, self.key(name), positive=positive, nonnegative=nonnegative, below=below)
+        """The number at ``name``: finite, and as asked (``rule``: a :class:`~isolator.scenario.rules.Rule`)."""
+        value = number(self.raw(name, default), self.key(name), positive=positive, nonnegative=nonnegative,
+                       below=below)
+        problem = None if rule is None else rule.problem(value)
+        if problem is not None:
+            raise ScenarioError(f"{self.key(name)}: {problem}")
+        return value
 
     def vector(
         self, name: str, default: Any = ..., *, positive: bool = False, nonnegative: bool = False
@@ -160,8 +166,11 @@ def number(
     below: float | None = None,
 ) -> float:
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ScenarioError(f"{key}: must be a number, got {value!r}")
-    value = float(value)
+        raise ScenarioError(f"{key}: must be a number, got {escaped(repr(value), 40)}")
+    try:
+        value = float(value)
+    except OverflowError:  # a TOML integer beyond any float (10**400)
+        raise ScenarioError(f"{key}: must be finite, got an integer of {len(str(abs(value)))} digits") from None
     if not math.isfinite(value):
         raise ScenarioError(f"{key}: must be finite, got {value}")
     if positive and value <= 0:

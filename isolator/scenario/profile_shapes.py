@@ -48,8 +48,28 @@ def segments(
     kind : str
         The name the profile reports.
     """
-    knots, coef = _from_segments(start, t0, durations, accelerations, jerks)
+    check_arguments(start=start, t0=t0)
+    given = {name: _numbers(value, name) for name, value in
+             (("durations", durations), ("accelerations", accelerations), ("jerks", jerks))}
+    n = given["durations"].size
+    for name, values in given.items():
+        if values.size != n:
+            raise ParameterError(f"{name}: {values.size} values for {n} durations (one per segment)")
+    if np.any(given["durations"] < 0):
+        raise ParameterError(f"durations: must be >= 0 [s], got {given['durations'].min():g}")
+    knots, coef = _from_segments(start, t0, *(tuple(map(float, v)) for v in given.values()))
     return PiecewisePolynomialProfile(knots, coef, kind=kind)
+
+
+def _numbers(value: object, name: str) -> np.ndarray:
+    """A 1-D array of finite numbers, or a ParameterError naming ``name``."""
+    try:
+        out = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name}: must be a sequence of numbers, got {type(value).__name__}") from None
+    if out.ndim != 1 or not np.all(np.isfinite(out)):
+        raise ParameterError(f"{name}: must be a sequence of finite numbers (1-D), got shape {out.shape}")
+    return out
 
 
 def segment_starts(
@@ -230,14 +250,16 @@ def shaped(profile: PiecewisePolynomialProfile, amplitudes: Sequence[float], del
     kind : str
         The name the shaped profile reports.
     """
-    amps = np.asarray(amplitudes, dtype=float)
-    lags = np.asarray(delays, dtype=float)
+    amps, lags = _numbers(amplitudes, "amplitudes"), _numbers(delays, "delays")
     if amps.shape != lags.shape or amps.size == 0:
-        raise ValueError("amplitudes, delays: need one delay per amplitude")
+        raise ParameterError(f"amplitudes, delays: need one delay per amplitude, got {amps.size} amplitudes and "
+                             f"{lags.size} delays")
     if abs(amps.sum() - 1.0) > 1e-9 or np.any(lags < 0):
-        raise ValueError("amplitudes: must sum to 1, with delays >= 0")
+        raise ParameterError("amplitudes: must sum to 1, with delays >= 0")
+    if not isinstance(profile, PiecewisePolynomialProfile):
+        raise ParameterError(f"profile: must be a PiecewisePolynomialProfile, got {type(profile).__name__}")
     if profile._coefficient_array().shape[1] > 4:
-        raise ValueError("profile: shaping takes pieces of degree 3 at most")
+        raise ParameterError("profile: shaping takes pieces of degree 3 at most")
     base = np.asarray(profile.knots)
     knots = np.unique(np.concatenate([base + d for d in lags]))
     lo, hi = knots[:-1], knots[1:]

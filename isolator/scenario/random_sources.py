@@ -15,6 +15,7 @@ import numpy as np
 from isolator.errors import ScenarioError
 from isolator.scenario.ground import FloorSpectrum
 from isolator.scenario.keys import KeyReader, number, table_of_tables
+from isolator.scenario.names import check_name
 
 __all__ = ["VC_CLASSES", "Disturbance", "SpectralDensity", "read_density", "read_disturbances", "vc_spectrum"]
 
@@ -153,10 +154,7 @@ class Disturbance:
 
 def check_disturbance(disturbance: Disturbance, key: str) -> None:
     """Refuse a disturbance built with wrong values (one :class:`ScenarioError` naming ``key`` and the field)."""
-    name = disturbance.name
-    if not isinstance(name, str) or not name.strip() or name != name.strip() or not name.isprintable():
-        raise ScenarioError(f"{key}.name: must be a non-empty printable name without leading or trailing spaces, "
-                            f"got {name[:40] if isinstance(name, str) else name!r}")
+    check_name(disturbance.name, f"{key}.name")
     for field, vec in (("position", disturbance.position), ("direction", disturbance.direction)):
         if not isinstance(vec, tuple) or len(vec) != 3:
             raise ScenarioError(f"{key}.{field}: must be three numbers")

@@ -30,12 +30,13 @@ from isolator.scenario.definitions import (
 from isolator.scenario.field_checks import register_field_checks
 from isolator.scenario.ground_reader import read_spectrum
 from isolator.scenario.keys import KeyReader, load_toml, number, table_of_tables
+from isolator.scenario.names import MAX_NAME, escaped
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
 from isolator.scenario.profiles import Profile, SineProfile
 from isolator.scenario.random_sources import read_density, read_disturbances
-from isolator.scenario.rules import check_scenario_values
+from isolator.scenario.rules import MOTION, check_scenario_values
 from isolator.scenario.sensors import read_sensors
 from isolator.scenario.sequence import StepSequence, held, read_sequence
 from isolator.scenario.tables import load_spectrum, read_csv_columns, read_samples
@@ -70,7 +71,7 @@ def resolve_scenario_path(spec: str | Path | None) -> Path:
     if spec is None:
         spec = DEFAULT_SCENARIO
     path = Path(spec)
-    if path.is_file():
+    if path.exists() and not path.is_dir():  # a FIFO or a device too: load_toml refuses it, naming what it is
         return path
     if path.is_dir():
         raise ScenarioError(f"{spec}: is a folder, not a scenario file")
@@ -108,7 +109,7 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     7.9
     """
     path = resolve_scenario_path(spec)
-    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=path.stem)
+    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=escaped(path.stem)[:MAX_NAME].strip())
 
 
 def scenario_from_dict(
@@ -131,7 +132,7 @@ def scenario_from_dict(
 
 def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: str) -> Scenario:
     top = KeyReader(data, "")
-    name = top.string("name", default_name)
+    name = top.string("name", default_name or "scenario")
     gravity = top.number("gravity", 9.81, nonnegative=True)
     table = _read_table(KeyReader(top.raw("table"), "table"))
     read = tuple(
@@ -260,20 +261,20 @@ def _read_profile(r: KeyReader, base_dir: Path) -> Profile:
         common = {
             "start": r.number("start"),
             "stroke": r.number("stroke"),
-            "velocity": r.number("velocity", positive=True),
-            "acceleration": r.number("acceleration", positive=True),
+            "velocity": r.number("velocity", rule=MOTION),
+            "acceleration": r.number("acceleration", rule=MOTION),
             "t0": r.number("t0", 0.0, nonnegative=True),
         }
         if kind == "trapezoid":
-            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
+            dec = r.number("deceleration", rule=MOTION) if r.has("deceleration") else None
             r.used.add("deceleration")
             prof = trapezoid(deceleration=dec, **common)
         else:
-            dec = r.number("deceleration", positive=True) if r.has("deceleration") else None
-            jerk_down = r.number("deceleration_jerk", positive=True) if r.has("deceleration_jerk") else None
+            dec = r.number("deceleration", rule=MOTION) if r.has("deceleration") else None
+            jerk_down = r.number("deceleration_jerk", rule=MOTION) if r.has("deceleration_jerk") else None
             r.used.update(("deceleration", "deceleration_jerk"))
             prof = scurve(
-                jerk=r.number("jerk", positive=True), deceleration=dec, deceleration_jerk=jerk_down, **common
+                jerk=r.number("jerk", rule=MOTION), deceleration=dec, deceleration_jerk=jerk_down, **common
             )
     elif kind == "samples":
         t, q = read_samples(r, base_dir)
@@ -310,7 +311,7 @@ def _read_carriage(r: KeyReader, base_dir: Path, sequence: StepSequence | None) 
 
 def _read_limits(r: KeyReader) -> MotionLimits:
     keys = ("velocity", "acceleration", "jerk")
-    values = {k: r.number(k, positive=True) if r.has(k) else None for k in keys}
+    values = {k: r.number(k, rule=MOTION) if r.has(k) else None for k in keys}
     r.used.update(keys)
     r.finish()
     return MotionLimits(**values)

@@ -28,11 +28,13 @@ import numpy as np
 
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.definitions import Isolator, Scenario
+from isolator.scenario.names import check_scenario_names
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 
 __all__ = [
     "MAGNITUDE",
+    "MOVE_FLOOR",
     "RULES",
     "UNIT_TOLERANCE",
     "Rule",
@@ -77,6 +79,7 @@ class Rule:
     high_open: bool = False
     unit: bool = False
     triangle: bool = False
+    why: str = ""
 
     def problem(self, value: float) -> str | None:
         """Why ``value`` breaks the rule (None: it does not)."""
@@ -88,8 +91,10 @@ class Rule:
         low, high = self.low, self.high
         if low is not None and high is not None and not (low <= value <= high):
             return f"must be in [{low:g}, {high:g}], got {value:g}"
+        if low is not None and low > 0 and value <= 0:  # the sign first: a floor is for tiny positive values
+            return f"must be > 0, got {value:g}"
         if low is not None and (value <= low if self.low_open else value < low):
-            return f"must be {'>' if self.low_open else '>='} {low:g}, got {value:g}"
+            return f"must be {'>' if self.low_open else '>='} {low:g}{self.why}, got {value:g}"
         if high is not None and (value >= high if self.high_open else value > high):
             return f"must be {'<' if self.high_open else '<='} {high:g}, got {value:g}"
         return None
@@ -98,26 +103,31 @@ class Rule:
 FINITE = Rule()
 POSITIVE = Rule(low=0.0, low_open=True)
 NONNEGATIVE = Rule(low=0.0)
+#: the least speed, acceleration or jerk of a move (SI units): slower is no stage's move, and the products of
+#: smaller ones underflow (a move of acceleration 1e-300 vanished)
+MOVE_FLOOR = 1e-9
+#: a move's speed, acceleration, jerk: at least MOVE_FLOOR
+MOTION = Rule(low=MOVE_FLOOR, why=" (slower than any stage moves: 1 nm/s, 1 nm/s^2, 1 nm/s^3)")
 
 #: the rule of every numeric field of a scenario, by field (keys without indices and components)
 RULES: dict[str, Rule] = {
     "gravity": NONNEGATIVE,
-    "table.mass": POSITIVE,
+    "table.mass": Rule(low=1e-3, why=" kg (lighter than any table; its inertia from table.size would underflow)"),
     "table.inertia": Rule(low=0.0, low_open=True, triangle=True),
     "table.size": POSITIVE,
     "carriages.mass": POSITIVE,
     "carriages.axis": Rule(unit=True),
     "carriages.origin": FINITE,
-    "carriages.limits.velocity": POSITIVE,
-    "carriages.limits.acceleration": POSITIVE,
-    "carriages.limits.jerk": POSITIVE,
+    "carriages.limits.velocity": MOTION,
+    "carriages.limits.acceleration": MOTION,
+    "carriages.limits.jerk": MOTION,
     "carriages.profile.start": FINITE,
     "carriages.profile.stroke": FINITE,
-    "carriages.profile.velocity": POSITIVE,
-    "carriages.profile.acceleration": POSITIVE,
-    "carriages.profile.deceleration": POSITIVE,
-    "carriages.profile.jerk": POSITIVE,
-    "carriages.profile.deceleration_jerk": POSITIVE,
+    "carriages.profile.velocity": MOTION,
+    "carriages.profile.acceleration": MOTION,
+    "carriages.profile.deceleration": MOTION,
+    "carriages.profile.jerk": MOTION,
+    "carriages.profile.deceleration_jerk": MOTION,
     "carriages.profile.t0": NONNEGATIVE,
     "carriages.profile.amplitude": FINITE,
     "carriages.profile.omega": POSITIVE,
@@ -356,10 +366,12 @@ _VECTOR_LENGTHS = {"table.inertia": 3, "table.size": 3, "carriages.axis": 3, "ca
 
 
 def check_scenario_values(scenario: Scenario) -> None:
-    """Every number of a scenario (however it was built) by :data:`RULES`; one :class:`ScenarioError` naming the key.
+    """Every name (:func:`check_scenario_names`) and number (by :data:`RULES`) of a scenario, however it was built;
+    one :class:`ScenarioError` naming the key.
 
     For scenarios built from the dataclasses directly: the file reader checks the same rules key by key.
     """
+    check_scenario_names(scenario)
     vectors: dict[str, list[float]] = {}
     for key, value in scenario_values(scenario):
         x = check_value(key, value)

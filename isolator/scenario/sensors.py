@@ -15,6 +15,7 @@ from typing import Any
 
 from isolator.errors import ScenarioError
 from isolator.scenario.keys import KeyReader, number, table_of_tables
+from isolator.scenario.names import check_name
 from isolator.scenario.random_sources import SpectralDensity, read_density
 
 __all__ = ["QUANTITIES", "SENSOR_SITES", "UFF_DIRECTIONS", "Sensor", "read_sensors", "sensor_from_dict"]
@@ -25,8 +26,6 @@ QUANTITIES = {"displacement": "m", "velocity": "m/s", "acceleration": "m/s^2"}
 SENSOR_SITES = ("table", "floor")
 #: a UFF channel's direction as a sensor names it
 UFF_DIRECTIONS = ("+X", "-X", "+Y", "-Y", "+Z", "-Z")
-#: the longest sensor name
-MAX_NAME = 100
 #: names a record's columns already use
 _RESERVED = ("t",)
 
@@ -87,11 +86,7 @@ class Sensor:
 
 def check_sensor(sensor: Sensor, key: str) -> None:
     """Refuse a sensor built with wrong values (:class:`ScenarioError` naming ``key`` and the field)."""
-    if not isinstance(sensor.name, str) or not sensor.name.strip() or sensor.name != sensor.name.strip():
-        raise ScenarioError(f"{key}.name: must be a non-empty name without leading or trailing spaces, "
-                            f"got {sensor.name!r}")
-    if len(sensor.name) > MAX_NAME or not sensor.name.isprintable():
-        raise ScenarioError(f"{key}.name: must be at most {MAX_NAME} printable characters, got {sensor.name[:40]!r}")
+    check_name(sensor.name, f"{key}.name")
     if sensor.name in _RESERVED:
         raise ScenarioError(f"{key}.name: '{sensor.name}' is the records' time column; choose another name")
     if sensor.on not in SENSOR_SITES:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 
 import numpy as np
@@ -10,7 +11,9 @@ import numpy as np
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import FloorSpectrum
+from isolator.scenario.files import read_input_text
 from isolator.scenario.keys import KeyReader
+from isolator.scenario.names import escaped, excerpt
 
 __all__ = ["SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "read_samples", "spectrum_from_columns"]
 
@@ -53,18 +56,13 @@ def read_csv_columns(
         An unreadable, empty or non-UTF-8 file; unknown, missing or repeated columns; a row of the
         wrong length; a cell that is not a finite number; too few rows; values not increasing.
     """
-    where = f"{key}: '{path}'"
+    where = f"{key}: '{escaped(path, 120)}'"
+    text = read_input_text(path, key)
     try:
-        with open(path, newline="", encoding="utf-8-sig") as handle:
-            reader = csv.reader(handle)
-            rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
-    except OSError as exc:
-        raise ScenarioError(f"{key}: cannot read '{path}' ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(f"{where}: not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset "
-                            f"{exc.start}); save it as UTF-8") from None
+        reader = csv.reader(io.StringIO(text, newline=""))
+        rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
     except csv.Error as exc:
-        raise ScenarioError(f"{where}: not a CSV file ({exc})") from None
+        raise ScenarioError(f"{where}: not a CSV file ({escaped(exc, 80)})") from None
     if not rows:
         raise ScenarioError(f"{where}: is empty (needs a header line {','.join(required)},... and data rows)")
     head_line, header = rows[0][0], [h.strip() for h in rows[0][1]]
@@ -77,11 +75,11 @@ def read_csv_columns(
             try:
                 values[i, j] = float(cell)
             except ValueError:
-                raise ScenarioError(f"{where} line {line}, column '{header[j]}': '{cell.strip()}' is not a "
-                                    "number") from None
+                raise ScenarioError(f"{where} line {line}, column '{excerpt(header[j])}': '{excerpt(cell.strip())}' "
+                                    "is not a number") from None
             if not np.isfinite(values[i, j]):
-                raise ScenarioError(f"{where} line {line}, column '{header[j]}': {cell.strip()} is not a "
-                                    "finite number")
+                raise ScenarioError(f"{where} line {line}, column '{excerpt(header[j])}': "
+                                    f"{excerpt(cell.strip())} is not a finite number")
     n = values.shape[0]
     if n < min_rows:
         got = "no data rows" if n == 0 else f"{n} data row{'s' if n > 1 else ''}"
@@ -96,7 +94,7 @@ def _check_header(
     where: str, header: list[str], required: tuple[str, ...], optional: tuple[str, ...], exact: bool
 ) -> str:
     """The header as text, after checking its columns."""
-    got = ",".join(header)
+    got = excerpt(",".join(header))
     if exact and header != list(required):
         raise ScenarioError(f"{where}: the header must be '{','.join(required)}', got '{got}'")
     for name in required:
@@ -105,9 +103,9 @@ def _check_header(
     allowed = required + optional
     for name in header:
         if name not in allowed:
-            raise ScenarioError(f"{where}: column '{name}' is not one of {', '.join(allowed)}")
+            raise ScenarioError(f"{where}: column '{excerpt(name)}' is not one of {', '.join(allowed)}")
         if header.count(name) > 1:
-            raise ScenarioError(f"{where}: column '{name}' appears {header.count(name)} times")
+            raise ScenarioError(f"{where}: column '{excerpt(name)}' appears {header.count(name)} times")
     return got
 
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
+from isolator.scenario.names import check_names
 from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
 from isolator.scenario.rules import check_scenario_values
 from isolator.scenario.sequence import StepSequence
@@ -44,10 +45,8 @@ def check_isolator_layout(isolators: tuple[Isolator, ...] | tuple[PneumaticIsola
 
 
 def check_unique_names(names: list[str], section: str) -> None:
-    """Each name once per section, else an error naming the second use."""
-    for i, n in enumerate(names):
-        if n in names[:i]:
-            raise ScenarioError(f"{section}[{i}].name: '{n}' is used twice")
+    """Each name of a section by the rule for names (:func:`isolator.scenario.names.check_names`), once."""
+    check_names(names, section)
 
 
 def check_carriage_tree(carriages: tuple[Carriage, ...]) -> None:

@@ -25,6 +25,7 @@ from isolator.model.equilibrium import Equilibrium
 from isolator.model.variants import Model
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario, SimulationSettings
+from isolator.scenario.names import escaped
 from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.discrete_controller import DiscreteController
 from isolator.simulation.sampled_loop import SampledLaw, sampled_loop
@@ -109,7 +110,8 @@ def state_feedback(feedback: FeedbackLaw) -> SampledLaw:
     """A :class:`FeedbackLaw` as the compiled loop runs it."""
     a, b, c, d = (np.asarray(m, dtype=float) for m in feedback.matrices())
     return SampledLaw(float(feedback.sample_rate), ((a, b, c, d),),
-                      offsets=lambda t: -np.asarray(feedback.references(t), dtype=float).reshape(t.size, -1))
+                      offsets=lambda t: -np.asarray(feedback.references(t), dtype=float).reshape(t.size, -1),
+                      name=f"feedback law ({type(feedback).__name__})")
 
 
 def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equilibrium,
@@ -153,7 +155,8 @@ def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equil
     points = controller.schedule or (controller,)
     matrices = tuple((e.A, e.B, e.C, e.D) for e in points)
     return SampledLaw(controller.sample_rate, matrices, sensors, offsets,  # type: ignore[arg-type]
-                      weights if controller.schedule else None, controller.delay)
+                      weights if controller.schedule else None, controller.delay,
+                      f"controller (method '{escaped(controller.method, 40)}')")
 
 
 def run_closed_loop(scenario: Scenario, model: Model, grid: TimeGrid, grid_inputs: np.ndarray, p: np.ndarray,

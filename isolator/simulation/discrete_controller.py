@@ -36,6 +36,9 @@ import numpy as np
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.files import read_input_text
+from isolator.scenario.names import escaped
+from isolator.simulation.controller_schema import check_controller_data, warn_if_unstable
 
 __all__ = ["DiscreteController", "ScheduleEntry"]
 
@@ -244,8 +247,13 @@ class DiscreteController:
 
         ``u = C x + D y`` [N] is the command from ``t_k``; ``x_next = A x + B y``.
         """
+        if q is not None and np.size(q) != len(self.carriages):
+            raise ParameterError(f"q: must hold one position per carriage ({len(self.carriages)}), got {np.size(q)}")
         A, B, C, D = self.matrices(q)
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)
+        for name, value, size, what in (("x", x, self.states, "states"), ("y", y, len(self.sensors), "sensors")):
+            if value.shape != (size,):
+                raise ParameterError(f"{name}: must be ({size},), one value per {what[:-1]}, got shape {value.shape}")
         return A @ x + B @ y, C @ x + D @ y
 
     def to_dict(self) -> dict[str, Any]:
@@ -265,17 +273,14 @@ class DiscreteController:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> DiscreteController:
-        """The controller of :meth:`to_dict`'s data (with a ``schedule``, its top-level ``A .. D`` are ignored)."""
-        if missing := [key for key in ("sample_rate", "sensors", "actuators") if key not in data]:
-            raise ParameterError(f"{missing[0]}: missing from the controller's JSON")
-        common: dict[str, Any] = {k: data[k] for k in ("sample_rate", "sensors", "actuators")}
-        common.update(carriages=data.get("carriages", []), method=data.get("method", "custom"),
-                      settings=data.get("settings", {}), delay=bool(data.get("delay", False)))
-        if data.get("schedule"):
-            entries = [ScheduleEntry(e["q"], *(e[k] for k in _MATRICES)) for e in data["schedule"]]
-            return cls(**common, schedule=entries, schedule_carriage=data.get("schedule_carriage", 0))
-        common.update({k: data.get(k) for k in _MATRICES})
-        return cls(**common)
+        """The controller of :meth:`to_dict`'s data (with a ``schedule``, its top-level ``A .. D`` are ignored),
+        checked against the schema first (:func:`~isolator.simulation.controller_schema.check_controller_data`:
+        strict types, unknown keys warned about; one :class:`ParameterError` naming ``controller.<key>``)."""
+        checked = check_controller_data(data)
+        schedule = checked.pop("schedule", None)
+        if schedule:
+            checked["schedule"] = [ScheduleEntry(e["q"], *(e[k] for k in _MATRICES)) for e in schedule]
+        return cls(**checked)
 
     def to_json(self, path: str | Path) -> Path:
         """Write ``controller.json`` (``path`` a file, or a folder to write it in); returns the file."""
@@ -287,7 +292,24 @@ class DiscreteController:
     def from_json(cls, path: str | Path) -> DiscreteController:
         """Read ``controller.json`` (``path`` the file or its folder)."""
         source = Path(path) / "controller.json" if Path(path).is_dir() else Path(path)
-        return cls.from_dict(json.loads(source.read_text(encoding="utf-8")))
+        text = read_input_text(source, "", error=ParameterError, bom=False)  # errors start with the path
+        where = escaped(source, 120)
+        try:
+            data = json.loads(text, parse_constant=_no_constant)
+        except json.JSONDecodeError as error:  # where, and the decoder's reason: no content quoted
+            raise ParameterError(f"{where}: cannot read as JSON (JSONDecodeError at line {error.lineno}, column "
+                                 f"{error.colno}: {error.msg})") from None
+        except RecursionError:
+            raise ParameterError(f"{where}: cannot read as JSON (nested too deeply)") from None
+        controller = cls.from_dict(data)
+        points = controller.schedule or (controller,)
+        warn_if_unstable([e.A for e in points], f"controller '{where}'")  # type: ignore[misc]
+        return controller
+
+
+def _no_constant(name: str) -> float:
+    """JSON has no NaN or Infinity: refused where Python's decoder would take them."""
+    raise ParameterError(f"controller: {name} is not a JSON number (every entry must be finite)")
 
 
 check_public(globals())

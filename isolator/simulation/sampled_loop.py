@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from isolator.errors import SimulationError
 from isolator.model.rotations import cardan_matrix, quaternion_to_matrix
 from isolator.model.variants import Model
 from isolator.numerics.native import NativeFunction
@@ -31,6 +32,7 @@ from isolator.numerics.rk4 import rk4_step
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.sensors import Sensor
+from isolator.simulation.controller_schema import spectral_radius
 from isolator.simulation.sensors import _motion_function
 
 __all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "sampled_loop"]
@@ -65,6 +67,8 @@ class SampledLaw:
         ``t (ticks,) [s] -> (ticks, design points)`` (default: the first point alone).
     delay : bool
         One sample of computation delay.
+    name : str
+        How errors name it (a controller that diverges is one).
     """
 
     sample_rate: float
@@ -73,6 +77,7 @@ class SampledLaw:
     offsets: Callable[[np.ndarray], np.ndarray] | None = None
     weights: Callable[[np.ndarray], np.ndarray] | None = None
     delay: bool = False
+    name: str = "controller"
 
     @property
     def shape(self) -> tuple[int, int, int, int]:
@@ -285,8 +290,9 @@ class SampledLoop:
         flags = ticks.astype(float)
         states, applied = np.empty((total, x0.size)), np.empty((total, stages, m))
         call = self.chunk.bound()  # buffers allocated once for the run's calls
-        for lo in range(0, total, CHUNK):
-            hi = min(lo + CHUNK, total)
+
+        def advance(lo: int, hi: int, carry: list[np.ndarray]) -> list[np.ndarray]:
+            """Intervals lo..hi (at most CHUNK) from ``carry``; the carry after them."""
             part = [inputs[lo:hi], steps[lo:hi], flags[lo:hi], offsets[lo:hi], weights[lo:hi],
                     none[: hi - lo] if feedforward is None else feedforward[lo:hi]]
             if hi - lo < CHUNK:  # padded with empty intervals, dropped
@@ -295,11 +301,29 @@ class SampledLoop:
             xs, forces, *rest = call(*carry, cin, h, p, x0, tick, offset, weight, force, *consts)
             states[lo:hi] = xs[: hi - lo]
             applied[lo:hi] = forces[: hi - lo].reshape(hi - lo, stages, m)
-            carry = [xs[hi - lo - 1].copy(), *(r.ravel().copy() for r in rest)]
+            return [xs[hi - lo - 1].copy(), *(r.ravel().copy() for r in rest)]
+
+        for lo in range(0, total, CHUNK):
+            hi = min(lo + CHUNK, total)
+            before, carry = carry, advance(lo, hi, carry)
+            if not all(np.all(np.isfinite(c)) for c in carry[1:3]):  # the controller's state, its command
+                for j in range(lo, hi):  # which interval (only once the run has failed: one call each)
+                    before = advance(j, j + 1, before)
+                    if not all(np.all(np.isfinite(c)) for c in before[1:3]):
+                        raise _diverged(law, int(np.sum(ticks[: j + 1])) - 1)
         bad = ~np.all(np.isfinite(states), axis=1)
         if bad.any():
             states[int(np.argmax(bad)):] = np.nan
         return LoopRun(states, applied)
+
+
+def _diverged(law: SampledLaw, sample: int) -> SimulationError:
+    """The error of a controller whose state or command stopped being finite at ``sample``."""
+    radius = spectral_radius([a for a, *_ in law.matrices])
+    return SimulationError(f"{law.name}: a non-finite state or command at sample {sample} (t = "
+                           f"{sample / law.sample_rate:.6g} s): the controller diverged (the spectral radius of its "
+                           f"A is {radius:.6g}{'; > 1: unstable on its own' if radius > 1 else ''}): the run is "
+                           "refused rather than its NaN commands clipped to the force limits")
 
 
 _LOOPS: dict[tuple[object, ...], SampledLoop] = {}

@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Settling
 from isolator.simulation.band import MOTION_FLOOR, Band, as_band
@@ -87,7 +89,29 @@ def settling_time(
     reason : str
         Why the time is None ("" otherwise).
     """
-    return settling_times(t, np.asarray(s)[None, :], np.array([final]), stop_time, np.array([band]), hold)[0]
+    t, s = _samples(t, "t"), _samples(s, "s")
+    if s.size != t.size:
+        raise ParameterError(f"s: {s.size} samples for the {t.size} times of t (one per time)")
+    for name, value in (("final", final), ("stop_time", stop_time), ("band", band), ("hold", hold)):
+        if isinstance(value, bool) or not isinstance(value, numbers.Real) or math.isnan(value):
+            raise ParameterError(f"{name}: must be a number, got {value!r}")
+    if not (math.isfinite(band) and band > 0):
+        raise ParameterError(f"band: must be a finite half-width > 0 [m or rad], got {band!r}")
+    if not (math.isfinite(hold) and hold >= 0):
+        raise ParameterError(f"hold: must be a finite time >= 0 [s], got {hold!r}")
+    return settling_times(t, s[None, :], np.array([float(final)]), float(stop_time), np.array([float(band)]),
+                          float(hold))[0]
+
+
+def _samples(value: object, name: str) -> np.ndarray:
+    """A 1-D array of numbers with at least one, or a ParameterError naming ``name``."""
+    try:
+        out = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name}: must be a 1-D array of numbers, got {type(value).__name__}") from None
+    if out.ndim != 1 or out.size == 0:
+        raise ParameterError(f"{name}: must be a 1-D array of numbers, got shape {out.shape}")
+    return out
 
 
 def settling_times(

@@ -20,6 +20,7 @@ from isolator.numerics.native import MappedFunction
 from isolator.numerics.rk4 import Stepper
 from isolator.numerics.systems import Unstaged
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.profiles import SineProfile
 from isolator.simulation.time_grid import inputs_at
 
 __all__ = [
@@ -166,13 +167,25 @@ def plan_stage_inputs(scenario: Scenario, model: Model, method: Method, p: np.nd
 MAX_STEPS = 2e7
 
 
-def check_step_count(omega: float, duration: float, angle: float) -> None:
+def check_step_count(omega: float, duration: float, angle: float, scenario: Scenario | None = None) -> None:
     """Refuse a run whose fastest eigenvalue ``omega`` [1/s] needs more than :data:`MAX_STEPS` explicit steps
-    of ``|lambda| h <= angle`` over ``duration`` [s] (a stiffness or damping far beyond a real isolator's)."""
+    of ``|lambda| h <= angle`` over ``duration`` [s] (a stiffness or damping far beyond a real isolator's); with
+    ``scenario``, a sine drive (a carriage's or the floor's) at least as fast is named as the cause instead."""
     steps = duration * omega / angle
-    if not math.isfinite(steps) or steps > MAX_STEPS:
-        raise ScenarioError(
-            f"isolators: the table's fastest mode (|lambda| = {omega:.3g} 1/s) needs about {steps:.3g} integration "
-            f"steps for this {duration:g} s run (at most {MAX_STEPS:g}): a stiffness or damping far beyond a real "
-            "isolator's, or much too light a table"
-        )
+    if math.isfinite(steps) and steps <= MAX_STEPS:
+        return
+    drives = [] if scenario is None else [(f"carriages[{i}].profile", c.profile)
+                                          for i, c in enumerate(scenario.carriages)]
+    if scenario is not None and scenario.ground is not None:
+        drives += [(f"ground.{axis}", profile) for axis, profile in scenario.ground.motion.items()]
+    sines = [(abs(p.omega), key) for key, p in drives if isinstance(p, SineProfile)]
+    fastest = max(sines, default=(0.0, ""))
+    if fastest[0] >= omega:
+        raise ScenarioError(f"{fastest[1]}.omega: a sine of {fastest[0]:.3g} rad/s needs about {steps:.3g} "
+                            f"integration steps for this {duration:g} s run (at most {MAX_STEPS:g}): faster than "
+                            "any stage or floor moves")
+    raise ScenarioError(
+        f"isolators: the table's fastest mode (|lambda| = {omega:.3g} 1/s) needs about {steps:.3g} integration "
+        f"steps for this {duration:g} s run (at most {MAX_STEPS:g}): a stiffness or damping far beyond a real "
+        "isolator's, or much too light a table"
+    )

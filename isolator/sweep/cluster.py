@@ -11,10 +11,12 @@ as ``DASK_DISTRIBUTED__COMM__TLS__...`` environment variables) keeps working whe
 
 from __future__ import annotations
 
+import asyncio
 import ipaddress
 import os
 import socket
 import ssl
+import threading
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -110,18 +112,32 @@ def tls_security(ca_file: str | os.PathLike[str], cert: str | os.PathLike[str], 
     ca = _readable(ca_file, names["ca"], "CERTIFICATE", "certificate")
     mine = _readable(cert, names["cert"], "CERTIFICATE", "certificate")
     secret = _readable(key, names["key"], "PRIVATE KEY", "private key")
+    if _encrypted(secret):
+        raise ParameterError(f"{names['key']}: '{secret}' is encrypted: its passphrase would be asked for on the "
+                             "terminal; give the key unencrypted (openssl pkey -in KEY.pem -out plain.pem), "
+                             "readable by you only")
     try:
         ssl.create_default_context(cafile=ca)
     except ssl.SSLError as exc:
         raise ParameterError(f"{names['ca']}: '{ca}' is not a CA certificate OpenSSL reads ({exc.reason})") from None
-    try:
-        ssl.create_default_context().load_cert_chain(mine, secret)
+    try:  # a password callback: OpenSSL never prompts on the terminal
+        ssl.create_default_context().load_cert_chain(mine, secret, password=_no_passphrase)
     except ssl.SSLError as exc:
         which = names["key"] if "KEY" in str(exc.reason) else names["cert"]
         raise ParameterError(f"{which}: the certificate '{mine}' and key '{secret}' do not go together "
                              f"({exc.reason or exc})") from None
     return distributed.Security(tls_ca_file=ca, tls_client_cert=mine, tls_client_key=secret,
                                 require_encryption=True)
+
+
+def _encrypted(key: str) -> bool:
+    """Whether a PEM private key is encrypted (PKCS#8 ``ENCRYPTED PRIVATE KEY`` or a legacy ``Proc-Type``)."""
+    text = Path(key).read_text(encoding="ascii", errors="replace")
+    return "ENCRYPTED PRIVATE KEY" in text or "Proc-Type: 4,ENCRYPTED" in text
+
+
+def _no_passphrase() -> bytes:
+    raise ssl.SSLError("KEY_ENCRYPTED: the key needs a passphrase")
 
 
 def connect(address: str, security: Any = None, *, timeout: float | None = None,
@@ -169,10 +185,39 @@ def connect(address: str, security: Any = None, *, timeout: float | None = None,
         how = "--tls-ca-file, --tls-cert, --tls-key" if names["tls"].startswith("--") else "security="
         warnings.warn(UNENCRYPTED_WARNING.format(option=option, address=address, tls=f"{how}; see the recipe in "
                                                  "docs/guide/sweeps.md"), stacklevel=2)
-    try:
+    _probe(distributed, address, configured, timeout, names)
+    try:  # after the probe: a scheduler that answers (a refused one never gets a Client to close at exit)
         return distributed.Client(address, timeout=timeout, security=security, set_as_default=False)
     except Exception as exc:  # Dask raises many kinds: each is one line naming what to fix
         raise ParameterError(_failure(address, exc, timeout, names)) from None
+
+
+def _probe(distributed: Any, address: str, security: Any, timeout: float, names: Mapping[str, str]) -> None:
+    """Connect to ``address`` and read the scheduler's handshake within ``timeout`` s (Dask's own connect
+    waits for the handshake for ever: a peer that accepts and says nothing would hang the command); a
+    failure is one :class:`ParameterError` naming the address."""
+    async def handshake() -> None:
+        comm = await distributed.comm.connect(address, timeout=timeout, **security.get_connection_args("client"))
+        await comm.close()
+
+    failure: list[BaseException] = []
+
+    def run() -> None:  # its own event loop, in a thread: the caller may be running one (a notebook)
+        try:
+            asyncio.run(asyncio.wait_for(handshake(), timeout + 1.0))  # Dask's own connect error first
+        except BaseException as exc:  # reported in the caller's thread
+            failure.append(exc)
+
+    thread = threading.Thread(target=run, name="isolator-scheduler-probe", daemon=True)
+    thread.start()
+    thread.join(timeout + 2.0)
+    if thread.is_alive() or (failure and isinstance(failure[0], asyncio.TimeoutError | TimeoutError)):
+        raise ParameterError(f"{names['scheduler']}: {address} accepted the connection but did not answer as a "
+                             f"Dask scheduler within {timeout:g} s (another service on that port, or a scheduler "
+                             "that hangs)")
+    if failure:
+        raise ParameterError(_failure(address, failure[0] if isinstance(failure[0], Exception) else
+                                      RuntimeError(str(failure[0])), timeout, names)) from None
 
 
 def _failure(address: str, exc: Exception, timeout: float, names: Mapping[str, str]) -> str:

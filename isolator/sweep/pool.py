@@ -96,6 +96,7 @@ class SweepPool(ProcessPoolExecutor):
 def _started(parent: int) -> None:
     """The pool's initializer, in each worker: end with the sweep."""
     watched = os.getppid()
+    signal.signal(signal.SIGTERM, signal.SIG_DFL)  # not the command's handler (forked): stop() ends it at once
     if sys.platform.startswith("linux"):
         with contextlib.suppress(OSError, AttributeError):
             ctypes.CDLL(None, use_errno=True).prctl(_PR_SET_PDEATHSIG, int(signal.SIGKILL), 0, 0, 0)

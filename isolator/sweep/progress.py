@@ -10,7 +10,7 @@ import time
 from collections.abc import Callable
 from typing import Any, TextIO
 
-__all__ = ["DELAY", "Progress", "progress_bar"]
+__all__ = ["DELAY", "Progress", "progress_bar", "worker_notice"]
 
 #: how long [s] a sweep runs before its progress shows
 DELAY = 2.0
@@ -82,3 +82,26 @@ def progress_bar(progress: bool, total: int, initial: int) -> Callable[[int], No
     if not progress:
         return lambda k: None
     return Progress(total, initial, sys.stderr, sys.stderr.isatty())
+
+
+def worker_notice(progress: bool, stream: TextIO | None = None, delay: float = DELAY) -> Callable[[Any], None]:
+    """Called with a Dask client while no chunk finishes: once the sweep has run ``delay`` s, one line when
+    the cluster has no workers (the sweep would otherwise wait in silence), and one when workers come."""
+    if not progress:
+        return lambda client: None
+    started, said = time.monotonic(), [False]
+
+    def notice(client: Any) -> None:
+        if time.monotonic() - started < delay:
+            return
+        try:
+            workers = len(client.scheduler_info().get("workers", {}))
+        except Exception:  # a client closing: the runner finds out
+            return
+        if (workers == 0) != said[0]:
+            said[0] = workers == 0
+            text = ("0 workers: the chunks wait until a worker joins the scheduler (dask worker "
+                    f"{client.scheduler.address})" if workers == 0 else f"{workers} workers joined")
+            print(f"isolator sweep: {text}", file=stream or sys.stderr, flush=True)
+
+    return notice

@@ -25,20 +25,33 @@ from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
 from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
 from isolator.sweep.pool import SweepPool
-from isolator.sweep.progress import progress_bar
+from isolator.sweep.progress import progress_bar, worker_notice
 from isolator.sweep.result import SweepResult, Tally
 from isolator.sweep.runner import run_chunks
 from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key, simulator_for
 
-__all__ = ["MAX_CHUNK", "chunk_size_for", "default_workers", "sweep"]
+__all__ = ["MAX_CHUNK", "WORKERS_PER_CORE", "check_workers", "chunk_size_for", "default_workers", "sweep"]
 
 #: designs per chunk at most (about 0.3 s of work on one core for Table 3.2: a Dask task costs some 10 ms)
 MAX_CHUNK = 512
+#: local worker processes per core at most (more only share the cores, each with its own memory)
+WORKERS_PER_CORE = 4
 
 
 def default_workers() -> int:
     """Worker processes of the default pool: the cores this process may use."""
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+
+
+def check_workers(value: object, name: str = "workers") -> int:
+    """A count of local worker processes: a whole number from 1 to :data:`WORKERS_PER_CORE` times the cores
+    (:func:`default_workers`); else a :class:`ParameterError` naming ``name``."""
+    workers = _positive(value, name)
+    most = WORKERS_PER_CORE * default_workers()
+    if workers > most:
+        raise ParameterError(f"{name}: {workers} worker processes on {default_workers()} core(s); at most {most} "
+                             f"({WORKERS_PER_CORE} per core: more would only share the cores and the memory)")
+    return workers
 
 
 def chunk_size_for(designs: int, workers: int) -> int:
@@ -225,7 +238,8 @@ def sweep(
         swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
         template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
         simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
-        pool, renew = _executor(executor, n_workers)  # made (a function's executor checked) before any file
+        chunks = _chunk_count(done, size)  # no more processes than chunks to run
+        pool, renew = _executor(executor, n_workers, min(n_workers, chunks))  # made (a function's executor checked)
         if pool is not None and renew is not None:  # should the sweep fail before its chunks run (else a no-op)
             cluster.callback(pool.shutdown, wait=False, cancel_futures=True)
         if path is not None:
@@ -248,7 +262,7 @@ def sweep(
         complete = False
         try:
             run_chunks(_chunks(designs, template, done, size), pool, 2 * n_workers + 1, finished, renew,
-                       _alive(pool))
+                       _alive(pool, worker_notice(progress)))
             complete = True
         except ExecutorError as exc:
             kept = f"the {tally.resumed + tally.runs} rows done are kept in '{path}'" if path is not None else \
@@ -289,9 +303,17 @@ def _chunks(designs: Designs, template: Chunk, done: np.ndarray, size: int) -> I
         lo = hi
 
 
-def _executor(executor: Executor | Callable[[], Executor] | None,
-              workers: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
-    """The executor and how to make a fresh one (the pool made here, or the caller's function making one)."""
+def _chunk_count(done: np.ndarray, size: int) -> int:
+    """How many chunks :func:`_chunks` makes of the designs not done."""
+    todo = np.flatnonzero(~done)
+    runs = np.split(todo, np.flatnonzero(np.diff(todo) != 1) + 1) if todo.size else []
+    return sum(-(-run.size // size) for run in runs)
+
+
+def _executor(executor: Executor | Callable[[], Executor] | None, workers: int,
+              processes: int) -> tuple[Executor | None, Callable[[], Executor] | None]:
+    """The executor and how to make a fresh one (the pool made here, of ``processes`` workers, or the caller's
+    function making one)."""
     if isinstance(executor, Executor):
         return executor, None
     if executor is not None:
@@ -307,7 +329,7 @@ def _executor(executor: Executor | Callable[[], Executor] | None,
         return None, None
 
     def make() -> Executor:
-        return SweepPool(workers)
+        return SweepPool(max(1, processes))
 
     return make(), make
 
@@ -318,17 +340,23 @@ def _close(client: Any) -> None:
         client.close(timeout=2)
 
 
-def _alive(executor: Executor | None) -> Callable[[], bool] | None:
-    """Whether a Dask executor's client still talks to its scheduler (None: an executor that cannot tell)."""
+def _alive(executor: Executor | None, notice: Callable[[Any], None]) -> Callable[[], bool] | None:
+    """Whether a Dask executor's client still talks to its scheduler (None: an executor that cannot tell);
+    ``notice`` is told of the client each time (a cluster without workers, said once)."""
     client = getattr(executor, "_client", None)
     if client is None or not hasattr(client, "status"):
         return None
-    return lambda: str(client.status) in ("running", "connecting", "newly-created")
+
+    def alive() -> bool:
+        notice(client)
+        return str(client.status) in ("running", "connecting", "newly-created")
+
+    return alive
 
 
 def _workers(workers: int | None, executor: Executor | Callable[[], Executor] | None) -> int:
     if workers is not None:
-        return _positive(workers, "workers")
+        return _positive(workers, "workers") if executor is not None else check_workers(workers)
     if executor is not None:  # a pool's own count, a Dask cluster's threads, else this machine's cores
         client = getattr(executor, "_client", None)
         if client is not None and hasattr(client, "nthreads"):

@@ -279,5 +279,5 @@ def test_modes_over_travel_and_figures(tmp_path):
     for i, fig in enumerate((travel.plot(), direct.plot(), compliance(linearise(scenario)).plot())):
         fig.savefig(tmp_path / f"{i}.png")
         assert (tmp_path / f"{i}.png").stat().st_size > 10_000
-    with pytest.raises(ValueError, match="samples: must be >= 2"):
+    with pytest.raises(ParameterError, match="samples: must be a whole number from 2"):
         modes_over_travel(scenario, samples=1)

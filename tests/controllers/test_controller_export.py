@@ -104,7 +104,7 @@ def test_reset_puts_the_state_at_rest(tmp_path):
 
 def test_json_round_trip(tmp_path):
     rng = np.random.default_rng(6)
-    plain = DiscreteController(1234.5, ["s1", "s\n2"], ["a"], [], "skyhook", *random_design(rng, 3, 2, 1),
+    plain = DiscreteController(1234.5, ["s1", "s\\2"], ["a"], [], "skyhook", *random_design(rng, 3, 2, 1),
                                settings={"gain": 0.1, "bands": [1, 2]})
     for ctrl in (plain, scheduled(rng)):
         path = ctrl.to_json(tmp_path)
