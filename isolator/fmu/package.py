@@ -95,7 +95,7 @@ def _guid(text: str) -> str:
 
 def build_fmu(out: Path, identifier: str, name: str, description: str, variables: Sequence[FmuVariable],
               sources: Mapping[str, str], *, me: bool, cs: bool, step: float, stop_time: float | None = None,
-              interpolates: bool = False) -> Path:
+              interpolates: bool = False, key: str = "out") -> Path:
     """Compile ``sources`` for this platform and zip the FMU at ``out``.
 
     Parameters
@@ -119,6 +119,8 @@ def build_fmu(out: Path, identifier: str, name: str, description: str, variables
         The default experiment's stop time [s].
     interpolates : bool
         Co-Simulation: ``canInterpolateInputs``.
+    key : str
+        How errors name ``out``.
 
     Raises
     ------
@@ -142,10 +144,20 @@ def build_fmu(out: Path, identifier: str, name: str, description: str, variables
                                "initial_unknowns": sorted({*outputs, *derivatives, *states})}
     xml = render("isolator.fmu", "templates/modelDescription.xml.j2", **context)
     headers = {h: resources.files("isolator.fmu").joinpath("templates", h).read_text() for h in FMI_HEADERS}
-    out.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        out.parent.mkdir(parents=True, exist_ok=True)
+        _write(out, identifier, xml, {**texts, **headers}, c_files, compiler)
+    except OSError as exc:
+        raise ParameterError(f"{key}: cannot write '{out}' ({exc.strerror or exc})") from None
+    return out
+
+
+def _write(out: Path, identifier: str, xml: str, files: Mapping[str, str], c_files: Sequence[str], compiler: str
+           ) -> None:
+    """Compile and zip into a temporary folder beside ``out``, then move the archive into place."""
     with tempfile.TemporaryDirectory(dir=out.parent, prefix=".fmu-") as tmp:
         folder = Path(tmp)
-        for file, text in {**texts, **headers}.items():
+        for file, text in files.items():
             (folder / file).write_text(text, encoding="utf-8")
         suffix = ".dll" if os.name == "nt" else ".dylib" if platform.system() == "Darwin" else ".so"
         binary = folder / f"{identifier}{suffix}"
@@ -159,7 +171,6 @@ def build_fmu(out: Path, identifier: str, name: str, description: str, variables
         with zipfile.ZipFile(archive, "w", zipfile.ZIP_DEFLATED) as zf:
             zf.writestr("modelDescription.xml", xml)
             zf.write(binary, f"binaries/{fmi_platform()}/{binary.name}")
-            for file in sorted({**texts, **headers}):
+            for file in sorted(files):
                 zf.write(folder / file, f"sources/{file}")
         os.replace(archive, out)
-    return out
