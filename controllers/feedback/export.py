@@ -29,7 +29,7 @@ from isolator.numerics.rendering import escape_name, render
 from isolator.scenario.arguments import check_public
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
 
-__all__ = ["DiscreteController", "ScheduleEntry", "from_statespace", "write_c"]
+__all__ = ["DiscreteController", "ScheduleEntry", "c_sources", "from_statespace", "write_c"]
 
 _MATRICES = ("A", "B", "C", "D")
 
@@ -54,10 +54,16 @@ def write_c(controller: DiscreteController, folder: str | Path) -> tuple[Path, P
     out = Path(folder)
     out.mkdir(parents=True, exist_ok=True)
     header, source = out / "controller.h", out / "controller.c"
-    header.write_text(render(__package__, "templates/controller.h.j2", ctrl=controller), encoding="utf-8")
-    source.write_text(render(__package__, "templates/controller.c.j2", **_source_values(controller)),
-                      encoding="utf-8")
+    texts = c_sources(controller)
+    header.write_text(texts["controller.h"], encoding="utf-8")
+    source.write_text(texts["controller.c"], encoding="utf-8")
     return header, source
+
+
+def c_sources(controller: DiscreteController) -> dict[str, str]:
+    """The texts of ``controller.h`` and ``controller.c`` by file name (what :func:`write_c` writes)."""
+    return {"controller.h": render(__package__, "templates/controller.h.j2", ctrl=controller),
+            "controller.c": render(__package__, "templates/controller.c.j2", **_source_values(controller))}
 
 
 def _source_values(ctrl: DiscreteController) -> dict[str, Any]:

@@ -27,7 +27,7 @@ from isolator.errors import ParameterError
 from isolator.numerics.native import _compiler
 from isolator.numerics.rendering import render
 
-__all__ = ["FMI_HEADERS", "FmuVariable", "build_fmu", "fmi_platform"]
+__all__ = ["FMI_HEADERS", "FmuVariable", "build_fmu", "c_compiler", "fmi_platform"]
 
 #: the FMI 2.0 headers shipped in ``templates/``
 FMI_HEADERS = ("fmi2Functions.h", "fmi2FunctionTypes.h", "fmi2TypesPlatform.h")
@@ -89,6 +89,23 @@ def fmi_platform() -> str:
     return system + bits
 
 
+def c_compiler() -> str:
+    """The C compiler an FMU's binary is built with (as the native build finds it: ``$CC``, ``cc``, ``gcc``,
+    ``clang``).
+
+    Raises
+    ------
+    ParameterError
+        None found, naming the ones looked for.
+    """
+    compiler = _compiler("c")
+    if compiler is None:
+        looked = "$CC, cc, gcc, clang" if not os.environ.get("CC") else f"$CC ({os.environ['CC']}), cc, gcc, clang"
+        raise ParameterError(f"no C compiler found (looked for {looked}): an FMU carries a binary compiled here; "
+                             "install one or set CC")
+    return compiler
+
+
 def _guid(text: str) -> str:
     return "{" + str(uuid.UUID(hashlib.sha256(text.encode()).hexdigest()[:32])) + "}"
 
@@ -127,11 +144,9 @@ def build_fmu(out: Path, identifier: str, name: str, description: str, variables
     ParameterError
         No C compiler (naming the ones looked for), or it failed; ``out`` not writable.
     """
-    compiler = _compiler("c")
-    if compiler is None:
-        looked = "$CC, cc, gcc, clang" if not os.environ.get("CC") else f"$CC ({os.environ['CC']}), cc, gcc, clang"
-        raise ParameterError(f"no C compiler found (looked for {looked}): an FMU carries a binary compiled here; "
-                             "install one or set CC")
+    compiler = c_compiler()
+    if sorted(v.vr for v in variables) != list(range(len(variables))):
+        raise ValueError("build_fmu: the variables' value references must be 0, 1, ... (each once)")
     texts = dict(sources)
     guid = _guid("".join(texts[k] for k in sorted(texts)) + identifier)
     texts = {k: v.replace("@GUID@", guid) for k, v in texts.items()}
@@ -140,8 +155,9 @@ def build_fmu(out: Path, identifier: str, name: str, description: str, variables
     derivatives = [i + 1 for i, v in enumerate(variables) if v.derivative is not None]
     states = [v.derivative for v in variables if v.derivative is not None]
     outputs = [i + 1 for i, v in enumerate(variables) if v.causality == "output"]
+    calculated = [i for i in outputs if variables[i - 1].initial != "exact"]
     context: dict[str, Any] = {"fmu": fmu, "variables": variables, "outputs": outputs, "derivatives": derivatives,
-                               "initial_unknowns": sorted({*outputs, *derivatives, *states})}
+                               "initial_unknowns": sorted({*calculated, *derivatives, *states})}
     xml = render("isolator.fmu", "templates/modelDescription.xml.j2", **context)
     headers = {h: resources.files("isolator.fmu").joinpath("templates", h).read_text() for h in FMI_HEADERS}
     try:

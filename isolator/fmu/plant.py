@@ -23,7 +23,7 @@ import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.fmu.functions import PlantFunctions, plant_functions, state_nominals
-from isolator.fmu.package import FmuVariable, build_fmu
+from isolator.fmu.package import FmuVariable, build_fmu, c_compiler
 from isolator.model.names import expand_changes, resolve
 from isolator.numerics.rendering import render
 from isolator.scenario.arguments import check_public
@@ -179,6 +179,7 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     if carriages not in ("profiles", "inputs"):
         raise ParameterError(f"carriages: must be 'profiles' or 'inputs', got {carriages!r}")
     out = Path(out)
+    c_compiler()  # before any work
     sim = Simulator(scenario)
     p = sim.parameter_vector(expand_changes(sim.layout, changes) if changes else None)  # type: ignore[arg-type]
     sim.check_tipping(p)
