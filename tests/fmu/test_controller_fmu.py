@@ -16,10 +16,10 @@ from isolator.fmu import write_fmu
 from isolator.simulation.settling import settling_time
 
 pytest.importorskip("fmpy")
-from fmpy import read_model_description  # noqa: E402
-from fmpy.validation import validate_fmu  # noqa: E402
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
 
-from controllers.feedback import design_controller, write_controller_fmu  # noqa: E402
+from controllers.feedback import design_controller, write_controller_fmu
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
 
@@ -41,7 +41,8 @@ def test_each_step_is_the_controllers_step(tmp_path, delay):
     path = write_controller_fmu(ctrl, tmp_path / "controller.fmu")
     assert validate_fmu(str(path)) == []
     md = read_model_description(str(path))
-    assert md.modelExchange is None and md.coSimulation is not None
+    assert md.modelExchange is None
+    assert md.coSimulation is not None
     slave = Slave(path, tmp_path)
     rng = np.random.default_rng(4)
     x, previous = ctrl.reset(), np.zeros(len(ctrl.actuators))
