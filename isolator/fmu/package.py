@@ -162,7 +162,7 @@ def build_fmu(out: Path, identifier: str, name: str, description: str, variables
     headers = {h: resources.files("isolator.fmu").joinpath("templates", h).read_text() for h in FMI_HEADERS}
     try:
         out.parent.mkdir(parents=True, exist_ok=True)
-        _write(out, identifier, xml, {**texts, **headers}, c_files, compiler)
+        _write(out.absolute(), identifier, xml, {**texts, **headers}, c_files, compiler)
     except OSError as exc:
         raise ParameterError(f"{key}: cannot write '{out}' ({exc.strerror or exc})") from None
     return out

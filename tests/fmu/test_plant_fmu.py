@@ -216,3 +216,28 @@ def test_no_c_compiler_says_which_were_looked_for(tmp_path, capsys, monkeypatch)
     assert "no-such-cc" in err[0]
     assert "gcc" in err[0]
     assert not (tmp_path / "t.fmu").exists()
+
+
+def test_hostile_names_reach_the_xml_and_the_c_escaped(tmp_path):
+    """Quotes, comment ends, trigraphs, markup and non-ASCII in names: the XML holds them exactly, the C
+    compiles strictly, the outputs are there by those names."""
+    names = ['probe "a" */ ??/', "<&'é>"]
+    scenario = shortened("paper-table-3-2", points=tuple(Point(n, (0.3, 0.1 * k, 0.4)) for k, n in enumerate(names)))
+    path = write_fmu(scenario, tmp_path / "hostile.fmu")
+    assert validate_fmu(str(path)) == []
+    outputs = output_names(path)
+    assert [f"{n}:x" for n in names] == [o for o in outputs if o.endswith(":x")]
+    with zipfile.ZipFile(path) as zf:
+        zf.extractall(tmp_path)
+    for source in sorted((tmp_path / "sources").glob("*.c")):
+        subprocess.run(["gcc" if shutil.which("gcc") else "cc", "-std=c99", "-Wall", "-Wextra", "-Werror",
+                        "-pedantic", "-trigraphs", "-c", "-o", str(tmp_path / "probe.o"), str(source)], check=True,
+                       capture_output=True, cwd=tmp_path / "sources")
+
+
+def test_a_relative_out_path(tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    status, _text, err = run_command(["fmu", "paper-table-3-2", "--out", "sub/table.fmu"], capsys)
+    assert status == 0, err
+    assert validate_fmu(str(tmp_path / "sub" / "table.fmu")) == []
+    assert sorted(p.name for p in (tmp_path / "sub").iterdir()) == ["table.fmu"]
