@@ -17,11 +17,15 @@ from fmu_master import relative_error, run
 from isolator import Simulator, load_scenario
 from isolator.fmu import write_fmu
 from isolator.scenario.definitions import Point
+from isolator.scenario.ground import Ground
+from isolator.scenario.profile_shapes import samples
+from isolator.scenario.profiles import SineProfile
 from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.stepping import Method
 
 fmpy = pytest.importorskip("fmpy")
-from fmpy import read_model_description, simulate_fmu  # noqa: E402
+from fmpy import extract, read_model_description, simulate_fmu  # noqa: E402
+from fmpy.fmi2 import FMU2Model  # noqa: E402
 from fmpy.validation import validate_fmu  # noqa: E402
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
@@ -241,3 +245,41 @@ def test_a_relative_out_path(tmp_path, capsys, monkeypatch):
     assert status == 0, err
     assert validate_fmu(str(tmp_path / "sub" / "table.fmu")) == []
     assert sorted(p.name for p in (tmp_path / "sub").iterdir()) == ["table.fmu"]
+
+
+def test_a_sampled_profile_and_a_moving_floor_equal_simulate(tmp_path):
+    """The x-stage on a sampled profile (a clamped spline through 50 ms samples: 160 pieces, each a breakpoint)
+    and the floor heaving and rolling by sines (the scenario's [ground] motion, profiles of the FMU's time)."""
+    base = load_scenario("paper-table-3-2")
+    t = np.arange(0.0, 8.0 + 1e-9, 0.05)
+    q = base.carriages[0].profile.evaluate(t)[0]
+    carriages = (dataclasses.replace(base.carriages[0], profile=samples(t, q)), *base.carriages[1:])
+    ground = Ground(motion={"z": SineProfile(2e-6, 2 * np.pi * 3.0, t0=0.2), "rx": SineProfile(1e-6, 2 * np.pi * 5.0)})
+    scenario = shortened("paper-table-3-2", carriages=carriages, ground=ground)
+    path = write_fmu(scenario, tmp_path / "sampled.fmu")
+    names = output_names(path)
+    t_out, values = run(path, tmp_path, names, scenario.simulation.duration, STEP)
+    assert_close(t_out, values, names, Simulator(scenario).run())
+
+
+def test_model_exchange_announces_the_breakpoints_as_time_events(table, tmp_path):
+    scenario, path = table
+    md = read_model_description(str(path))
+    fmu = FMU2Model(guid=md.guid, unzipDirectory=extract(str(path), unzipdir=str(tmp_path / "me")),
+                    modelIdentifier=md.modelExchange.modelIdentifier, instanceName="me")
+    fmu.instantiate()
+    fmu.setupExperiment(startTime=0.0)
+    fmu.enterInitializationMode()
+    fmu.exitInitializationMode()
+    events = []
+    for _ in range(len(scenario.breakpoints) + 1):
+        *_, defined, next_time = fmu.newDiscreteStates()
+        if not defined:
+            break
+        events.append(next_time)
+        fmu.enterContinuousTimeMode()
+        fmu.setTime(events[-1])
+        fmu.enterEventMode()
+    fmu.terminate()
+    fmu.freeInstance()
+    np.testing.assert_allclose(events, scenario.breakpoints, rtol=0, atol=1e-12)
