@@ -58,6 +58,7 @@ def _fmu(args: argparse.Namespace) -> int:
     out = output_path(args.out, "--out", (".fmu",))
     scenario = load_scenario(args.scenario)
     names = [n.strip() for n in args.parameters.split(",") if n.strip()]
-    written = write_fmu(scenario, out, args.carriages, names, parse_sets(args.sets), key="--out")
+    written = write_fmu(scenario, out, args.carriages, names, parse_sets(args.sets),
+                        keys={"out": "--out", "parameters": "--parameters", "changes": "--set"})
     print(f"wrote {written}")
     return 0

@@ -25,6 +25,7 @@ from isolator.errors import ParameterError
 from isolator.fmu.functions import PlantFunctions, plant_functions, state_nominals
 from isolator.fmu.package import FmuVariable, build_fmu, c_compiler
 from isolator.model.names import expand_changes, resolve
+from isolator.model.parameters import ParameterLayout
 from isolator.numerics.rendering import render
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
@@ -72,14 +73,16 @@ def _identifier(out: Path) -> str:
     return stem if re.match(r"[A-Za-z_]", stem) else f"t_{stem}"
 
 
-def _tunable(functions: PlantFunctions, names: Sequence[str]) -> list[tuple[str, tuple[int, ...]]]:
-    layout = functions.model.layout
+def _tunable(layout: ParameterLayout, names: Sequence[str], key: str) -> list[tuple[str, tuple[int, ...]]]:
+    """Each name and the parameter entries it sets (errors name ``key``)."""
     out = []
     for name in names:
-        column = resolve(layout, name, "set", f"--parameters {name!r}")
+        if not isinstance(name, str):
+            raise ParameterError(f"{key}: names must be strings, got {name!r}")
+        column = resolve(layout, name, "set", f"{key} {name!r}")
         out.append((name, column.entries))
     if len({n for n, _ in out}) != len(out):
-        raise ParameterError("--parameters: a name is given twice")
+        raise ParameterError(f"{key}: a name is given twice")
     return out
 
 
@@ -145,8 +148,8 @@ def _variables(scenario: Scenario, inputs_mode: bool, tunable: list[tuple[str, t
 
 
 def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles", "inputs"] = "profiles",
-              parameters: Sequence[str] = (), changes: Mapping[str, float] | None = None, key: str = "out"
-              ) -> Path:
+              parameters: Sequence[str] = (), changes: Mapping[str, float] | None = None,
+              keys: Mapping[str, str] | None = None) -> Path:
     """Write the table of ``scenario`` as an FMI 2.0 FMU (Model Exchange and Co-Simulation).
 
     Parameters
@@ -161,8 +164,9 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
         Names as ``isolator sweep --set`` takes them, each a parameter of the FMU.
     changes : mapping of str to float, optional
         Values changed in the scenario before it is exported (as ``--set``).
-    key : str
-        How errors name ``out`` (the command line's ``--out``).
+    keys : mapping of str to str, optional
+        How errors name the arguments ``out``, ``parameters``, ``changes`` (default: so; the command line
+        passes its options' names).
 
     Returns
     -------
@@ -181,12 +185,14 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     out = Path(out)
     c_compiler()  # before any work
     sim = Simulator(scenario)
-    p = sim.parameter_vector(expand_changes(sim.layout, changes) if changes else None)  # type: ignore[arg-type]
+    names = {"out": "out", "parameters": "parameters", "changes": "changes", **(keys or {})}
+    expanded = expand_changes(sim.layout, changes, names["changes"])
+    p = sim.layout.with_changes(sim.parameters, expanded, names["changes"])  # type: ignore[arg-type]
+    tunable = _tunable(sim.layout, list(parameters), names["parameters"])  # the same names as the FMU's model
     sim.check_tipping(p)
     start, end = sim.equilibria(p)
     functions = plant_functions(scenario)
     model, layout = functions.model, functions.model.layout
-    tunable = _tunable(functions, list(parameters))
     drives = [c.profile for c in scenario.carriages]
     drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
     omega = max(start.max_frequency, end.max_frequency if end is not None else 0.0,
@@ -231,7 +237,8 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     }
     stop = scenario.simulation.duration
     return build_fmu(out, identifier, scenario.name, f"isolation table {scenario.name} (isolator)", variables,
-                     sources, me=True, cs=True, step=COMMUNICATION_STEP, stop_time=stop, interpolates=True, key=key)
+                     sources, me=True, cs=True, step=COMMUNICATION_STEP, stop_time=stop, interpolates=True,
+                     key=names["out"])
 
 
 check_public(globals())

@@ -198,6 +198,8 @@ def test_a_pneumatic_table_equals_the_toolkits_integrator(tmp_path):
     ["--out", "{tmp}/plain.txt/table.fmu"],
     ["--out", "{tmp}/table.fmu", "--parameters", "isolators[*].stifness.z"],
     ["--out", "{tmp}/table.fmu", "--set", "isolators[*].stiffness.z=soft"],
+    ["--out", "{tmp}/table.fmu", "--set", "isolators[*].stifness.z=1e6"],
+    ["--out", "{tmp}/table.fmu", "--set", "isolators[*].stiffness.z=-1"],
     ["--out", "{tmp}/table.fmu", "--carriages", "both"],
 ])
 def test_bad_input_is_one_line_and_writes_nothing(tmp_path, capsys, argv):
