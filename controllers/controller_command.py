@@ -66,6 +66,9 @@ def register(sub: Any) -> None:
                      help="skyhook: the geophone loop's high-pass corner (default: a fifth of the lowest mode)")
     ctl.add_argument("--max-velocity", type=float, default=None, metavar="M_PER_S",
                      help="lqg and hinf: the acceptable table velocity (and angular velocity, rad/s) (default 0.01)")
+    ctl.add_argument("--fmu", action="store_true",
+                     help="also write controller.fmu: the controller as an FMI 2.0 Co-Simulation FMU (inputs "
+                     "y:<sensor>, q:<carriage>; outputs u:<actuator>; one step per sample); needs a C compiler")
     ctl.add_argument("--json", action="store_true", help="print JSON instead of text")
     ctl.set_defaults(handler=_controller)
 
@@ -122,9 +125,14 @@ def _controller(args: argparse.Namespace) -> int:
         parse_uncertainty,
         uncertainty_from_calibration,
         write_c,
+        write_controller_fmu,
     )
 
     _writable_folder(args.out)
+    if args.fmu:
+        from isolator.fmu.package import c_compiler
+
+        c_compiler()  # before the design and its check
     if args.uncertainty is not None and args.calibration_json is not None:
         raise ParameterError("--uncertainty: give either bounds or --calibration-json, not both")
     uncertainty = (parse_uncertainty(args.uncertainty) if args.uncertainty is not None else
@@ -142,7 +150,11 @@ def _controller(args: argparse.Namespace) -> int:
         staged = Path(scratch)
         (staged / "controller.json").write_text(json.dumps(data, indent=1, allow_nan=False) + "\n", encoding="utf-8")
         write_c(controller, staged)
-        for name in ("controller.json", "controller.h", "controller.c"):
+        names: tuple[str, ...] = ("controller.json", "controller.h", "controller.c")
+        if args.fmu:
+            write_controller_fmu(controller, staged / "controller.fmu", key="--fmu")
+            names += ("controller.fmu",)
+        for name in names:
             os.replace(staged / name, folder / name)
     target, header, source = (folder / name for name in ("controller.json", "controller.h", "controller.c"))
     lines = [f"{args.method} controller: {len(controller.sensors)} sensors -> {len(controller.actuators)} actuators, "
@@ -152,4 +164,5 @@ def _controller(args: argparse.Namespace) -> int:
                 f"{len(controller.schedule)} points" if controller.schedule else ""),
              *robustness.summary()]
     return report(args.json, data, "\n".join(lines),
-                  [("controller data", target), ("C header", header), ("C source", source)])
+                  [("controller data", target), ("C header", header), ("C source", source),
+                   ("FMU", folder / "controller.fmu" if args.fmu else None)])

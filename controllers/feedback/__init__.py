@@ -16,7 +16,8 @@ optional delay), :mod:`.output_designs` (:func:`skyhook_design` from collocated 
 (:func:`design_controller`: design points, gain scheduling over the travel, the sample-rate check),
 :mod:`.robustness` (:func:`check_robustness` over the travel and the isolators' uncertainty) and
 :mod:`.export` (:func:`write_c`: the :class:`DiscreteController` as C99; :func:`from_statespace`
-discretises any python-control design into one).
+discretises any python-control design into one) and :mod:`.fmu` (:func:`write_controller_fmu`: the same
+C as an FMI 2.0 Co-Simulation FMU).
 
 The designs ignore saturation; the checks and the simulation include it. No anti-windup: an integrator
 keeps integrating while its actuator saturates.
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 from .designs import MEASUREMENTS, SAMPLE_RATE, Controller, decentralised, lead, pid, skyhook
 from .export import DiscreteController, ScheduleEntry, from_statespace, write_c
+from .fmu import write_controller_fmu
 from .hinf_output import hinf_design
 from .laws import DiscreteLaw, feedback_law
 from .loop_margins import LoopMargins
@@ -75,4 +77,5 @@ __all__ = [
     "skyhook_design",
     "uncertainty_from_calibration",
     "write_c",
+    "write_controller_fmu",
 ]

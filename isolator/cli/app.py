@@ -27,7 +27,7 @@ from typing import NoReturn
 
 import numpy as np
 
-from isolator.cli import commands, sweep_command
+from isolator.cli import commands, fmu_command, sweep_command
 from isolator.cli.helpers import MADE_FOLDERS, remove_made_folders
 from isolator.errors import IsolatorError
 from isolator.scenario.names import escaped
@@ -56,6 +56,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     commands.register(sub)
     sweep_command.register(sub)
+    fmu_command.register(sub)
     for entry in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
         entry.load()(sub)
     return parser

@@ -4,7 +4,8 @@ The loop (the stages, the dense output, the samples and their peaks) is C++
 source shipped with the package (``cpp/dop853_loop.cpp``, ``cpp/lanes.hpp``);
 this module puts it together with two casadi-generated functions (the model's
 right-hand side and the table signals of a state) and the tableau's
-coefficients, unrolled as macros, compiles it and calls it. Compiled with
+coefficients, unrolled as macros, through the template ``cpp/dop853_driver.cpp.j2``
+(:func:`~isolator.numerics.rendering.render`), compiles it and calls it. Compiled with
 ``casadi_real`` a vector of ``lanes`` doubles (GCC/Clang vector extensions), the same source steps
 ``lanes`` runs that share a step plan and staged inputs, such as the runs of
 a batch whose isolators differ, with one instruction stream. With AVX, four
@@ -17,29 +18,17 @@ shared arrays (stage inputs, step lengths, sample fractions) are plain.
 from __future__ import annotations
 
 import ctypes
-from functools import cache
-from importlib import resources
 
 import casadi as ca
 import numpy as np
 
 from isolator.numerics.dop853_tableau import STAGES, dop853_tableau
 from isolator.numerics.native import FLAGS, compiled_library
+from isolator.numerics.rendering import render
 from isolator.numerics.step_plan import StepPlan
 from isolator.numerics.systems import SteppedSystem, stepped_rhs
 
 __all__ = ["Dop853Driver", "driver_source", "signal_rows"]
-
-
-@cache
-def _source_file(name: str) -> str:
-    """A C++ source file of the loop (``cpp/lanes.hpp``, ``cpp/dop853_loop.cpp``), shipped as package data."""
-    return resources.files("isolator.numerics").joinpath("cpp", name).read_text()
-
-
-def _macro(name: str, lines: list[str]) -> str:
-    """``#define name`` with a body of several lines."""
-    return f"#define {name} \\\n" + " \\\n".join(lines) + "\n"
 
 
 def signal_rows(signals: ca.Function, n_states: int) -> list[int]:
@@ -48,16 +37,15 @@ def signal_rows(signals: ca.Function, n_states: int) -> list[int]:
     return sorted(set(ca.jacobian(signals(x, reference), x).sparsity().get_col()))
 
 
+def _nonzero(weights: np.ndarray) -> list[tuple[int, float]]:
+    """The nonzero weights of a tableau row as (stage, weight) pairs."""
+    return [(i, float(w)) for i, w in enumerate(weights) if w != 0.0]
+
+
 def _sized(function: ca.Function) -> dict[str, int]:
     return {
         "ARG": function.sz_arg(), "RES": function.sz_res(), "IW": function.sz_iw() + 1, "W": function.sz_w() + 1
     }
-
-
-def _weighted(weights: np.ndarray, row: str) -> str:
-    """``w0 * K[0][j] + w1 * K[1][j] + ...`` over the nonzero weights (``row`` is the index text)."""
-    terms = [f"{float(w)!r} * K[{i}][{row}]" for i, w in enumerate(weights) if w != 0.0]
-    return " + ".join(terms) if terms else "0.0"
 
 
 def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: int) -> str:
@@ -90,13 +78,6 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
     generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
     for f in functions:
         generator.add(f)
-    stages = []
-    for i in range(1, STAGES):
-        stages.append(f"for (int j = 0; j < NX; ++j) xi[j] = x[j] + h * ({_weighted(tab.a[i, :i], 'j')});")
-        stages.append(f"rhs(xi, uv + {i} * NU, P, K[{i}]);")
-        if i == tab.end:
-            stages.append("for (int j = 0; j < NX; ++j) xn[j] = xi[j];")
-    dense = [f"coef[{d}][j] = h * ({_weighted(tab.dense[:, d], 'j')});" for d in range(tab.dense.shape[1])]
     rows = signal_rows(signals, nx)
     others = [j for j in range(nx) if j not in rows]
     defines = {"NX": nx, "NU": rhs.size1_in(1), "ST": STAGES, "DEG": tab.dense.shape[1], "END": tab.end,
@@ -105,12 +86,9 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
     defines |= {f"SIG_{k}": v for k, v in _sized(functions[1]).items()}
     defines |= {"DOP853_NAME": name, "DOP853_RHS": f"{name}_rhs", "DOP853_SIGNALS": f"{name}_signals",
                 "DOP853_ROWS": ", ".join(map(str, rows)), "DOP853_OTHERS": ", ".join(map(str, others or [0]))}
-    body = "".join(f"#define {k} {v}\n" for k, v in defines.items())
-    body += _macro("DOP853_STAGES", stages) + _macro("DOP853_DENSE", dense)
-    return (
-        f"#define LANES {lanes}\n" + _source_file("lanes.hpp") + generator.dump() + body
-        + _source_file("dop853_loop.cpp")
-    )
+    return render("isolator.numerics", "cpp/dop853_driver.cpp.j2", lanes=lanes, casadi=generator.dump(),
+                  defines=defines, stages=[_nonzero(tab.a[i, :i]) for i in range(1, STAGES)], end=tab.end,
+                  dense=[_nonzero(tab.dense[:, d]) for d in range(tab.dense.shape[1])])
 
 
 class Dop853Driver:

@@ -29,7 +29,7 @@ import numpy as np
 
 from isolator.numerics.native_cache import cache_dir, private_cache, record_hash, verified
 
-__all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library"]
+__all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library", "find_compiler"]
 
 #: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
 #: infinity still propagate, so a diverging run is still detected); -march=native is safe because
@@ -53,7 +53,7 @@ def _cpu_identity() -> str:
 _LOCK = threading.Lock()
 
 
-def _compiler(language: str = "c") -> str | None:
+def find_compiler(language: str = "c") -> str | None:
     names = ("CC", "cc", "gcc", "clang") if language == "c" else ("CXX", "c++", "g++", "clang++")
     for name in (os.environ.get(names[0]), *names[1:]):
         if name and shutil.which(name):
@@ -93,7 +93,7 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     SHA-256 is recorded beside it when it is built, and a library whose hash is not the one recorded (one
     planted in the folder, or damaged) is built again rather than loaded.
     """
-    compiler = _compiler(language)
+    compiler = find_compiler(language)
     if compiler is None:
         raise RuntimeError(f"no {language.upper()} compiler found (set {'CC' if language == 'c' else 'CXX'})")
     digest = hashlib.sha256(

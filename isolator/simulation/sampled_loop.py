@@ -35,7 +35,7 @@ from isolator.scenario.sensors import Sensor
 from isolator.simulation.controller_schema import spectral_radius
 from isolator.simulation.sensors import _motion_function
 
-__all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "sampled_loop"]
+__all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "readings", "rotation", "sampled_loop"]
 
 #: grid intervals per compiled call
 CHUNK = 256
@@ -90,18 +90,18 @@ class SampledLaw:
         return np.concatenate([np.concatenate([m.ravel(order="F") for m in point]) for point in self.matrices])
 
 
-def _rotation(x: ca.SX, kind: str) -> ca.SX:
+def rotation(x: ca.SX, kind: str) -> ca.SX:
     """The table's rotation matrix of a state, as the model's own equations build it: Cardan angles in
     ``x[3:6]`` ("paper") or the quaternion in ``x[3:7]`` (normalised)."""
     return cardan_matrix(x[3:6]) if kind == "paper" else quaternion_to_matrix(x[3:7])
 
 
-def _readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.SX, p: ca.SX, ref: ca.SX) -> ca.SX:
+def readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.SX, p: ca.SX, ref: ca.SX) -> ca.SX:
     """The inputs' noise-free readings at a state (floor sensors: zero, their signal is an offset)."""
     if sensors is None:
         return model.variant.sensed_motion(x, ref)
     motion, rates = _motion_function(model)(x, c, p, ref)
-    rot, rot0 = _rotation(x, model.kind), _rotation(ref, model.kind)
+    rot, rot0 = rotation(x, model.kind), rotation(ref, model.kind)
     out = []
     for s in sensors:
         if s.on != "table":
@@ -167,7 +167,7 @@ def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, i
     nx, nc, npar = model.n_states, model.layout.input_size, model.layout.size
     stages = 2 * substeps + 1
     xs, cs, ps, rs = ca.SX.sym("x", nx), ca.SX.sym("c", nc), ca.SX.sym("p", npar), ca.SX.sym("ref", nx)
-    reading = ca.Function("readings", [xs, cs, ps, rs], [_readings(model, sensors, xs, cs, ps, rs)])
+    reading = ca.Function("readings", [xs, cs, ps, rs], [readings(model, sensors, xs, cs, ps, rs)])
     sym = ca.MX.sym
     x, xc, hold, pending, lag, cprev = sym("x", nx), sym("xc", n), sym("hold", m), sym("pending", m), \
         sym("lag", m), sym("cprev", nc)

@@ -1,0 +1,108 @@
+"""The plant FMU's model as casadi functions, generated as C: the right-hand side with the actuators' clipping
+and lag, the outputs, the static residual and the rest state.
+
+The functions are the toolkit's own exact model (:func:`isolator.model.cache.get_model`, built with the floor's
+motion among the inputs so that a host can move the floor), its sensors' readings
+(:func:`isolator.simulation.sampled_loop.readings`, as the compiled loop reads them) and the table's signals
+(:meth:`~isolator.model.variants.ModelVariant.sensed_motion`); nothing of the equations is written again.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import casadi as ca
+import numpy as np
+
+from isolator.model.cache import get_model
+from isolator.model.parameters import ParameterLayout
+from isolator.model.variants import Model
+from isolator.scenario.definitions import Scenario
+from isolator.simulation.sampled_loop import readings, rotation
+
+__all__ = ["PlantFunctions", "plant_functions", "state_nominals"]
+
+
+@dataclass(frozen=True)
+class PlantFunctions:
+    """The casadi functions the plant FMU's C is generated from.
+
+    Attributes
+    ----------
+    model : Model
+        The exact model with the floor's motion among its inputs.
+    ode : casadi.Function
+        ``(x, u, p) -> dx/dt`` of the FMU's state ``x`` (the model's state, then one force [N] per actuator
+        with a lag) and the inputs ``u`` (the model's inputs with the actuators' commands in place of their
+        forces).
+    outputs : casadi.Function
+        ``(x, u, p, ref, floor_acceleration) -> y``: the six table signals, the sensors, the points' x, y, z.
+    static : casadi.Function
+        ``(z, c, p) -> (r, dr/dz)``: the static residual (:attr:`Model.static_residual`).
+    pose : casadi.Function
+        ``(z, p) -> x``: the FMU's state at rest in pose ``z`` (no lagged force).
+    lagged : tuple of int
+        The actuators with a lag, in order.
+    """
+
+    model: Model
+    ode: ca.Function
+    outputs: ca.Function
+    static: ca.Function
+    pose: ca.Function
+    lagged: tuple[int, ...]
+
+    @property
+    def n_states(self) -> int:
+        return self.model.n_states + len(self.lagged)
+
+
+def plant_functions(scenario: Scenario) -> PlantFunctions:
+    """The FMU's casadi functions of a scenario's structure (see :class:`PlantFunctions`)."""
+    layout = dataclasses.replace(ParameterLayout.of(scenario), ground=True)
+    model = get_model(layout, "exact")
+    nx, nu, npar = model.n_states, layout.input_size, layout.size
+    acts = scenario.actuators
+    lagged = tuple(k for k, a in enumerate(acts) if a.bandwidth is not None)
+    x, u, p = ca.SX.sym("x", nx + len(lagged)), ca.SX.sym("u", nu), ca.SX.sym("p", npar)
+    ref, floor_acc = ca.SX.sym("ref", nx + len(lagged)), ca.SX.sym("floor_acceleration", 3)
+    commands = u[layout.actuator_slice]
+    limits = ca.DM([a.max_force for a in acts])
+    clipped = ca.fmin(ca.fmax(commands, -limits), limits) if acts else commands
+    applied = [x[nx + lagged.index(k)] if k in lagged else clipped[k] for k in range(len(acts))]
+    inputs = ca.vertcat(u[: layout.actuator_slice.start], *applied)
+    rates = [(clipped[k] - x[nx + j]) * (2 * np.pi * float(acts[k].bandwidth or 0.0)) for j, k in enumerate(lagged)]
+    xdot = ca.vertcat(model.rhs(x[:nx], inputs, p), *rates)
+    ode = ca.Function("ode", [x, u, p], [xdot], ["x", "u", "p"], ["xdot"])
+
+    ground = u[layout.ground_slice]
+    floor = {0: ground[0:3], 1: ground[6:9], 2: floor_acc}
+    table = readings(model, scenario.sensors, x[:nx], inputs, p, ref[:nx])
+    sensors = [ca.dot(ca.DM(list(s.direction)), floor[s.order]) if s.on == "floor" else table[i]
+               for i, s in enumerate(scenario.sensors)]
+    rot, rot0 = rotation(x, "exact"), rotation(ref, "exact")
+    points = [x[0:3] + rot @ ca.DM(list(pt.position)) - ref[0:3] - rot0 @ ca.DM(list(pt.position))
+              for pt in scenario.points]
+    y = ca.vertcat(model.variant.sensed_motion(x[:nx], ref[:nx])[:6], *sensors, *points)
+    outputs = ca.Function("outputs", [x, u, p, ref, floor_acc], [y], ["x", "u", "p", "ref", "floor_acceleration"],
+                          ["y"])
+    z = ca.SX.sym("z", model.n_static)
+    pose = ca.Function("pose", [z, p], [ca.vertcat(model.pose_state(z, p), ca.SX.zeros(len(lagged)))])
+    return PlantFunctions(model, ode, outputs, model.static_residual, pose, lagged)
+
+
+def state_nominals(functions: PlantFunctions, rest: np.ndarray) -> np.ndarray:
+    """Each FMU state's nominal scale: the size of a change a host's solver should resolve, from which it
+    sets its absolute tolerances (relative tolerance x nominal).
+
+    Positions 1 um; the quaternion 1 urad (its vector part; its scalar part 1); velocities 1 um/s and
+    angular velocities 1 urad/s; pressures 1e-6 of their rest value (a pressure that moves the table 1 um
+    changes by more); lagged forces 1e-6 N.
+    """
+    nx = functions.model.n_states
+    out = np.full(functions.n_states, 1e-6)
+    out[3] = 1.0
+    if nx > 13:
+        out[13:nx] = np.maximum(1e-6 * np.abs(rest[13:nx]), 1e-3)
+    return out
