@@ -54,6 +54,8 @@ _LOCK = threading.Lock()
 
 
 def find_compiler(language: str = "c") -> str | None:
+    """The C (``language="c"``) or C++ compiler to use: ``$CC``/``$CXX``, else the first of cc, gcc, clang
+    (c++, g++, clang++) on the path; None when there is none."""
     names = ("CC", "cc", "gcc", "clang") if language == "c" else ("CXX", "c++", "g++", "clang++")
     for name in (os.environ.get(names[0]), *names[1:]):
         if name and shutil.which(name):

@@ -115,7 +115,8 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
     assert np.allclose(a[1], b[1], rtol=0, atol=1e-10 * np.abs(a[1]).max())
     # a C compiler but no C++ one: the casadi graph is compiled as C, with a warning
     any_compiler = native.find_compiler
-    monkeypatch.setattr(native, "find_compiler", lambda language="c": any_compiler(language) if language == "c" else None)
+    monkeypatch.setattr(native, "find_compiler",
+                        lambda language="c": any_compiler(language) if language == "c" else None)
     with pytest.warns(RuntimeWarning, match=r"no C\+\+ compiler found \(set CXX\)"):
         graph = DenseStepper(sim.model, signals)
     assert not graph.native
