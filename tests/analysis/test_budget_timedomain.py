@@ -11,6 +11,7 @@ two (so the error bars are themselves right), and assert each axis within 3 sigm
 
 from __future__ import annotations
 
+import copy
 import tomllib
 from pathlib import Path
 
@@ -24,6 +25,7 @@ from isolator.analysis.budget.loop import closed_loop_poles
 from isolator.analysis.linear import linearise
 from isolator.scenario.random_sources import SpectralDensity
 from isolator.scenario.reader import bundled_scenarios
+from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.sensor_noise import shaped_noise
 from sampled_loops import RATE, geophone_data
 
@@ -32,6 +34,8 @@ FLOOR_F = (1.0, 10.0, 100.0)
 FLOOR_V = {"x": (1e-12, 1e-12, 1e-14), "y": (2e-12, 2e-12, 2e-14), "z": (4e-12, 1e-12, 1e-13)}
 #: a geophone's noise [(m/s)^2/Hz]: falling as f^-2 to 20 Hz, flat above, zero below 2 Hz
 GEOPHONE = {"frequency": [2.0, 20.0, 900.0], "value": [1e-16, 1e-18, 1e-18]}
+#: a random force's PSD [N^2/Hz]: flat to 10 Hz, then falling, zero outside 1-60 Hz
+FORCE = {"frequency": [1.0, 10.0, 60.0], "value": [1.0, 1.0, 0.01]}
 POINTS = [{"name": "probe", "position": [0.6, 0.3, 0.5]}, {"name": "corner", "position": [-1.0, -0.5, 0.15]}]
 BATCHES = 8
 
@@ -123,4 +127,42 @@ def test_the_sensor_noise_budget_is_the_rms_of_a_noisy_closed_loop_run(method):
     warm = _warm_up(closed_loop_poles(linearise(scenario), controller))
     assert warm < 10.0
     failures = _check(budget, "probe", run.t, run.point("probe"), warm)
+    assert not failures, failures
+
+
+def test_the_force_and_actuator_noise_budget_is_the_rms_of_a_run_with_those_forces():
+    """The active Table 3.2 (actuators without lag or limit), carriages parked: a ``[[disturbances]]`` force
+    and the noise of actuator z1 against 200 s of the exact model with both applied as sampled forces (1 kHz
+    samples of the two densities, the disturbance by an extra actuator at its point along its line). The
+    actuator's noise acts after its lag, so a lag on z1 changes nothing in the budget."""
+    duration, rate = 200.0, 1000.0
+    data = _parked("paper-table-3-2-active")
+    data["points"] = POINTS[:1]
+    for act in data["actuators"]:
+        act.pop("bandwidth", None)
+        act["max_force"] = 1e6
+    push = {"name": "push", "position": [0.9, -0.4, 0.15], "direction": [0.6, 0.0, 0.8], "psd": FORCE}
+    budgeted = copy.deepcopy(data)
+    budgeted["disturbances"] = [push]
+    budgeted["actuators"][2]["noise_psd"] = FORCE
+    budget = error_budget(scenario_from_dict(budgeted))
+    assert budget.sources == ("force:push", "actuator:z1")
+    budgeted["actuators"][2]["bandwidth"] = 5.0
+    lagged = error_budget(scenario_from_dict(budgeted))
+    for axis in "xyz":
+        assert lagged.value("probe", axis, "actuator:z1") == pytest.approx(budget.value("probe", axis,
+                                                                                        "actuator:z1"), rel=1e-9)
+    data["actuators"].append({"name": "push", "position": push["position"], "direction": push["direction"],
+                              "max_force": 1e6})
+    data["simulation"] = {"duration": duration, "sample_rate": rate}
+    scenario = scenario_from_dict(data)
+    names = tuple(a.name for a in scenario.actuators)
+    t = np.arange(round(duration * rate) + 1) / rate
+    rng = np.random.default_rng(5)
+    density = SpectralDensity(tuple(FORCE["value"]), tuple(FORCE["frequency"]))
+    forces = np.zeros((len(names), t.size))
+    for name in ("z1", "push"):
+        forces[names.index(name)] = shaped_noise(rng.standard_normal(t.size), density, rate)
+    run = Simulator(scenario).run(forces=ForceHistory(t, forces, names))
+    failures = _check(budget, "probe", run.t, run.point("probe"), _warm_up(linearise(scenario).eigenvalues))
     assert not failures, failures
