@@ -99,3 +99,35 @@ def test_white_noise_runs_are_unchanged_and_a_flat_spectrum_is_the_same_run():
     moved = np.abs(one.signals - quiet.signals).max(axis=1)
     assert (moved > 0).all()
     np.testing.assert_allclose(two.signals, one.signals, rtol=0, atol=1e-9 * moved.max())
+
+
+def test_the_command_draws_the_spectrum(tmp_path, capsys):
+    """``isolator simulate --controller DIR --noise`` on a scenario file with ``noise_psd``: the library's run
+    with the same seed, and not the run with the sensors' noise left out."""
+    import json
+
+    import tomli_w
+
+    from conftest import run_command
+
+    data = _with_psd()
+    scenario_file = tmp_path / "noisy.toml"
+    scenario_file.write_text(tomli_w.dumps(data))
+    s = scenario_from_dict(data)
+    ctrl = dynamic(s)
+    (tmp_path / "ctl").mkdir()
+    ctrl.to_json(tmp_path / "ctl" / "controller.json")
+    status, out, err = run_command(["simulate", str(scenario_file), "--controller", str(tmp_path / "ctl"), "--noise",
+                                    "--seed", "2", "--json"], capsys)
+    assert status == 0, err
+    peaks = json.loads(out)["peak"]
+    ours = Simulator(s).run(controller=ctrl, noise=True, seed=2).peak
+    for key, value in ours.items():
+        assert peaks[key] == pytest.approx(value, rel=1e-9, abs=1e-18), key
+    # the first four geophones alone (the others' white noise off) move the table
+    for sensor in data["sensors"][4:]:
+        sensor["noise"] = 0.0
+    only_psd = Simulator(scenario_from_dict(data)).run(controller=ctrl, noise=True, seed=2)
+    quiet = Simulator(s).run(controller=ctrl)
+    assert np.abs(quiet.signals).max() < 1e-14  # parked, nothing pushes: at rest to rounding
+    assert (np.abs(only_psd.signals).max(axis=1) > 1e-11).all()  # 0.3-0.9 nm and nrad
