@@ -58,7 +58,8 @@ def register(sub: Any) -> None:
                      help="run the discrete controller of DIR/controller.json (isolator controller's output) on the "
                      "scenario's sensors and actuators")
     sim.add_argument("--noise", action="store_true",
-                     help="with --controller: add each sensor's noise (its 'noise' RMS per sample) to its readings")
+                     help="with --controller: add each sensor's noise to its readings (white of its 'noise' RMS "
+                          "per sample, or with its 'noise_psd' spectrum [SI^2/Hz] below half the controller's rate)")
     sim.add_argument("--seed", type=seed, default=0, metavar="N", help="seed of --noise (default 0)")
     band = sim.add_mutually_exclusive_group()
     band.add_argument("--band", metavar="x=M,y=M,z=M,rx=RAD,ry=RAD,rz=RAD",

@@ -6,10 +6,10 @@ divide the rate the simulation steps at. A
 :class:`~isolator.simulation.discrete_controller.DiscreteController` (``controller.json``) reads the
 scenario's sensors as ``docs/scenario-format.md`` says ("Sensors in the scenario, output feedback and
 exported controllers"): each reading minus its reading at the initial equilibrium (the table at rest
-there, the inputs at ``t = 0``), with seeded white noise of each sensor's ``noise`` RMS when asked, and the
-carriages' raw positions ``q(t_k)`` for a schedule. Its run steps at the least whole multiple of the output
-rate that is 1 kHz or more and a whole multiple of the controller's rate
-(:func:`controller_factor`).
+there, the inputs at ``t = 0``), with each sensor's seeded noise when asked (white of its ``noise`` RMS per
+sample, or of its ``noise_psd``: :mod:`isolator.simulation.sensor_noise`), and the carriages' raw
+positions ``q(t_k)`` for a schedule. Its run steps at the least whole multiple of the output rate that is
+1 kHz or more and a whole multiple of the controller's rate (:func:`controller_factor`).
 """
 
 from __future__ import annotations
@@ -29,6 +29,7 @@ from isolator.scenario.names import escaped
 from isolator.simulation.actuation import ForceHistory
 from isolator.simulation.discrete_controller import DiscreteController
 from isolator.simulation.sampled_loop import SampledLaw, sampled_loop
+from isolator.simulation.sensor_noise import sensor_noise
 from isolator.simulation.sensors import floor_motion, sensor_signals
 from isolator.simulation.time_grid import (
     INTERNAL_RATE,
@@ -121,9 +122,11 @@ def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equil
     Parameters
     ----------
     noise : bool
-        Add each sensor's white noise (``noise`` RMS per sample, SI units) to its readings.
+        Add each sensor's noise to its readings [SI]: white of its ``noise`` RMS per sample, or a sequence
+        at the controller's rate whose one-sided PSD below half that rate is its ``noise_psd``
+        (:func:`~isolator.simulation.sensor_noise.sensor_noise`, over the run's ticks).
     seed : int
-        Seed of the noise (numpy's default generator), one draw per tick and sensor.
+        Seed of the noise (numpy's default generator), one standard-normal draw per tick and sensor.
 
     Raises
     ------
@@ -136,7 +139,6 @@ def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equil
     c0 = inputs_at(scenario, t0, t0)  # zero actuator force
     rest = sensor_signals(scenario, model, t0, start.state[None, :], c0, p, start.state)[:, 0]
     floor = [i for i, s in enumerate(sensors) if s.on == "floor"]
-    sigma = np.array([s.noise for s in sensors], dtype=float) if noise else np.zeros(len(sensors))
 
     def offsets(t: np.ndarray) -> np.ndarray:
         out = np.broadcast_to(-rest, (t.size, rest.size)).copy()
@@ -145,7 +147,8 @@ def controller_law(scenario: Scenario, model: Model, p: np.ndarray, start: Equil
             for i in floor:
                 out[:, i] += np.asarray(sensors[i].direction, dtype=float) @ ground[sensors[i].order]
         if noise:
-            out += np.random.default_rng(seed).standard_normal(out.shape) * sigma
+            out += sensor_noise(sensors, np.random.default_rng(seed).standard_normal(out.shape),
+                                controller.sample_rate)
         return out
 
     def weights(t: np.ndarray) -> np.ndarray:

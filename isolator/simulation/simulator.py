@@ -225,7 +225,8 @@ class Simulator:
             A controller of the scenario's sensors (``controller.json``), run as ``docs/scenario-format.md``
             says (:mod:`isolator.simulation.closed_loop`); not with ``feedback``.
         noise : bool
-            Add each sensor's white noise (``noise`` RMS per sample [SI]) to the controller's readings.
+            Add each sensor's noise to the controller's readings [SI]: white of its ``noise`` RMS per sample,
+            or with the one-sided PSD ``noise_psd`` below half the controller's rate.
         seed : int
             Seed of that noise.
 
