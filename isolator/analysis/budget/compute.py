@@ -13,7 +13,7 @@ from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 
 from .grid import integrate_psd, seed_grid
-from .loop import SampledController, closed_loop_poles, source_responses
+from .loop import SampledController, SourceResponses, closed_loop_poles
 from .result import AXES, QUANTITY_UNITS, ErrorBudget
 from .sources import budget_sources
 
@@ -145,8 +145,10 @@ def error_budget(
     corners = np.concatenate([np.asarray(s.corners, dtype=float) for s in sources] + [np.zeros(0)])
     order = {"displacement": 0, "velocity": 1, "acceleration": 2}[quantity]
 
+    responses = SourceResponses(lin, sources, outputs, controller)
+
     def evaluate(f: np.ndarray) -> np.ndarray:
-        h = source_responses(lin, sources, outputs, f, controller)  # (nf, outputs, sources)
+        h = responses(f)  # (nf, outputs, sources)
         gain = np.abs(h) ** 2 * (2 * np.pi * f[:, None, None]) ** (2 * order)
         density = np.stack([np.asarray(s.density(f), dtype=float) for s in sources], axis=1)  # (nf, sources)
         return np.asarray(gain * density[:, None, :])
