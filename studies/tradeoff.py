@@ -26,6 +26,11 @@ The study writes
   transmissibility for every design, with the Pareto front and the scenario's design;
 * ``throughput.png`` (with ``[[windows]]`` or a ``[sequence]``): transmissibility
   against moves (steps) per hour, with its own Pareto front;
+* ``budget.png`` (with a random source: ``[ground.spectrum]``, ``[[disturbances]]``
+  or an actuator's ``noise_psd``): the time figure against the passive error
+  budget's displacement RMS at the tool (the first ``[[points]]`` entry, or the
+  mass centre; the worst of x, y, z) and against the resonance peak, with their
+  Pareto fronts (:mod:`studies.tradeoff_budget`);
 * ``designs.csv``: every design's numbers;
 * ``report.md``: the scenario's design, the Pareto-optimal designs, the best
   design at the scenario's transmissibility and at its settling time, and the
@@ -38,17 +43,19 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
+from time import perf_counter
 
 import numpy as np
 
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator, UnstableTableError
-from isolator.analysis.linear import linearise
+from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
 from isolator.scenario.arguments import check_public
 from isolator.simulation.scaling import scale_columns
 from isolator.sweep import SweepResult, sweep
 
 from .reporting import output_folder, progress_printer
+from .tradeoff_budget import budget_report, budget_tool, plot_budget, worst_budget
 from .tradeoff_designs import write_designs_csv
 from .tradeoff_report import plot_maps, plot_throughput, plot_tradeoff, write_tradeoff_report
 from .tradeoff_results import TradeoffStudy, pareto_front
@@ -122,12 +129,21 @@ def run_tradeoff_study(
     say(f"tradeoff: {k.size} x {c.size} designs of {scenario.name}; which stiffnesses tip ...")
     stable = np.array([_stands(sim, scale) for scale in k])
     n_runs = int(stable.sum()) * c.size
-    say(f"transmissibility of the {n_runs} designs that stand ...")
-    trans, peak, peak_hz, decay = (np.full((k.size, c.size), np.nan) for _ in range(4))
+    tool = budget_tool(scenario)
+    say(f"transmissibility{'' if tool is None else f' and error budget at {tool}'} of the {n_runs} designs that "
+        "stand ...")
+    trans, peak, peak_hz, decay, budget = (np.full((k.size, c.size), np.nan) for _ in range(5))
+    budget_axis = np.full((k.size, c.size), "", dtype=object)
+    spent = 0.0
     done = 0
     for i in np.flatnonzero(stable):
         for j in range(c.size):
-            trans[i, j], peak[i, j], peak_hz[i, j], decay[i, j] = _linear_figures(sim, k[i], c[j], reference_hz)
+            lin = linearise(sim.scenario, parameters=sim.scaled_parameters(k[i], c[j]))
+            trans[i, j], peak[i, j], peak_hz[i, j], decay[i, j] = _linear_figures(lin, reference_hz)
+            if tool is not None:
+                began = perf_counter()
+                budget[i, j], budget_axis[i, j] = worst_budget(lin, tool)
+                spent += perf_counter() - began
             done += 1
             if n_runs >= 10 and done % max(1, n_runs // 10) == 0:
                 say(f"  transmissibility: {done}/{n_runs} designs")
@@ -162,13 +178,15 @@ def run_tradeoff_study(
         failures = {(int(i), int(j)): str(why) for i, j, st, why in zip(*where, swept, rows["reason"],
                                                                        strict=True) if st != "ok"}
     study = TradeoffStudy(scenario, k, c, reference_hz, settling, trans, peak, peak_hz, stable, duration, failures, out,
-                          band, widths, window, per_hour, status, sequence)
+                          band, widths, window, per_hour, status, sequence, budget, budget_axis, tool, spent)
     plot_maps(study)
     plot_tradeoff(study)
     if study.has_throughput:
         plot_throughput(study)
+    if study.has_budget:
+        plot_budget(study)
     write_designs_csv(study)
-    write_tradeoff_report(study)
+    write_tradeoff_report(study, budget_report(study))
     return study
 
 
@@ -217,10 +235,9 @@ def _stands(sim: Simulator, stiffness: float) -> bool:
     return True
 
 
-def _linear_figures(sim: Simulator, stiffness: float, damping: float, reference_hz: float) -> tuple[float, ...]:
+def _linear_figures(lin: LinearModel, reference_hz: float) -> tuple[float, ...]:
     """Worst x, y, z same-axis transmissibility at ``reference_hz``, worst resonance peak, its frequency
-    [Hz], and the slowest mode's decay rate [1/s]."""
-    lin = linearise(sim.scenario, parameters=sim.scaled_parameters(stiffness, damping))
+    [Hz], and the slowest mode's decay rate [1/s] of a design's parked table."""
     at = lin.frequency_response(np.array([reference_hz]), [f"ground:{a}" for a in _AXES], list(_AXES))[0]
     response = transmissibility(lin)
     peaks = [response.peak(a) for a in _AXES]
