@@ -204,9 +204,10 @@ def sweep(
     path = None if out is None else Path(out)
     done = np.zeros(designs.count, dtype=bool)
     key = scenario_key(scene, model)
-    identity = {"scenario_key": key, "model": model, "band": None if band is None else band.to_dict(),
-                "samples": samples, "method": None if samples is None else method,
-                "seed": None if samples is None else seed, "zip": zip, "frequencies": freqs, "modes": n_modes}
+    identity: dict[str, Any] = {"scenario_key": key, "model": model, "band": None if band is None else band.to_dict(),
+                                "samples": samples, "method": None if samples is None else method,
+                                "seed": None if samples is None else seed, "zip": zip, "frequencies": freqs,
+                                "modes": n_modes}
     if requests:  # only then: the descriptions of sweeps without budget columns stay as they were
         identity["budget"] = budget_columns(requests)
     if path is not None:

@@ -67,9 +67,13 @@ def test_the_figure_names_its_axes_and_marks_the_front_and_the_design(budget_stu
     (fig, path), = figures
     assert path.name == "budget.png"
     left, right = fig.axes[:2]  # then their colour bars
-    assert "[nm]" in left.get_ylabel() and "probe" in left.get_ylabel() and "worst of x, y, z" in left.get_ylabel()
-    assert "settling time" in left.get_xlabel() and "[s]" in left.get_xlabel()
-    assert "resonance peak" in right.get_ylabel() and "[m/m]" in right.get_ylabel()
+    assert "[nm]" in left.get_ylabel()
+    assert "probe" in left.get_ylabel()
+    assert "worst of x, y, z" in left.get_ylabel()
+    assert "settling time" in left.get_xlabel()
+    assert "[s]" in left.get_xlabel()
+    assert "resonance peak" in right.get_ylabel()
+    assert "[m/m]" in right.get_ylabel()
     for ax in (left, right):
         labels = [t.get_text() for t in ax.get_legend().get_texts()]
         assert labels == ["design (size: stiffness)", "Pareto front", "scenario's design"]
@@ -86,7 +90,8 @@ def test_report_and_designs_csv_carry_the_budget(budget_study):
     study, _ = budget_study
     report = (study.folder / "report.md").read_text()
     assert "## Error budget at the tool" in report
-    assert "the largest of the x, y and z values" in report and "`probe`" in report
+    assert "the largest of the x, y and z values" in report
+    assert "`probe`" in report
     nominal = study.nominal()
     assert f"{study.budget_rms[nominal] * 1e9:.4g} nm RMS along {study.budget_axis[nominal]}" in report
     rows = list(csv.DictReader((study.folder / "designs.csv").open()))
@@ -100,7 +105,9 @@ def test_report_and_designs_csv_carry_the_budget(budget_study):
 def test_without_random_sources_the_study_runs_as_before_and_says_why(tmp_path):
     study = run_tradeoff_study(tmp_path, load_scenario("paper-table-3-2"), stiffness=[0.5, 1.0], damping=[1.0, 2.0],
                                progress=False, workers=1)
-    assert study.budget_point is None and not study.has_budget and study.budget_pareto() == []
+    assert study.budget_point is None
+    assert not study.has_budget
+    assert study.budget_pareto() == []
     assert np.isfinite(study.settling_time).all()
     assert not (tmp_path / "budget.png").exists()
     assert "budget" not in (tmp_path / "designs.csv").read_text().splitlines()[0]

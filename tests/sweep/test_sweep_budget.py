@@ -72,7 +72,7 @@ def test_requests_are_checked_against_the_scenario():
         budget_requests(load_scenario("paper-table-3-2"), ["table:z"])
 
 
-@pytest.mark.parametrize("scenario, budget, named", [
+@pytest.mark.parametrize(("scenario", "budget", "named"), [
     ("paper-table-3-2-budget", "tool:z", "budget: no point named 'tool'"),
     ("paper-table-3-2-budget", "probe:w", "budget: the axis of 'probe:w' must be x, y or z"),
     ("paper-table-3-2", "table:z", "budget: the scenario has no random source"),
@@ -85,7 +85,8 @@ def test_bad_budget_on_the_command_line_is_one_line_and_nothing_written(tmp_path
     assert status == 2
     assert len(err) == 1, err
     assert named in err[0], err
-    assert not out.exists() and not out.with_name("rows.csv.sweep.json").exists()
+    assert not out.exists()
+    assert not out.with_name("rows.csv.sweep.json").exists()
 
 
 def test_budget_from_the_command_line(tmp_path: Path, capsys):
