@@ -43,19 +43,18 @@ import math
 from collections.abc import Sequence
 from dataclasses import replace
 from pathlib import Path
-from time import perf_counter
 
 import numpy as np
 
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator, UnstableTableError
-from isolator.analysis.linear import LinearModel, linearise
+from isolator.analysis.linear import linearise
 from isolator.analysis.transmissibility import transmissibility
 from isolator.scenario.arguments import check_public
 from isolator.simulation.scaling import scale_columns
 from isolator.sweep import SweepResult, sweep
 
 from .reporting import output_folder, progress_printer
-from .tradeoff_budget import budget_report, budget_tool, plot_budget, worst_budget
+from .tradeoff_budget import budget_report, budget_tool, plot_budget, worst_axis
 from .tradeoff_designs import write_designs_csv
 from .tradeoff_report import plot_maps, plot_throughput, plot_tradeoff, write_tradeoff_report
 from .tradeoff_results import TradeoffStudy, pareto_front
@@ -129,21 +128,12 @@ def run_tradeoff_study(
     say(f"tradeoff: {k.size} x {c.size} designs of {scenario.name}; which stiffnesses tip ...")
     stable = np.array([_stands(sim, scale) for scale in k])
     n_runs = int(stable.sum()) * c.size
-    tool = budget_tool(scenario)
-    say(f"transmissibility{'' if tool is None else f' and error budget at {tool}'} of the {n_runs} designs that "
-        "stand ...")
-    trans, peak, peak_hz, decay, budget = (np.full((k.size, c.size), np.nan) for _ in range(5))
-    budget_axis = np.full((k.size, c.size), "", dtype=object)
-    spent = 0.0
+    say(f"transmissibility of the {n_runs} designs that stand ...")
+    trans, peak, peak_hz, decay = (np.full((k.size, c.size), np.nan) for _ in range(4))
     done = 0
     for i in np.flatnonzero(stable):
         for j in range(c.size):
-            lin = linearise(sim.scenario, parameters=sim.scaled_parameters(k[i], c[j]))
-            trans[i, j], peak[i, j], peak_hz[i, j], decay[i, j] = _linear_figures(lin, reference_hz)
-            if tool is not None:
-                began = perf_counter()
-                budget[i, j], budget_axis[i, j] = worst_budget(lin, tool)
-                spent += perf_counter() - began
+            trans[i, j], peak[i, j], peak_hz[i, j], decay[i, j] = _linear_figures(sim, k[i], c[j], reference_hz)
             done += 1
             if n_runs >= 10 and done % max(1, n_runs // 10) == 0:
                 say(f"  transmissibility: {done}/{n_runs} designs")
@@ -158,11 +148,17 @@ def run_tradeoff_study(
     status = np.full(shape, "ok", dtype=object)
     status[~stable] = "tips"
     failures: dict[tuple[int, int], str] = {}
+    tool = budget_tool(scenario)
+    budget, budget_axis = np.full(shape, np.nan), np.full(shape, "", dtype=object)
     if n_runs:
-        say(f"{'sequences' if sequence else 'transient runs'} of the {n_runs} designs that stand ...")
+        say(f"{'sequences' if sequence else 'transient runs'}{'' if tool is None else f' and error budgets at {tool}'}"
+            f" of the {n_runs} designs that stand ...")
         kk, cc = np.meshgrid(k[stable], c, indexing="ij")
-        rows = tradeoff_sweep(timed, kk.ravel(), cc.ravel(), band, workers, progress).table()
+        rows = tradeoff_sweep(timed, kk.ravel(), cc.ravel(), band, workers, progress,
+                              None if tool is None else [f"{tool}:{a}" for a in _AXES]).table()
         where = (np.repeat(np.flatnonzero(stable), c.size), np.tile(np.arange(c.size), int(stable.sum())))
+        if tool is not None:
+            budget[where], budget_axis[where] = worst_axis(np.column_stack([rows[f"budget:{tool}:{a}"] for a in _AXES]))
         time = "total_time" if sequence else "dynamic_settling_time_max" if scenario.is_pneumatic \
             else "settling_time_max"
         settling[where] = rows[time]
@@ -178,7 +174,7 @@ def run_tradeoff_study(
         failures = {(int(i), int(j)): str(why) for i, j, st, why in zip(*where, swept, rows["reason"],
                                                                        strict=True) if st != "ok"}
     study = TradeoffStudy(scenario, k, c, reference_hz, settling, trans, peak, peak_hz, stable, duration, failures, out,
-                          band, widths, window, per_hour, status, sequence, budget, budget_axis, tool, spent)
+                          band, widths, window, per_hour, status, sequence, budget, budget_axis, tool)
     plot_maps(study)
     plot_tradeoff(study)
     if study.has_throughput:
@@ -191,16 +187,18 @@ def run_tradeoff_study(
 
 
 def tradeoff_sweep(scenario: Scenario, stiffness: np.ndarray, damping: np.ndarray, band: Band | None = None,
-                   workers: int | None = None, progress: bool = False) -> SweepResult:
+                   workers: int | None = None, progress: bool = False,
+                   budget: Sequence[str] | None = None) -> SweepResult:
     """The study's designs as one :func:`isolator.sweep.sweep`, zipped: every isolator's stiffness and damping
     scaled by ``stiffness[r]`` and ``damping[r]`` [-] (the columns of
     :func:`isolator.simulation.scaling.scale_columns`: for air springs the volumes, the orifice and the
     horizontal springs and dampers), the designs' parameter vectors those of
-    :func:`isolator.simulation.scaling.scaled_parameter_sets`."""
+    :func:`isolator.simulation.scaling.scaled_parameter_sets`; ``budget``: the sweep's error-budget columns
+    (``"point:axis"`` entries), computed in its workers."""
     scale = scale_columns(Simulator(scenario).layout, np.asarray(stiffness, dtype=float),
                           np.asarray(damping, dtype=float))
     return sweep(scenario, scale={n: list(v) for n, v in scale.items()}, zip=True, band=band, workers=workers,
-                 progress=progress)
+                 progress=progress, budget=budget)
 
 
 def _duration(scenario: Scenario, stop_time: float, decay: np.ndarray | None) -> float:
@@ -235,9 +233,10 @@ def _stands(sim: Simulator, stiffness: float) -> bool:
     return True
 
 
-def _linear_figures(lin: LinearModel, reference_hz: float) -> tuple[float, ...]:
+def _linear_figures(sim: Simulator, stiffness: float, damping: float, reference_hz: float) -> tuple[float, ...]:
     """Worst x, y, z same-axis transmissibility at ``reference_hz``, worst resonance peak, its frequency
-    [Hz], and the slowest mode's decay rate [1/s] of a design's parked table."""
+    [Hz], and the slowest mode's decay rate [1/s]."""
+    lin = linearise(sim.scenario, parameters=sim.scaled_parameters(stiffness, damping))
     at = lin.frequency_response(np.array([reference_hz]), [f"ground:{a}" for a in _AXES], list(_AXES))[0]
     response = transmissibility(lin)
     peaks = [response.peak(a) for a in _AXES]

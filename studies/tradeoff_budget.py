@@ -4,19 +4,16 @@ at the tool on the scenario's floor, its figure ``budget.png`` and its section o
 The tool is the scenario's first ``[[points]]`` entry (its mass centre, ``table``, when it has none); each
 design's value is the largest of its x, y and z RMS there (:func:`isolator.analysis.budget.error_budget` of the
 design's table parked with its carriages at their start, default band 0.1 Hz to 1 kHz, every random source of
-the scenario: floor, force disturbances, actuators' noise).
+the scenario: floor, force disturbances, actuators' noise), the sweep's ``budget:<point>:<axis>`` columns
+computed in its workers beside the transient runs.
 """
 
 from __future__ import annotations
 
-import math
-
 import matplotlib.pyplot as plt
 import numpy as np
 
-from isolator.analysis.budget import AXES, DEFAULT_BAND, error_budget
-from isolator.analysis.linear import LinearModel
-from isolator.errors import IsolatorError
+from isolator.analysis.budget import AXES, DEFAULT_BAND
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.sweep.budget import budget_point_names, has_random_sources
@@ -26,7 +23,7 @@ from .reporting import fmt, table_header, table_row
 from .tradeoff_report import scatter_designs
 from .tradeoff_results import TradeoffStudy
 
-__all__ = ["NM", "budget_report", "budget_tool", "plot_budget", "worst_budget"]
+__all__ = ["NM", "budget_report", "budget_tool", "plot_budget", "worst_axis"]
 
 #: metres to nanometres
 NM = 1e9
@@ -38,15 +35,15 @@ def budget_tool(scenario: Scenario) -> str | None:
     return budget_point_names(scenario)[0] if has_random_sources(scenario) else None
 
 
-def worst_budget(lin: LinearModel, point: str) -> tuple[float, str]:
-    """The passive budget's largest displacement RMS [m] at ``point`` over x, y and z, and that axis; (NaN, "")
-    when the budget fails."""
-    try:
-        rms = error_budget(lin, points=[point]).rms[0]
-    except IsolatorError:
-        return math.nan, ""
-    worst = int(np.argmax(rms))
-    return float(rms[worst]), AXES[worst]
+def worst_axis(rms: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per row of ``rms`` (designs, 3: x, y, z) [m] the largest value and its axis (NaN and "" for a row with
+    a NaN: a design without a budget)."""
+    rms = np.asarray(rms, dtype=float)
+    known = np.all(np.isfinite(rms), axis=1)
+    at = np.argmax(np.where(np.isfinite(rms), rms, -np.inf), axis=1)
+    value = np.where(known, rms[np.arange(rms.shape[0]), at], np.nan)
+    axis = np.array([AXES[a] if ok else "" for a, ok in zip(at, known, strict=True)], dtype=object)
+    return value, axis
 
 
 def plot_budget(study: TradeoffStudy) -> None:
@@ -79,15 +76,14 @@ def budget_report(study: TradeoffStudy) -> list[str]:
                 "spectrum (`[ground.spectrum]`, or `vc = \"VC-C\"` for a floor at a vibration criterion), "
                 "`[[disturbances]]` or an actuator's `noise_psd` (`paper-table-3-2-budget` has all three).", ""]
     low, high = DEFAULT_BAND
-    per = study.budget_seconds / max(int(np.sum(np.isfinite(study.budget_rms))), 1)
     lines = ["## Error budget at the tool", "",
              f"The random motion at `{study.budget_point}` "
              f"({'the first [[points]] entry' if study.scenario.points else 'the mass centre: no [[points]]'}) "
              f"while the table stands still: each design's passive error budget (`isolator budget`), displacement "
              f"RMS from {low:g} Hz to {high:g} Hz, absolute, the largest of the x, y and z values (the "
              "`budget_axis` column of `designs.csv` says which), every random source of the scenario (its floor, "
-             "force disturbances and actuators' noise), the table parked with its carriages at their start. "
-             f"{study.budget_seconds:.3g} s for the budgets ({per * 1e3:.0f} ms per design).", "",
+             "force disturbances and actuators' noise), the table parked with its carriages at their start "
+             "(the sweep's `budget:<point>:<axis>` columns, computed in its workers beside the runs).", "",
              "![budget](budget.png)", ""]
     nominal = study.nominal()
     if nominal is not None and np.isfinite(study.budget_rms[nominal]):

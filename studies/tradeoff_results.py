@@ -83,14 +83,13 @@ class TradeoffStudy:
         The scenario has a ``[sequence]`` (the time figure is its total time).
     budget_rms : ndarray (nk, nc)
         The passive error budget's displacement RMS at :attr:`budget_point` [m], the largest of x, y and z
-        (:mod:`studies.tradeoff_budget`); NaN where the table tips or without a random source.
+        (:mod:`studies.tradeoff_budget`); NaN where the table tips (at rest or in its run) or without a random
+        source.
     budget_axis : ndarray (nk, nc) of str
         Which axis that is ("" without a value).
     budget_point : str or None
         The tool: the first ``[[points]]`` entry (``table``, the mass centre, without points); None when the
         scenario has no random source (no budget).
-    budget_seconds : float
-        Time spent on the budgets [s].
     """
 
     scenario: Scenario
@@ -114,7 +113,6 @@ class TradeoffStudy:
     budget_rms: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     budget_axis: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=object))
     budget_point: str | None = None
-    budget_seconds: float = 0.0
 
     @property
     def time_label(self) -> str:

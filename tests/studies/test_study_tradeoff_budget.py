@@ -43,7 +43,14 @@ def test_each_designs_budget_is_that_of_its_own_table(budget_study):
         assert study.budget_axis[i, j] == AXES[int(np.argmax(rms))]
     nominal = study.nominal()
     assert study.budget_rms[nominal] == pytest.approx(error_budget(study.scenario).rms[0].max(), rel=1e-9)
-    assert study.budget_seconds > 0
+
+
+
+def test_the_worst_axis_of_each_design():
+    value, axis = tradeoff_budget.worst_axis(np.array([[1.0, 3.0, 2.0], [5.0, 4.0, np.nan], [0.5, 0.25, 0.75]]))
+    assert np.array_equal(value[[0, 2]], [3.0, 0.75])
+    assert np.isnan(value[1])
+    assert list(axis) == ["y", "", "z"]
 
 
 def test_the_budget_front_by_its_definition(budget_study):
