@@ -158,8 +158,13 @@ def _control(args: argparse.Namespace) -> int:
         print(f"{run:>12}: settling {f'n/a ({why})' if value is None else f'{value:.3g} s'}{window}")
     for design in control.sensors:
         value = design.settling_time_max
+        budget = design.budget
+        random = "" if budget is None or budget.passive is None or budget.closed is None else (
+            f", random motion at {budget.point} {budget.closed.rms.max() * 1e9:.4g} nm RMS (passive "
+            f"{budget.passive.rms.max() * 1e9:.4g} nm, worst axis), its sensors' noise "
+            f"{budget.sensor_rms().max() * 1e9:.3g} nm")
         print(f"{design.method + ' (sensors)':>12}: settling {'n/a' if value is None else f'{value:.3g} s'}, "
-              f"peak force {design.peak_force:.3g} N")
+              f"peak force {design.peak_force:.3g} N{random}")
     print(f"report: {args.out / 'report.md'}")
     return 0
 

@@ -97,3 +97,16 @@ def test_budget_from_the_command_line(tmp_path: Path, capsys):
     rows = list(csv.DictReader(out.open()))
     assert [c for c in rows[0] if c.startswith("budget:")] == ["budget:probe:z", "budget:probe:x", "budget:lens:y"]
     assert all(np.isfinite(float(r["budget:lens:y"])) and float(r["budget:lens:y"]) > 0 for r in rows)
+
+
+def test_resume_keeps_the_budget_columns_and_refuses_other_ones(tmp_path: Path):
+    out = tmp_path / "rows.csv"
+    first = sweep("paper-table-3-2-budget", scale={"isolators[*].damping": [1.0, 2.0]}, budget="probe:z", workers=1,
+                  out=out)
+    again = sweep("paper-table-3-2-budget", scale={"isolators[*].damping": [1.0, 2.0]}, budget="probe:z", workers=1,
+                  out=out, resume=True)
+    assert np.array_equal(again["budget:probe:z"], first["budget:probe:z"])
+    for budget, named in (("probe:x", "differs in: budget"), (None, "holds other columns than this sweep's")):
+        with pytest.raises(ParameterError, match=named):
+            sweep("paper-table-3-2-budget", scale={"isolators[*].damping": [1.0, 2.0]}, budget=budget, workers=1,
+                  out=out, resume=True)
