@@ -12,6 +12,7 @@ from isolator.cli.helpers import check_run_memory, output_folder, scheduler_argu
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.random_sources import vc_spectrum
 from isolator.scenario.reader import DEFAULT_SCENARIO, load_scenario
 
 __all__ = ["CONTROL_SCENARIO", "PNEUMATIC_SCENARIO", "register"]
@@ -40,6 +41,9 @@ def register(sub: Any) -> None:
                          help="the feedforward method (default allocation)")
     control.add_argument("--sample-rate", type=float, default=2000.0, metavar="HZ",
                          help="with [[sensors]]: the output-feedback designs' rate (default 2000)")
+    control.add_argument("--floor", metavar="VC-X", default=None,
+                         help="put the table on a floor at the limit of this vibration criterion (VC-A to VC-G; "
+                         "replaces its [ground.spectrum]) for the error budget of the sensor-based designs")
     control.set_defaults(handler=_control)
 
     profiles = _study(studies, "profiles", "the scenario's profile, input shapers, time-optimal and optimised "
@@ -136,9 +140,14 @@ def _paper(args: argparse.Namespace) -> int:
 
 def _control(args: argparse.Namespace) -> int:
     from studies.control import run_control_study
+    from studies.control_budget import on_floor
 
-    control = run_control_study(args.out, _scenario(args, CONTROL_SCENARIO), args.controller, args.feedforward,
-                                sample_rate=args.sample_rate)
+    if args.floor is not None:
+        vc_spectrum(args.floor, "--floor")  # refused before the output folder is made
+    scenario = _scenario(args, CONTROL_SCENARIO)
+    if args.floor is not None:
+        scenario = on_floor(scenario, args.floor, "--floor")
+    control = run_control_study(args.out, scenario, args.controller, args.feedforward, sample_rate=args.sample_rate)
     for run in ("passive", "feedforward", "feedback", "both"):
         value = control.settling_time_max(run)
         settle, rate = control.window_cycle(run)
@@ -149,8 +158,13 @@ def _control(args: argparse.Namespace) -> int:
         print(f"{run:>12}: settling {f'n/a ({why})' if value is None else f'{value:.3g} s'}{window}")
     for design in control.sensors:
         value = design.settling_time_max
+        budget = design.budget
+        random = "" if budget is None or budget.passive is None or budget.closed is None else (
+            f", random motion at {budget.point} {budget.closed.rms.max() * 1e9:.4g} nm RMS (passive "
+            f"{budget.passive.rms.max() * 1e9:.4g} nm, worst axis), its sensors' noise "
+            f"{budget.sensor_rms().max() * 1e9:.3g} nm")
         print(f"{design.method + ' (sensors)':>12}: settling {'n/a' if value is None else f'{value:.3g} s'}, "
-              f"peak force {design.peak_force:.3g} N")
+              f"peak force {design.peak_force:.3g} N{random}")
     print(f"report: {args.out / 'report.md'}")
     return 0
 

@@ -14,7 +14,8 @@ Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
   feedforward.csv --band ...`` reproduces the feedforward run's numbers;
 * ``report.md``: the numbers, the band, the controller and its loop's stability;
 * with ``[[sensors]]``, the output-feedback designs the machine can run (:mod:`studies.control_sensors`):
-  ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png`` and their section of the report.
+  ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png``, ``sensors-budget.png`` (the error
+  budget at the tool, passive and closed loop: :mod:`studies.control_budget`) and their section of the report.
 
 With feedback alone the controller regulates to the initial equilibrium
 (the state-feedback designs lqr and hinf, which would fight the carriages'
@@ -243,9 +244,7 @@ def run_control_study(
     _settling_figure(study, folder / "settling.png")
     _forces_figure(study, folder / "forces.png")
     if sensors:
-        sensor_study.loops_figure(sensors, scenario, folder / "sensors-loops.png")
-        sensor_study.margins_figure(sensors, folder / "sensors-margins.png")
-        sensor_study.time_figure(sensors, runs["passive"], band, folder / "sensors-time.png")
+        sensor_study.write_figures(sensors, scenario, runs["passive"], band, folder)
     _report(study, scenario, loops)
     return study
 
@@ -391,7 +390,8 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
               *table_header(["design", *SIGNALS])]
     for name, resp in loops.items():
         lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
-    extra = ", `sensors-loops.png`, `sensors-margins.png`, `sensors-time.png`" if study.sensors else ""
+    extra = (", `sensors-loops.png`, `sensors-margins.png`, `sensors-time.png`, `sensors-budget.png`"
+             if study.sensors else "")
     lines += ["", *sensor_study.sensor_report(study.sensors, study.sensors_left_out),
               f"Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`{extra}."]
     write_report(study.folder, lines)

@@ -8,9 +8,12 @@ the study's sample rate, as ``isolator controller`` exports them) the study repo
 * the closed-loop floor-to-sensor transmissibility and the sensitivity and complementary sensitivity at
   the sensors (:mod:`studies.sensor_loops`), carriages at the middle of their travel;
 * the margins across the travel (:func:`controllers.feedback.check_robustness`);
-* the table's RMS motion and the actuators' RMS command caused by the sensors' noise alone.
+* the table's RMS motion and the actuators' RMS command caused by the sensors' noise alone;
+* the error budget at the tool, passive and closed loop, with the part the sensors' noise adds
+  (:mod:`studies.control_budget`; with a random source on the passive table).
 
-Figures ``sensors-loops.png``, ``sensors-margins.png`` and ``sensors-time.png``.
+Figures ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png`` and ``sensors-budget.png``
+(:func:`write_figures`).
 """
 
 from __future__ import annotations
@@ -31,11 +34,12 @@ from isolator.analysis.linear import linearise
 from isolator.scenario.arguments import check_public
 from isolator.simulation.discrete_controller import DiscreteController
 
+from .control_budget import DesignBudget, budget_figure, budget_section, design_budget
 from .figures import save_figure
 from .reporting import fmt, micro_unit, table_header, table_row
 from .sensor_loops import LoopResponse, NoiseMotion, loop_response, noise_motion
 
-__all__ = ["SENSOR_METHODS", "SensorDesign", "run_sensor_designs", "sensor_report"]
+__all__ = ["SENSOR_METHODS", "SensorDesign", "run_sensor_designs", "sensor_report", "write_figures"]
 
 #: the output-feedback designs the study compares
 SENSOR_METHODS = ("skyhook", "lqg", "hinf")
@@ -64,6 +68,8 @@ class SensorDesign:
         isolators: margins along the travel.
     peak_force, rms_force : float
         Largest and RMS applied actuator force over the run [N] (over all actuators).
+    budget : DesignBudget or None
+        The error budget at the tool, passive and with this controller (:func:`studies.control_budget.design_budget`).
     """
 
     method: str
@@ -76,6 +82,7 @@ class SensorDesign:
     travel: tuple[fb.RobustnessCase, ...]
     peak_force: float
     rms_force: float
+    budget: DesignBudget | None = None
 
     @property
     def settling_time_max(self) -> float | None:
@@ -91,7 +98,8 @@ class SensorDesign:
                 "noise_table_rms": self.noise.table_rms, "noise_force_rms_max": float(np.max(self.noise.force_rms)),
                 "sensitivity_peak": float(np.max(self.loops.sensitivity)),
                 "complementary_peak": float(np.max(self.loops.complementary)),
-                "robustness": self.robustness, "settings": self.controller.settings}
+                "robustness": self.robustness, "settings": self.controller.settings,
+                "budget": None if self.budget is None else self.budget.to_dict()}
 
 
 def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Response, Band], dict[str, float | None]],
@@ -139,7 +147,8 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
         forces = response.actuator_forces
         out.append(SensorDesign(method, ctrl, response, settle(response, band), loop_response(plant, ctrl, f),
                                 noise_motion(plant, ctrl), robust.to_dict(), along.cases,
-                                float(np.max(np.abs(forces))), float(np.sqrt(np.mean(forces**2)))))
+                                float(np.max(np.abs(forces))), float(np.sqrt(np.mean(forces**2))),
+                                design_budget(scenario, ctrl)))
     return out, skipped
 
 
@@ -154,6 +163,16 @@ def _along_travel(scenario: Scenario, points: int = 9) -> np.ndarray:
     out = np.repeat(positions[:1], points, axis=0)
     out[:, index] = np.linspace(lo, hi, points)
     return out
+
+
+def write_figures(designs: Sequence[SensorDesign], scenario: Scenario, passive: Response, band: Band,
+                  folder: Path) -> None:
+    """The section's figures in ``folder``: ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png``
+    and (with budgets) ``sensors-budget.png``."""
+    loops_figure(designs, scenario, folder / "sensors-loops.png")
+    margins_figure(designs, folder / "sensors-margins.png")
+    time_figure(designs, passive, band, folder / "sensors-time.png")
+    budget_figure({d.method: d.budget for d in designs if d.budget is not None}, folder / "sensors-budget.png")
 
 
 def margins_figure(designs: Sequence[SensorDesign], path: Path) -> None:
@@ -268,9 +287,10 @@ def sensor_report(designs: Sequence[SensorDesign], left_out: dict[str, str] | No
                                 "stable in all " + str(d.robustness["cases_checked"]) + " cases"
                                 if d.robustness["stable"] else "UNSTABLE somewhere"]))
     lines += ["", *skipped, "", "The noise columns: the stationary RMS that the sensors' own noise (their `noise`, "
-              "per sample) causes through the sampled loop, exact (discrete Lyapunov equation), carriages "
-              "mid-travel.", ""]
-    return lines
+              "per sample; a `noise_psd` spectrum is counted in the error budget below, not here) causes through "
+              "the sampled loop, exact (discrete Lyapunov equation), carriages mid-travel.", ""]
+    budgets = {d.method: d.budget for d in designs if d.budget is not None}
+    return lines + (budget_section(budgets) if budgets else [])
 
 
 check_public(globals())

@@ -26,6 +26,11 @@ The study writes
   transmissibility for every design, with the Pareto front and the scenario's design;
 * ``throughput.png`` (with ``[[windows]]`` or a ``[sequence]``): transmissibility
   against moves (steps) per hour, with its own Pareto front;
+* ``budget.png`` (with a random source: ``[ground.spectrum]``, ``[[disturbances]]``
+  or an actuator's ``noise_psd``): the time figure against the passive error
+  budget's displacement RMS at the tool (the first ``[[points]]`` entry, or the
+  mass centre; the worst of x, y, z) and against the resonance peak, with their
+  Pareto fronts (:mod:`studies.tradeoff_budget`);
 * ``designs.csv``: every design's numbers;
 * ``report.md``: the scenario's design, the Pareto-optimal designs, the best
   design at the scenario's transmissibility and at its settling time, and the
@@ -49,6 +54,7 @@ from isolator.simulation.scaling import scale_columns
 from isolator.sweep import SweepResult, sweep
 
 from .reporting import output_folder, progress_printer
+from .tradeoff_budget import budget_report, budget_tool, plot_budget, worst_axis
 from .tradeoff_designs import write_designs_csv
 from .tradeoff_report import plot_maps, plot_throughput, plot_tradeoff, write_tradeoff_report
 from .tradeoff_results import TradeoffStudy, pareto_front
@@ -142,11 +148,17 @@ def run_tradeoff_study(
     status = np.full(shape, "ok", dtype=object)
     status[~stable] = "tips"
     failures: dict[tuple[int, int], str] = {}
+    tool = budget_tool(scenario)
+    budget, budget_axis = np.full(shape, np.nan), np.full(shape, "", dtype=object)
     if n_runs:
-        say(f"{'sequences' if sequence else 'transient runs'} of the {n_runs} designs that stand ...")
+        say(f"{'sequences' if sequence else 'transient runs'}{'' if tool is None else f' and error budgets at {tool}'}"
+            f" of the {n_runs} designs that stand ...")
         kk, cc = np.meshgrid(k[stable], c, indexing="ij")
-        rows = tradeoff_sweep(timed, kk.ravel(), cc.ravel(), band, workers, progress).table()
+        rows = tradeoff_sweep(timed, kk.ravel(), cc.ravel(), band, workers, progress,
+                              None if tool is None else [f"{tool}:{a}" for a in _AXES]).table()
         where = (np.repeat(np.flatnonzero(stable), c.size), np.tile(np.arange(c.size), int(stable.sum())))
+        if tool is not None:
+            budget[where], budget_axis[where] = worst_axis(np.column_stack([rows[f"budget:{tool}:{a}"] for a in _AXES]))
         time = "total_time" if sequence else "dynamic_settling_time_max" if scenario.is_pneumatic \
             else "settling_time_max"
         settling[where] = rows[time]
@@ -162,27 +174,31 @@ def run_tradeoff_study(
         failures = {(int(i), int(j)): str(why) for i, j, st, why in zip(*where, swept, rows["reason"],
                                                                        strict=True) if st != "ok"}
     study = TradeoffStudy(scenario, k, c, reference_hz, settling, trans, peak, peak_hz, stable, duration, failures, out,
-                          band, widths, window, per_hour, status, sequence)
+                          band, widths, window, per_hour, status, sequence, budget, budget_axis, tool)
     plot_maps(study)
     plot_tradeoff(study)
     if study.has_throughput:
         plot_throughput(study)
+    if study.has_budget:
+        plot_budget(study)
     write_designs_csv(study)
-    write_tradeoff_report(study)
+    write_tradeoff_report(study, budget_report(study))
     return study
 
 
 def tradeoff_sweep(scenario: Scenario, stiffness: np.ndarray, damping: np.ndarray, band: Band | None = None,
-                   workers: int | None = None, progress: bool = False) -> SweepResult:
+                   workers: int | None = None, progress: bool = False,
+                   budget: Sequence[str] | None = None) -> SweepResult:
     """The study's designs as one :func:`isolator.sweep.sweep`, zipped: every isolator's stiffness and damping
     scaled by ``stiffness[r]`` and ``damping[r]`` [-] (the columns of
     :func:`isolator.simulation.scaling.scale_columns`: for air springs the volumes, the orifice and the
     horizontal springs and dampers), the designs' parameter vectors those of
-    :func:`isolator.simulation.scaling.scaled_parameter_sets`."""
+    :func:`isolator.simulation.scaling.scaled_parameter_sets`; ``budget``: the sweep's error-budget columns
+    (``"point:axis"`` entries), computed in its workers."""
     scale = scale_columns(Simulator(scenario).layout, np.asarray(stiffness, dtype=float),
                           np.asarray(damping, dtype=float))
     return sweep(scenario, scale={n: list(v) for n, v in scale.items()}, zip=True, band=band, workers=workers,
-                 progress=progress)
+                 progress=progress, budget=budget)
 
 
 def _duration(scenario: Scenario, stop_time: float, decay: np.ndarray | None) -> float:

@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
@@ -14,7 +16,7 @@ from .reporting import band_lines, fmt, table_header, write_report
 from .tradeoff_pneumatic import pneumatic_note
 from .tradeoff_results import TradeoffStudy
 
-__all__ = ["plot_maps", "plot_throughput", "plot_tradeoff", "write_tradeoff_report"]
+__all__ = ["plot_maps", "plot_throughput", "plot_tradeoff", "scatter_designs", "write_tradeoff_report"]
 
 
 def _time_axis(study: TradeoffStudy) -> str:
@@ -64,35 +66,37 @@ def plot_maps(study: TradeoffStudy) -> None:
     save_figure(fig, study.folder / "maps.png", dpi=110)
 
 
-def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tuple[int, int]]) -> None:
-    """Every design at (``x``, transmissibility), coloured by damping and sized by stiffness; the front and the
-    scenario's design."""
-    ok = np.isfinite(x) & np.isfinite(study.transmissibility)
+def scatter_designs(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tuple[int, int]],
+                    y: np.ndarray | None = None, ylabel: str | None = None) -> None:
+    """Every design at (``x``, ``y``) (default: transmissibility at the reference frequency, log axis),
+    coloured by damping and sized by stiffness; the front and the scenario's design."""
+    y = study.transmissibility if y is None else y
+    ok = np.isfinite(x) & np.isfinite(y)
     kk = np.broadcast_to(study.stiffness[:, None], ok.shape)
     cc = np.broadcast_to(study.damping[None, :], ok.shape)
     if ok.any():
         size = 14 + 30 * kk[ok] / kk.max()
-        points = ax.scatter(x[ok], study.transmissibility[ok], c=cc[ok], s=size, cmap="viridis", norm=LogNorm(),
+        points = ax.scatter(x[ok], y[ok], c=cc[ok], s=size, cmap="viridis", norm=LogNorm(),
                             label="design (size: stiffness)")
         bar = ax.figure.colorbar(points, ax=ax, label="damping scale (x the scenario's) [-]")
         plain_log_axis(bar.ax.yaxis)
     if front:
-        ax.plot([x[p] for p in front], [study.transmissibility[p] for p in front], "-o", color="tab:red", ms=5,
+        ax.plot([x[p] for p in front], [y[p] for p in front], "-o", color="tab:red", ms=5,
                 lw=1.5, label="Pareto front")
     nominal = study.nominal()
     if nominal is not None and ok[nominal]:
-        ax.plot(x[nominal], study.transmissibility[nominal], "*", ms=18, mfc="tab:red", mec="black",
+        ax.plot(x[nominal], y[nominal], "*", ms=18, mfc="tab:red", mec="black",
                 label="scenario's design")
     ax.set_yscale("log")
     plain_log_axis(ax.yaxis)
-    ax.set_ylabel(f"floor-to-table transmissibility at {study.reference_hz:g} Hz, worst of x, y, z [m/m]")
+    ax.set_ylabel(ylabel or f"floor-to-table transmissibility at {study.reference_hz:g} Hz, worst of x, y, z [m/m]")
     ax.grid(True, which="both", alpha=0.3)
 
 
 def plot_tradeoff(study: TradeoffStudy) -> None:
     """``tradeoff.png``: the time figure against transmissibility, the Pareto front and the scenario's design."""
     fig, ax = plt.subplots(figsize=(9, 6), constrained_layout=True)
-    _scatter(study, ax, study.settling_time, study.pareto())
+    scatter_designs(study, ax, study.settling_time, study.pareto())
     ax.set_xlabel("total time of the sequence [s]" if study.sequence else
                   f"largest settling time after the carriages stop [s] (band: {study.band.how()})")
     ax.set_title(f"{study.scenario.name}: {'total time' if study.sequence else 'settling'} against floor "
@@ -104,7 +108,7 @@ def plot_tradeoff(study: TradeoffStudy) -> None:
 def plot_throughput(study: TradeoffStudy) -> None:
     """``throughput.png``: transmissibility against moves (or steps) per hour, with its own Pareto front."""
     fig, ax = plt.subplots(figsize=(9, 6), constrained_layout=True)
-    _scatter(study, ax, study.per_hour, study.throughput_pareto())
+    scatter_designs(study, ax, study.per_hour, study.throughput_pareto())
     what = ("steps per hour of the sequence" if study.sequence else
             "moves per hour (move + window settling, repeated)")
     ax.set_xlabel(f"{what} [1/h]")
@@ -117,8 +121,9 @@ def _header(study: TradeoffStudy) -> list[str]:
     time = "total time [s]" if study.sequence else "settling [s]"
     extra = (["steps per hour"] if study.sequence else ["window settling [s]", "moves per hour"]) \
         if study.has_throughput else []
+    budget = [f"budget at {study.budget_point} [nm]"] if study.has_budget else []
     return table_header(["stiffness x", "damping x", time, *extra, f"transmissibility at {study.reference_hz:g} Hz",
-                         "resonance peak"])
+                         "resonance peak", *budget])
 
 
 def _row(study: TradeoffStudy, p: tuple[int, int]) -> str:
@@ -126,8 +131,9 @@ def _row(study: TradeoffStudy, p: tuple[int, int]) -> str:
     if study.has_throughput:
         rate = fmt(float(study.per_hour[p]), ".1f")
         extra = f" {rate} |" if study.sequence else f" {fmt(float(study.window_settling[p]), '.3f')} | {rate} |"
+    budget = f" {fmt(float(study.budget_rms[p]) * 1e9, '.4g')} ({study.budget_axis[p]}) |" if study.has_budget else ""
     return (f"| {study.stiffness[p[0]]:.3g} | {study.damping[p[1]]:.3g} | {study.settling_time[p]:.3f} |{extra} "
-            f"{study.transmissibility[p]:.3g} | {study.peak[p]:.3g} at {study.peak_hz[p]:.2f} Hz |")
+            f"{study.transmissibility[p]:.3g} | {study.peak[p]:.3g} at {study.peak_hz[p]:.2f} Hz |{budget}")
 
 
 def _method(study: TradeoffStudy) -> str:
@@ -172,9 +178,10 @@ def _against(study: TradeoffStudy, front: list[tuple[int, int]], nominal: tuple[
     return lines
 
 
-def write_tradeoff_report(study: TradeoffStudy) -> None:
+def write_tradeoff_report(study: TradeoffStudy, budget: Sequence[str] = ()) -> None:
     """``report.md``: the method, the scenario's design, the Pareto-optimal designs (in time and in throughput),
-    the designs without numbers and the assumptions."""
+    the ``budget`` section (:func:`studies.tradeoff_budget.budget_report`), the designs without numbers and the
+    assumptions."""
     header = _header(study)
     sc = study.scenario
     lines = [f"# Isolation against {'throughput' if study.sequence else 'settling'}: {sc.name}", "",
@@ -209,6 +216,7 @@ def write_tradeoff_report(study: TradeoffStudy) -> None:
         lines += [_row(study, p) for p in study.throughput_pareto()] or ["| (none) | | | | |"]
     if nominal is not None and np.isfinite(study.settling_time[nominal]):
         lines += _against(study, front, nominal)
+    lines += ["", *budget]
     lines += ["", "## Designs without numbers", ""]
     tips = study.stiffness[~study.stable]
     lines.append(f"- The table tips at stiffness x{', x'.join(f'{v:.3g}' for v in tips)} (rocking stiffness at or "

@@ -81,6 +81,15 @@ class TradeoffStudy:
         "refused", "unsettled", ...).
     sequence : bool
         The scenario has a ``[sequence]`` (the time figure is its total time).
+    budget_rms : ndarray (nk, nc)
+        The passive error budget's displacement RMS at :attr:`budget_point` [m], the largest of x, y and z
+        (:mod:`studies.tradeoff_budget`); NaN where the table tips (at rest or in its run) or without a random
+        source.
+    budget_axis : ndarray (nk, nc) of str
+        Which axis that is ("" without a value).
+    budget_point : str or None
+        The tool: the first ``[[points]]`` entry (``table``, the mass centre, without points); None when the
+        scenario has no random source (no budget).
     """
 
     scenario: Scenario
@@ -101,6 +110,9 @@ class TradeoffStudy:
     per_hour: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     status: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=object))
     sequence: bool = False
+    budget_rms: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    budget_axis: np.ndarray = field(default_factory=lambda: np.zeros((0, 0), dtype=object))
+    budget_point: str | None = None
 
     @property
     def time_label(self) -> str:
@@ -117,6 +129,11 @@ class TradeoffStudy:
         """Whether the designs have a throughput (``[[windows]]`` or a ``[sequence]``, and a finite value)."""
         return bool(self.per_hour.size and np.any(np.isfinite(self.per_hour)))
 
+    @property
+    def has_budget(self) -> bool:
+        """Whether the designs have an error budget (a random source and a finite value)."""
+        return self.budget_point is not None and bool(self.budget_rms.size and np.any(np.isfinite(self.budget_rms)))
+
     def design_band(self, i: int, j: int) -> Band | None:
         """Design (i, j)'s band, resolved (None: no run)."""
         return design_band(self.band, self.half_widths[i, j])
@@ -130,6 +147,18 @@ class TradeoffStudy:
         time."""
         return self._cells(pareto_front(np.column_stack([self.settling_time.ravel(),
                                                          self.transmissibility.ravel()])))
+
+    def budget_pareto(self) -> list[tuple[int, int]]:
+        """The designs no other design beats in both the time figure and the error budget at the tool, by
+        increasing time (none without a budget)."""
+        if not self.has_budget:
+            return []
+        return self._cells(pareto_front(np.column_stack([self.settling_time.ravel(), self.budget_rms.ravel()])))
+
+    def peak_pareto(self) -> list[tuple[int, int]]:
+        """The designs no other design beats in both the time figure and the resonance peak, by increasing
+        time."""
+        return self._cells(pareto_front(np.column_stack([self.settling_time.ravel(), self.peak.ravel()])))
 
     def throughput_pareto(self) -> list[tuple[int, int]]:
         """The designs no other design beats in both throughput (:attr:`per_hour`, maximised) and

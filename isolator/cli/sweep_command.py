@@ -52,9 +52,10 @@ def register(sub: Any) -> None:
         "design, band:<signal> (the half-widths of the settling band), then the columns of the scenario's kind "
         "(pneumatic: dynamic_settling_time_max, leveling_time, supply_exhausted; [[windows]]: "
         "window_settling_time_max, moves_per_hour; a [sequence], instead of these: total_time, "
-        "throughput_per_hour, unsettled_step), then transmissibility:<axis>@<f>Hz and mode:<k>. The sweep is "
-        "described beside the file in <out>.sweep.json (scenario, model, band, sampling, extras): --resume "
-        "refuses a file another sweep wrote.",
+        "throughput_per_hour, unsettled_step), then transmissibility:<axis>@<f>Hz, mode:<k> and "
+        "budget:<point>:<axis> (the passive error budget's RMS [m]). The sweep is described beside the file "
+        "in <out>.sweep.json (scenario, model, band, sampling, extras): --resume refuses a file another sweep "
+        "wrote.",
     )
     scenario_argument(p)
     p.add_argument("--set", action=_Swept, dest="swept", metavar="NAME=VALUES",
@@ -72,6 +73,10 @@ def register(sub: Any) -> None:
     p.add_argument("--frequency", type=float, action="append", default=[], metavar="HZ",
                    help="add the x, y, z transmissibility at this frequency per design; repeat for more")
     p.add_argument("--modes", action="store_true", help="add the mode frequencies per design")
+    p.add_argument("--budget", action="append", default=[], metavar="POINT:AXIS,...",
+                   help="add the passive error budget's displacement RMS [m] at these [[points]] (table: the mass "
+                   "centre of a scenario without points) and axes (x, y, z) per design, columns "
+                   "budget:<point>:<axis> (isolator budget's value, default band); repeat or separate by commas")
     p.add_argument("--model", choices=MODEL_KINDS, default="exact", help="exact or the paper's small-angle model")
     p.add_argument("--chunk-size", type=count, metavar="N", help="designs per task (default: about four per worker)")
     p.add_argument("--out", type=Path, required=True, metavar="FILE.csv", help="the rows (.csv or .parquet)")
@@ -154,7 +159,8 @@ def _sweep(args: argparse.Namespace) -> int:
         executor: Executor | None = None if client is None else client.get_executor()
         result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip,
                        samples=args.samples, method=args.method, seed=args.seed, model=args.model, executor=executor,
-                       workers=args.workers, frequencies=args.frequency, modes=args.modes, out=out,
+                       workers=args.workers, frequencies=args.frequency, modes=args.modes,
+                       budget=",".join(args.budget) or None, out=out,
                        resume=args.resume, force=args.force, progress=True, chunk_size=args.chunk_size)
     print(result.summary())
     if figure is not None:

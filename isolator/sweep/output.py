@@ -28,15 +28,16 @@ TEXT_COLUMNS = ("status", "reason")
 
 
 def column_names(names: Sequence[str], frequencies: Sequence[float], axes: Sequence[str], modes: int,
-                 metrics: Sequence[str] = ()) -> list[str]:
+                 metrics: Sequence[str] = (), budget: Sequence[str] = ()) -> list[str]:
     """The output's columns: the swept names as given, ``settling_time_max``, ``settling:<signal>``,
     ``peak:<signal>``, ``status``, then ``reason``, ``design`` (the design's index), ``band:<signal>`` (the
     settling band's half-widths [m or rad]), ``metrics`` (:func:`isolator.sweep.metrics.metric_columns`),
-    ``transmissibility:<axis>@<f>Hz`` and ``mode:<k>`` [Hz]."""
+    ``transmissibility:<axis>@<f>Hz``, ``mode:<k>`` [Hz] and the ``budget`` columns
+    (:func:`isolator.sweep.budget.budget_columns`)."""
     out = [*names, "settling_time_max", *[f"settling:{s}" for s in SIGNALS], *[f"peak:{s}" for s in SIGNALS]]
     out += ["status", "reason", "design", *[f"band:{s}" for s in SIGNALS], *metrics]
     out += [f"transmissibility:{a}@{f:g}Hz" for f in frequencies for a in axes]
-    return out + [f"mode:{k + 1}" for k in range(modes)]
+    return out + [f"mode:{k + 1}" for k in range(modes)] + list(budget)
 
 
 def staging_path(path: Path) -> Path:

@@ -19,6 +19,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import load_scenario
 from isolator.simulation.settling import Band
 from isolator.sweep import output
+from isolator.sweep.budget import budget_columns, budget_requests
 from isolator.sweep.cluster import connect
 from isolator.sweep.designs import Designs, Values, build_designs
 from isolator.sweep.metrics import metric_columns
@@ -74,6 +75,7 @@ def sweep(
     workers: int | None = None,
     frequencies: Sequence[float] = (),
     modes: bool = False,
+    budget: Sequence[str] | str | None = None,
     out: str | Path | None = None,
     resume: bool = False,
     force: bool = False,
@@ -116,6 +118,13 @@ def sweep(
         the rest with the carriages at their start) at each, columns ``transmissibility:<axis>@<f>Hz``.
     modes : bool
         Per design the six (spring-dampers) mode frequencies [Hz], columns ``mode:1`` ... ``mode:6``.
+    budget : sequence of str, optional
+        ``"point:axis"`` entries (``[[points]]`` names, or ``table``, the mass centre, without points; axes x,
+        y, z), or one string of them separated by commas: per design the passive error budget's displacement
+        RMS [m] there, columns ``budget:<point>:<axis>``:
+        :func:`~isolator.analysis.budget.error_budget` of ``linearise(scenario, parameters=p)`` (the design's
+        table parked with its carriages at their start), default band (0.1 Hz to 1 kHz). The scenario needs a
+        random source (``[ground.spectrum]``, ``[[disturbances]]`` or an actuator's ``noise_psd``).
     out : str or Path, optional
         Write the rows as they arrive, ``.csv`` or ``.parquet`` (needs pyarrow); the result then reads
         its columns back from the file (memory flat in the number of designs).
@@ -123,10 +132,10 @@ def sweep(
         Continue the sweep whose rows ``out`` holds (designs already there are skipped). A sweep describes
         itself beside ``out`` in ``<out>.sweep.json`` when it starts: the :func:`~isolator.sweep.worker.scenario_key`
         hash of the scenario and model, the model, the band (:meth:`Band.to_dict`, null: the scenario's
-        rule), the sampling (``samples``, ``method`` and ``seed`` when sampled, ``zip``), ``frequencies``
-        and ``modes``; a resume that differs in any is refused, naming what differs (a file without the
-        description, from an older version, is resumed as it is). The file's columns and each row's swept
-        values must also be this sweep's.
+        rule), the sampling (``samples``, ``method`` and ``seed`` when sampled, ``zip``), ``frequencies``,
+        ``modes`` and ``budget`` (when asked for); a resume that differs in any is refused, naming what differs
+        (a file without the description, from an older version, is resumed as it is). The file's columns and
+        each row's swept values must also be this sweep's.
     force : bool
         Overwrite ``out`` and its description (without ``resume`` or ``force`` an existing ``out`` is an
         error).
@@ -156,7 +165,7 @@ def sweep(
         settle, "failed": its chunk failed twice),
         ``reason``, ``design``, ``band:<signal>`` (the six half-widths [m or rad] of the band the design's
         settling time is measured in, as ``isolator simulate --band`` takes them), then the columns of the
-        scenario's kind, then the transmissibility and mode columns.
+        scenario's kind, then the transmissibility, mode and budget columns.
 
         A pneumatic scenario, one with ``[[windows]]`` or with a ``[sequence]`` runs each design on its own
         (``Simulator.run_method`` from its equilibria, or ``run_sequence(..., parameters=p)``), and adds:
@@ -175,6 +184,8 @@ def sweep(
     ------
     ParameterError
         A bad argument, named; nothing is written then.
+    ScenarioError
+        ``budget`` on a scenario without a random source.
     ExecutorError
         The executor could no longer run the chunks (a Dask scheduler that is gone): the rows written to
         ``out`` are kept, ``resume=True`` finishes the sweep. A worker process of the default pool that dies
@@ -199,15 +210,19 @@ def sweep(
     designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
     freqs = _frequencies(frequencies)
     n_modes = 6 if modes else 0
+    requests = budget_requests(scene, budget)
     metrics = metric_columns(scene)
     best_by = "total_time" if "total_time" in metrics else "settling_time_max"  # a sequence: finished first
-    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metrics)
+    columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metrics, budget_columns(requests))
     path = None if out is None else Path(out)
     done = np.zeros(designs.count, dtype=bool)
     key = scenario_key(scene, model)
-    identity = {"scenario_key": key, "model": model, "band": None if band is None else band.to_dict(),
-                "samples": samples, "method": None if samples is None else method,
-                "seed": None if samples is None else seed, "zip": zip, "frequencies": freqs, "modes": n_modes}
+    identity: dict[str, Any] = {"scenario_key": key, "model": model, "band": None if band is None else band.to_dict(),
+                                "samples": samples, "method": None if samples is None else method,
+                                "seed": None if samples is None else seed, "zip": zip, "frequencies": freqs,
+                                "modes": n_modes}
+    if requests:  # only then: the descriptions of sweeps without budget columns stay as they were
+        identity["budget"] = budget_columns(requests)
     if path is not None:
         check_format(path)
         if resume and force:
@@ -236,7 +251,8 @@ def sweep(
         n_workers = _workers(workers, executor)
         size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
         swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
-        template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes)
+        template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes,
+                         budget=requests)
         simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
         chunks = _chunk_count(done, size)  # no more processes than chunks to run
         pool, renew = _executor(executor, n_workers, min(n_workers, chunks))  # made (a function's executor checked)

@@ -20,6 +20,7 @@ from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.simulation.batch import run_batch
 from isolator.simulation.settling import Band, unavailable_reason
 from isolator.simulation.simulator import Simulator
+from isolator.sweep.budget import budget_values
 from isolator.sweep.metrics import Runs, metric_columns, run_each, run_each_sequence, runs_alone
 
 __all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "run_chunk", "scenario_key", "simulator_for",
@@ -60,6 +61,9 @@ class Chunk:
         Mode frequencies to report (0: none).
     threads : int
         Threads of the batch inside the worker.
+    budget : tuple of (str, str)
+        (point, axis) pairs of the passive error budget's displacement RMS columns
+        (:func:`isolator.sweep.budget.budget_requests`).
     """
 
     key: str
@@ -72,6 +76,7 @@ class Chunk:
     frequencies: tuple[float, ...] = ()
     modes: int = 0
     threads: int = 1
+    budget: tuple[tuple[str, str], ...] = ()
 
 
 @dataclass(frozen=True)
@@ -87,7 +92,8 @@ class ChunkResult:
         [m or rad].
     status, reason : ndarray (designs,) of str
     extras : ndarray (designs, k)
-        Transmissibility magnitudes [-] (each frequency: x, y, z), then mode frequencies [Hz].
+        Transmissibility magnitudes [-] (each frequency: x, y, z), then mode frequencies [Hz], then the
+        budget's RMS values [m].
     band : ndarray (designs, 6)
         The half-widths of the band each design's settling time is measured in [m or rad]; NaN: no run.
     metrics : ndarray (designs, len(metric_columns(scenario)))
@@ -170,11 +176,11 @@ def run_chunk(chunk: Chunk) -> ChunkResult:
     if chunk.scenario.sequence is None:  # a sequence's own "unsettled" names its step
         for row in np.flatnonzero((status == "ok") & np.any(np.isnan(settling), axis=1)):
             status[row], reason[row] = "unsettled", unsettled_reason(sim, settling[row])
-    width = len(chunk.frequencies) * len(TRANSMISSIBILITY_AXES) + chunk.modes
+    width = len(chunk.frequencies) * len(TRANSMISSIBILITY_AXES) + chunk.modes + len(chunk.budget)
     extras = np.full((n, width), np.nan)
     if width:
         for row in np.flatnonzero((status != "invalid") & (status != "tipped")):
-            extras[row] = _linear(sim.scenario, chunk.params[row], chunk.frequencies, chunk.modes)
+            extras[row] = _linear(sim.scenario, chunk.params[row], chunk.frequencies, chunk.modes, chunk.budget)
     return ChunkResult(chunk.start, settling, peak, status, reason, extras, band, metrics)
 
 
@@ -190,13 +196,15 @@ def unsettled_reason(sim: Simulator, settling: np.ndarray) -> str:
             "([simulation] duration)")
 
 
-def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], count: int) -> np.ndarray:
-    """Same-axis transmissibility magnitudes at ``frequencies`` and the first ``count`` mode frequencies
-    [Hz] (NaN past the modes there are) of one design, about its rest with the carriages at their start."""
+def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], count: int,
+            budget: tuple[tuple[str, str], ...] = ()) -> np.ndarray:
+    """Same-axis transmissibility magnitudes at ``frequencies``, the first ``count`` mode frequencies
+    [Hz] (NaN past the modes there are) and the passive budget's RMS [m] at each ``budget`` (point, axis) of one
+    design, about its rest with the carriages at their start."""
     try:
         lin = linearise(scenario, parameters=p)
     except IsolatorError:
-        return np.full(len(frequencies) * len(TRANSMISSIBILITY_AXES) + count, np.nan)
+        return np.full(len(frequencies) * len(TRANSMISSIBILITY_AXES) + count + len(budget), np.nan)
     out: list[float] = []
     if frequencies:
         axes = list(TRANSMISSIBILITY_AXES)
@@ -205,5 +213,5 @@ def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], c
     if count:
         found = modes(lin).frequencies_hz[:count]
         out += [*map(float, found), *[np.nan] * (count - found.size)]
-    return np.array(out)
+    return np.array(out + budget_values(lin, budget))
 
