@@ -19,14 +19,20 @@ from typing import Any
 import matplotlib.pyplot as plt
 import numpy as np
 
-from isolator.analysis.budget import AXES, ErrorBudget, budget_band, error_budget
+from isolator.analysis.budget import (
+    AXES,
+    ErrorBudget,
+    budget_band,
+    budget_point_names,
+    error_budget,
+    has_random_sources,
+)
 from isolator.errors import IsolatorError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.ground import Ground
 from isolator.scenario.random_sources import vc_spectrum
 from isolator.simulation.discrete_controller import DiscreteController
-from isolator.sweep.budget import budget_point_names, has_random_sources
 
 from .figures import save_figure
 from .reporting import table_header, table_row

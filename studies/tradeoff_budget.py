@@ -13,10 +13,9 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 
-from isolator.analysis.budget import AXES, DEFAULT_BAND
+from isolator.analysis.budget import AXES, DEFAULT_BAND, budget_point_names, has_random_sources
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
-from isolator.sweep.budget import budget_point_names, has_random_sources
 
 from .figures import save_figure
 from .reporting import fmt, table_header, table_row

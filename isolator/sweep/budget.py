@@ -8,29 +8,12 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from isolator.analysis.budget import AXES, error_budget
+from isolator.analysis.budget import AXES, budget_point_names, error_budget, has_random_sources
 from isolator.analysis.linear import LinearModel
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 
-__all__ = ["BUDGET_POINT", "budget_columns", "budget_point_names", "budget_requests", "budget_values",
-           "has_random_sources"]
-
-#: the budget's point of a scenario without ``[[points]]``: its mass centre
-BUDGET_POINT = "table"
-
-
-def has_random_sources(scenario: Scenario) -> bool:
-    """Whether the passive table has a random source for an error budget: a ``[ground.spectrum]`` (or ``vc``),
-    a ``[[disturbances]]`` entry or an actuator's ``noise_psd`` (sensors' noise counts only in a closed loop)."""
-    spectrum = scenario.ground.spectrum if scenario.ground is not None else None
-    return spectrum is not None or bool(scenario.disturbances) or any(
-        a.noise_psd is not None for a in scenario.actuators)
-
-
-def budget_point_names(scenario: Scenario) -> tuple[str, ...]:
-    """The points a budget of ``scenario`` knows: its ``[[points]]``, or :data:`BUDGET_POINT` when it has none."""
-    return tuple(p.name for p in scenario.points) or (BUDGET_POINT,)
+__all__ = ["budget_columns", "budget_requests", "budget_values"]
 
 
 def budget_requests(scenario: Scenario, budget: Sequence[str] | str | None) -> tuple[tuple[str, str], ...]:

@@ -15,7 +15,7 @@ from isolator.scenario.definitions import Scenario
 from .grid import integrate_psd, seed_grid
 from .loop import SampledController, SourceResponses, closed_loop_poles
 from .result import AXES, QUANTITY_UNITS, ErrorBudget
-from .sources import budget_sources
+from .sources import BUDGET_POINT, budget_sources, has_random_sources
 
 __all__ = ["DEFAULT_BAND", "budget_band", "error_budget"]
 
@@ -29,12 +29,12 @@ def _point_outputs(lin: LinearModel, points: Sequence[str] | None) -> tuple[tupl
     """The points' names and the linear model's outputs for them (``table``: the mass centre's x, y, z)."""
     names = [p.name for p in lin.scenario.points]
     if not names:
-        chosen = list(points) if points is not None else ["table"]
+        chosen = list(points) if points is not None else [BUDGET_POINT]
         for p in chosen:
-            if p != "table":
+            if p != BUDGET_POINT:
                 raise ParameterError(f"points: no point named {p!r}; the scenario has no [[points]], so its "
-                                     "budget is at the mass centre, 'table'")
-        return ("table",), ["x", "y", "z"]
+                                     f"budget is at the mass centre, '{BUDGET_POINT}'")
+        return (BUDGET_POINT,), ["x", "y", "z"]
     chosen = names if points is None else list(points)
     if not chosen:
         raise ParameterError("points: name at least one point")
@@ -134,12 +134,12 @@ def error_budget(
     limits = budget_band(band, controller)
     names, outputs = _point_outputs(lin, points)
     rate = None if controller is None else float(controller.sample_rate)
-    sources = budget_sources(lin, rate)
-    if not sources:
+    if not has_random_sources(lin.scenario, controller is not None):
         raise ScenarioError("the scenario has no random source for a budget: add [ground.spectrum] (a floor "
                             "spectrum or vc = \"VC-C\"), [[disturbances]], an actuator's noise_psd"
                             + (" or a sensor's noise" if controller is not None else
                                " (sensors' noise counts only with --controller)"))
+    sources = budget_sources(lin, rate)
     poles = lin.eigenvalues if controller is None else np.concatenate(
         [lin.eigenvalues, closed_loop_poles(lin, controller)])
     corners = np.concatenate([np.asarray(s.corners, dtype=float) for s in sources] + [np.zeros(0)])

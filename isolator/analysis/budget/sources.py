@@ -15,9 +15,28 @@ import numpy as np
 
 from isolator.analysis.linear import LinearModel
 from isolator.model.rotations import pose_rotation
+from isolator.scenario.definitions import Scenario
 from isolator.scenario.random_sources import SpectralDensity
 
-__all__ = ["Source", "budget_sources"]
+__all__ = ["BUDGET_POINT", "Source", "budget_point_names", "budget_sources", "has_random_sources"]
+
+#: the budget's point of a scenario without ``[[points]]``: its mass centre
+BUDGET_POINT = "table"
+
+
+def has_random_sources(scenario: Scenario, closed_loop: bool = False) -> bool:
+    """Whether the table has a random source for an error budget: a ``[ground.spectrum]`` (or ``vc``), a
+    ``[[disturbances]]`` entry, an actuator's ``noise_psd`` or, in a closed loop (``closed_loop``), a sensor's
+    noise."""
+    spectrum = scenario.ground.spectrum if scenario.ground is not None else None
+    return spectrum is not None or bool(scenario.disturbances) or any(
+        a.noise_psd is not None for a in scenario.actuators) or (closed_loop and any(
+            s.noise > 0 or s.noise_psd is not None for s in scenario.sensors))
+
+
+def budget_point_names(scenario: Scenario) -> tuple[str, ...]:
+    """The points a budget of ``scenario`` knows: its ``[[points]]``, or :data:`BUDGET_POINT` when it has none."""
+    return tuple(p.name for p in scenario.points) or (BUDGET_POINT,)
 
 
 @dataclass(frozen=True)
