@@ -149,7 +149,7 @@ def noise_motion(plant: SensorPlant, controller: DiscreteController, q: np.ndarr
     e = np.linalg.inv(np.eye(m) - dc @ dp)
     # the noise n enters the readings: u = E (Dc (Cp x + Dp u + n) + Cc xc) -> u = ... + E Dc n
     bn = np.vstack([bp @ e @ dc, bc + bc @ dp @ e @ dc])
-    sigma = np.diag([s.noise**2 for s in plant.lin.scenario.sensors])
+    sigma = np.diag([s.noise_rms(controller.sample_rate) ** 2 for s in plant.lin.scenario.sensors])
     cov = _stationary_covariance(big, bn @ sigma @ bn.T)
     outputs = list(plant.lin.system.output_labels)
     rows = np.asarray(plant.lin.system.C)[[outputs.index(s) for s in SIGNALS]]

@@ -262,7 +262,8 @@ def noise_model(plant: SensorPlant, sampled: control.StateSpace, noise_floor: fl
     so that the filter forgets a position estimate at ``washout_hz`` [Hz] or faster (geophones do not see a
     static position: without it the estimate integrates their noise with a pole at ``z = 1``). The walk is
     found by scaling: the slowest filter pole's rate grows in proportion to it. Measurement noise: each
-    sensor's ``noise``, at least ``noise_floor``.
+    sensor's noise per sample at the design's rate (``noise``, or ``noise_psd`` integrated up to half the
+    rate), at least ``noise_floor``.
 
     Parameters
     ----------
@@ -280,7 +281,8 @@ def noise_model(plant: SensorPlant, sampled: control.StateSpace, noise_floor: fl
     wrench = disturbance_scale(plant)
     sw = np.zeros(len(DISTURBANCES))
     sw[6:] = wrench  # the force and torque inputs; the floor is left to the measurement update
-    noise = np.array([max(s.noise, noise_floor) for s in plant.lin.scenario.sensors])
+    rate_hz = 1.0 / float(sampled.dt)
+    noise = np.array([max(s.noise_rms(rate_hz), noise_floor) for s in plant.lin.scenario.sensors])
     rn = np.diag(noise**2)
     qn = bw @ np.diag(sw**2) @ bw.T
     qn += 1e-12 * np.trace(qn) / n * np.eye(n)  # every state slightly excited: a well-posed filter

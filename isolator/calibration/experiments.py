@@ -197,16 +197,19 @@ def _warn_input_noise(key: str, floor: tuple[Sensor, ...], x: np.ndarray, rate: 
     an input lowers any H1 by the noise's share of that input's spectrum (``Gnn / Gxx``), which the fit's
     intervals do not include."""
     nperseg = round(estimate.segment * rate)
-    _, pxx = signal.welch(x, fs=rate, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
+    welch_f, pxx = signal.welch(x, fs=rate, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
     relative = np.sqrt(estimate.variance[:, :, band]) / np.maximum(np.abs(estimate.H[:, :, band]), 1e-300)
+    frequency = welch_f[band]
     for k, sensor in enumerate(floor):
-        if sensor.noise <= 0:
+        density = sensor.noise_density(rate)
+        if density is None:
             continue
-        share = float(np.max(2.0 * sensor.noise**2 / rate / np.maximum(pxx[k, band], 1e-300)))
+        share = float(np.max(density(frequency) / np.maximum(pxx[k, band], 1e-300)))
         error = float(np.median(relative[:, k, :]))
         if share > 0.5 * error:
             above = " (its declared noise exceeds the measured floor signal somewhere in the band)" if share > 1 else ""
-            warnings.warn(f"{key}: the floor sensor '{sensor.name}' (noise {sensor.noise:.3g} {sensor.unit} RMS) "
+            warnings.warn(f"{key}: the floor sensor '{sensor.name}' (noise {sensor.noise_rms(rate):.3g} {sensor.unit} "
+                          "RMS per sample) "
                           f"biases the H1 low by up to {min(share, 1.0):.2%} in the band{above}, against a random "
                           f"error of {error:.2%}; the intervals do not include it (a quieter sensor or a stronger "
                           "floor excitation removes it)", stacklevel=3)

@@ -72,6 +72,24 @@ class SpectralDensity:
         out[inside] = np.exp(np.interp(np.log(f[inside]), fs, vs))
         return out
 
+    def integral(self, high: float) -> float:
+        """``int_0^high S(f) df`` [SI^2]: the variance of the source below ``high`` [Hz] (exact for the log-log
+        interpolation: each segment a power law)."""
+        if self.is_flat:
+            return self.value[0] * high
+        total = 0.0
+        for f1, f2, s1, s2 in zip(self.frequency[:-1], self.frequency[1:], self.value[:-1], self.value[1:],
+                                  strict=True):
+            end = min(f2, high)
+            if end <= f1:
+                break
+            slope = math.log(s2 / s1) / math.log(f2 / f1)
+            if abs(slope + 1.0) < 1e-12:
+                total += s1 * f1 * math.log(end / f1)
+            else:
+                total += s1 * f1 / (slope + 1.0) * ((end / f1) ** (slope + 1.0) - 1.0)
+        return total
+
     def to_toml(self) -> float | dict[str, list[float]]:
         """The density as the scenario file writes it: a number, or ``{frequency, value}``."""
         if self.is_flat:

@@ -9,6 +9,7 @@ scenario").
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -77,6 +78,14 @@ class Sensor:
         if self.noise_psd is not None:
             return self.noise_psd
         return SpectralDensity.flat(2.0 * self.noise**2 / sample_rate) if self.noise > 0 else None
+
+    def noise_rms(self, sample_rate: float) -> float:
+        """RMS per sample [SI units] of the noise sampled at ``sample_rate`` [Hz]: ``noise``, or the root of
+        ``noise_psd`` integrated up to half the rate (what a design that models the noise as white per sample
+        assumes)."""
+        if self.noise_psd is None:
+            return self.noise
+        return math.sqrt(self.noise_psd.integral(sample_rate / 2.0))
 
     @property
     def order(self) -> int:
