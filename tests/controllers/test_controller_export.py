@@ -118,7 +118,8 @@ def test_json_round_trip(tmp_path):
                 back.settings) == (ctrl.sample_rate, ctrl.sensors, ctrl.actuators, ctrl.carriages, ctrl.method,
                                    ctrl.delay, ctrl.settings)
         x1 = x2 = ctrl.reset()
-        for y, q in zip(rng.normal(size=(20, 2 if ctrl is plain else 3)), rng.uniform(-1, 1, (20, 2)), strict=True):
+        positions = rng.uniform(-1, 1, (20, len(ctrl.carriages)))  # one per carriage (none for the plain one)
+        for y, q in zip(rng.normal(size=(20, 2 if ctrl is plain else 3)), positions, strict=True):
             (x1, u1), (x2, u2) = ctrl.step(x1, y, q), back.step(x2, y, q)
             np.testing.assert_array_equal(u1, u2)
     data = json.loads((tmp_path / "controller.json").read_text())
