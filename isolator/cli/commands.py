@@ -230,7 +230,8 @@ def _controller_option(args: argparse.Namespace) -> DiscreteController | None:
         if args.noise:
             raise ParameterError("--noise: adds sensor noise to a controller's readings; give --controller DIR")
         return None
-    source = args.controller / "controller.json" if args.controller.is_dir() else args.controller
+    named = args.controller.exists() and not args.controller.is_dir()  # a file (or a FIFO: refused as one)
+    source = args.controller if named else args.controller / "controller.json"
     try:
         return DiscreteController.from_json(source)
     except ParameterError as exc:  # the reading's own errors start with the path
