@@ -270,7 +270,8 @@ def read_controller(path: Path, option: str) -> Any:
     :class:`ParameterError` naming ``option``."""
     from isolator.simulation.discrete_controller import DiscreteController
 
-    source = path / "controller.json" if path.is_dir() else path
+    named = path.exists() and not path.is_dir()  # a file (or a FIFO: refused as one)
+    source = path if named else path / "controller.json"
     try:
         return DiscreteController.from_json(source)
     except ParameterError as exc:  # the reading's own errors start with the path

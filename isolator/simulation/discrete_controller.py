@@ -247,7 +247,7 @@ class DiscreteController:
 
         ``u = C x + D y`` [N] is the command from ``t_k``; ``x_next = A x + B y``.
         """
-        if q is not None and np.size(q) != len(self.carriages):
+        if q is not None and self.schedule and np.size(q) != len(self.carriages):  # read only when scheduled
             raise ParameterError(f"q: must hold one position per carriage ({len(self.carriages)}), got {np.size(q)}")
         A, B, C, D = self.matrices(q)
         x, y = np.asarray(x, dtype=float), np.asarray(y, dtype=float)

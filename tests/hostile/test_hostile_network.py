@@ -102,3 +102,34 @@ def test_an_encrypted_key_is_refused_without_a_prompt(tmp_path):
         tls_security(tmp_path / "ca.pem", tmp_path / "client.pem", tmp_path / "client.key",
                      {"ca": "--tls-ca-file", "cert": "--tls-cert", "key": "--tls-key", "tls": "--tls"})
     assert time.monotonic() - start < 5
+
+
+def test_a_cluster_without_workers_says_so(capfd):
+    """A scheduler with no workers: the sweep says "0 workers" after 2 s rather than wait in silence."""
+    from distributed import LocalCluster
+
+    from isolator.errors import ExecutorError
+    from isolator.sweep import sweep
+
+    cluster = LocalCluster(n_workers=0, processes=False, dashboard_address=None)
+    failed: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            sweep("paper-table-3-2", scale={"isolators[*].damping": [1.0, 2.0]}, scheduler=cluster.scheduler_address,
+                  progress=True)
+        except BaseException as exc:  # the cluster closed under it
+            failed.append(exc)
+
+    thread = threading.Thread(target=run, daemon=True)
+    thread.start()
+    deadline, seen = time.monotonic() + 30, ""
+    while time.monotonic() < deadline and "0 workers" not in seen:
+        time.sleep(0.5)
+        seen += capfd.readouterr().err
+    cluster.close()
+    thread.join(30)
+    assert "isolator sweep: 0 workers: the chunks wait until a worker joins" in seen, seen
+    assert not thread.is_alive()
+    assert failed
+    assert isinstance(failed[0], ExecutorError | ParameterError), failed

@@ -80,7 +80,6 @@ def _calls(lin):
         "transmissibility 2-D": (lambda: transmissibility(lin, np.ones((3, 3))), "frequency_hz:"),
         "transmissibility 1e8": (lambda: transmissibility(lin, np.linspace(1.0, 100.0, 10**8)), "frequency_hz:"),
         "step": (lambda: ctrl.step(np.ones(3), np.ones(5)), "x:"),
-        "step q": (lambda: ctrl.step(np.ones(1), np.ones(1), q=[0.1, 0.2]), "q:"),
         "from_dict": (lambda: DiscreteController.from_dict({"sample_rate": 1.0}), "controller.sensors"),
         "write_c": (lambda: write_c(ctrl, "/proc/nowhere/controller"), "folder:"),
         "reaction_wrench": (lambda: reaction_wrench(scene, np.ones(3), None, np.ones(2)), "rot:"),
@@ -90,7 +89,7 @@ def _calls(lin):
 
 @pytest.mark.parametrize("name", [
     "settling_time lengths", "settling_time NaN band", "segments lengths", "segments text", "shaped",
-    "table_signals", "modes_over_travel", "transmissibility 2-D", "transmissibility 1e8", "step", "step q",
+    "table_signals", "modes_over_travel", "transmissibility 2-D", "transmissibility 1e8", "step",
     "from_dict", "write_c", "reaction_wrench", "trapezoid"])
 def test_public_calls_raise_the_toolkits_own_error_naming_the_argument(lin, name):
     call, named = _calls(lin)[name]

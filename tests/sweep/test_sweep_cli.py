@@ -68,7 +68,7 @@ def test_ranges_are_inclusive_and_log_is_geometric():
     (["--scale", "isolators[*].stiffness=1:2:3", "--samples", "4"], "with --samples give a range START:STOP"),
     (["--scale", "isolators[*].stiffness=1,2", "--scale", "isolators[*].stiffness=3"], "is swept twice"),
     ([], "--set, --scale: give at least one NAME=VALUES"),
-    (["--set", "table.mass=4000:5000", "--samples", "4", "--seed", "-1"], "seed: must be a whole number >= 0"),
+    (["--set", "table.mass=4000:5000", "--samples", "4", "--seed", "-1"], "--seed: expected a whole number from 0"),
     (["--set", "table.mass=4000,5000", "--chunk-size", "0"], "chunk_size: must be a whole number >= 1"),
     (["--set", "table.mass=4000,5000", "--frequency", "-3"], "must be finite and >= 0 [Hz]"),
     (["--scale", "isolators[*].stiffness=1,2", "--scheduler", "tcp://127.0.0.1:9"],
