@@ -67,7 +67,7 @@ def test_budget_text_names_the_largest_source(capsys):
     (["--band", "10:1"], "--band: must be 0 < low < high"),
     (["--points", "nose"], "--points: no point named 'nose'"),
     (["--quantity", "jerk"], "argument --quantity: invalid choice"),
-    (["--controller", "/nonexistent"], "--controller: /nonexistent: cannot read"),
+    (["--controller", "/nonexistent"], "--controller: /nonexistent/controller.json: cannot read"),
     (["--position", "x-stage=9"], "--position x-stage: puts the carriage's mass"),
 ])
 def test_bad_budget_options_one_line_nothing_written(tmp_path, capsys, args, message):
