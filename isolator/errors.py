@@ -16,6 +16,7 @@ from __future__ import annotations
 __all__ = [
     "ExecutorError",
     "IsolatorError",
+    "MisfitError",
     "OptimisationError",
     "ParameterError",
     "ScenarioError",
@@ -66,6 +67,21 @@ class UnidentifiableError(IsolatorError):
     def __init__(self, message: str, groups: list[list[str]] | None = None) -> None:
         super().__init__(message)
         self.groups = groups or []
+
+
+class MisfitError(IsolatorError):
+    """A calibration's fit does not explain its records (its weighted residuals are beyond their chi-square
+    distribution); the message names each experiment, its ratio and what it most likely means.
+
+    Attributes
+    ----------
+    result : object
+        The :class:`~isolator.calibration.CalibrationResult` that was refused (``fit_ok`` False).
+    """
+
+    def __init__(self, message: str, result: object = None) -> None:
+        super().__init__(message)
+        self.result = result
 
 
 class ExecutorError(IsolatorError):

@@ -50,6 +50,7 @@ from isolator.scenario.validation import (
     check_carriage_tree,
     check_isolator_layout,
     check_pneumatics,
+    check_positions,
     check_sequence,
     check_strokes,
     check_unique_names,
@@ -198,6 +199,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
         sensors=sensors,
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
+    check_positions(scenario)
     check_sequence(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)

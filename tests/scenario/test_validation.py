@@ -138,3 +138,42 @@ def test_bundled_scenarios_load():
         sc = load_scenario(name)
         assert sc.table.mass == 4400.0
         assert len(sc.isolators) == 4
+
+
+def test_positions_in_mm_are_refused_naming_the_key_and_the_table():
+    """Isolator positions in mm (600 m from a 2 m table) named at their key, not as an isolator 'far beyond a
+    real one's' stiffness."""
+    data = base_dict()
+    for iso in data["isolators"]:
+        iso["position"] = [1000 * v for v in iso["position"]]
+    with pytest.raises(ScenarioError) as err:
+        make(data)
+    text = str(err.value)
+    assert text.startswith("isolators[0].position: [1000, 500, -150] m lies"), text
+    assert "+-1 m from the mass centre (table.size = [2, 1, 0.3] m)" in text
+    assert "in mm?" in text
+
+
+@pytest.mark.parametrize(("section", "key"), [("points", "position"), ("actuators", "position"),
+                                              ("sensors", "position"), ("carriages", "origin")])
+def test_every_table_position_is_checked_against_the_size(section, key):
+    from conftest import active_dict
+
+    data = active_dict()
+    data["points"] = [{"name": "tool", "position": [0.0, 0.0, 0.5]}]
+    data["sensors"] = [{"name": "floor", "on": "floor", "position": [50.0, 0.0, -3.0], "direction": [0, 0, 1.0],
+                        "quantity": "velocity"},
+                       {"name": "g", "on": "table", "position": [0.9, 0.4, 0.15], "direction": [0, 0, 1.0],
+                        "quantity": "velocity"}]
+    make(copy.deepcopy(data))  # a floor sensor is not on the table; the margin lets a tool point stand above it
+    index = 1 if section == "sensors" else 0
+    data[section][index][key] = [0.0, 0.0, 2.0]  # 1.85 m above a 0.3 m thick table: beyond the 1 m margin
+    with pytest.raises(ScenarioError, match=rf"^{section}\[{index}\]\.{key}: \[0, 0, 2\] m lies 0\.85 m beyond"):
+        make(data)
+
+
+def test_a_frame_under_the_table_is_within_the_margin():
+    data = base_dict()
+    for iso in data["isolators"]:
+        iso["position"] = [1.3 * iso["position"][0], 1.3 * iso["position"][1], -0.8]
+    make(data)
