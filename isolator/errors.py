@@ -8,7 +8,7 @@ argument; only a scenario whose own content makes the request impossible (no
 a :class:`ScenarioError` naming the scenario key; an optimiser or synthesis
 that finds no answer is an :class:`OptimisationError`; an executor that can no
 longer run a sweep's chunks (its cluster gone) is an :class:`ExecutorError`
-naming ``--resume``.
+naming ``resume=True`` (``--resume`` on the command line).
 """
 
 from __future__ import annotations
@@ -86,4 +86,5 @@ class MisfitError(IsolatorError):
 
 class ExecutorError(IsolatorError):
     """The executor running a sweep's chunks can no longer run them (a Dask scheduler that is gone, a broken
-    pool the sweep cannot renew); the rows written are kept and the message names ``--resume``."""
+    pool the sweep cannot renew); the rows written are kept and the message names ``resume=True`` (``isolator
+    sweep`` names ``--resume``)."""
