@@ -34,7 +34,7 @@ from isolator.simulation.discrete_controller import DiscreteController, Schedule
 
 from .hinf_output import hinf_design
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
-from .output_tuning import TUNED, tune
+from .output_tuning import TUNED, travel, tune
 from .sensor_plant import SensorPlant, sensor_plant
 
 __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positions", "travel"]
@@ -42,12 +42,6 @@ __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positi
 #: the output-feedback designs, by name
 METHODS: dict[str, Callable[..., DiscreteDesign]] = {"skyhook": skyhook_design, "lqg": lqg_design,
                                                      "hinf": hinf_design}
-
-
-def travel(scenario: Scenario) -> np.ndarray:
-    """Each carriage's least and greatest position over the run [m], (carriages, 2), file order."""
-    t_end = scenario.simulation.duration
-    return np.array([c.profile.position_range(t_end) for c in scenario.carriages], dtype=float).reshape(-1, 2)
 
 
 def _carried_mass(scenario: Scenario, index: int) -> float:

@@ -15,7 +15,8 @@ few of them and keeps the one whose closed loop settles the scenario's move fast
 The search: LQG's acceptable velocities, one scale for all axes on a coarse grid (translations and rotations
 apart), then each world axis's velocity and angular velocity in turn by factors of 3; skyhook's
 gain, the root locus's choice scaled on a coarse grid, then each world axis's actuators' gain in turn by factors
-of sqrt(2) (two passes; one that finds nothing better takes the square root of the factor). A candidate that breaks a limit is left out; when none keeps them all the method's own default stays.
+of sqrt(2) (two passes; one that finds nothing better takes the square root of the factor). A candidate that
+breaks a limit is left out; when none keeps them all the method's own default stays.
 """
 
 from __future__ import annotations
@@ -36,7 +37,7 @@ from isolator.simulation.simulator import Simulator
 
 from .robustness import check_robustness
 
-__all__ = ["DISK_MARGIN", "FORCE_SHARE", "GAIN_MARGIN", "PHASE_MARGIN", "TUNED", "Trial", "Tuning", "tune"]
+__all__ = ["DISK_MARGIN", "FORCE_SHARE", "GAIN_MARGIN", "PHASE_MARGIN", "TUNED", "Trial", "Tuning", "travel", "tune"]
 
 #: the share of each actuator's ``max_force`` the move's peak command may use (room for what the model misses)
 FORCE_SHARE = 0.8
@@ -101,10 +102,17 @@ class Tuning:
     def to_dict(self) -> dict[str, Any]:
         """JSON: the choice, the passive settling, the limits and the number of candidates."""
         best = min(self.trials, key=lambda t: t.key) if self.trials else None
-        return {"chosen": self.settings, "passive_settling": self.passive, "candidates": len(self.trials),
+        passive = self.passive if math.isfinite(self.passive) else None
+        return {"chosen": self.settings, "passive_settling": passive, "candidates": len(self.trials),
                 "settling": None if best is None or best.reason or not math.isfinite(best.settling)
                 else best.settling, "force_share": FORCE_SHARE, "gain_margin": GAIN_MARGIN,
                 "phase_margin": PHASE_MARGIN, "disk_margin": DISK_MARGIN}
+
+
+def travel(scenario: Scenario) -> np.ndarray:
+    """Each carriage's least and greatest position over the run [m], (carriages, 2), file order."""
+    t_end = scenario.simulation.duration
+    return np.array([c.profile.position_range(t_end) for c in scenario.carriages], dtype=float).reshape(-1, 2)
 
 
 def _slowest(settling: dict[str, float | None]) -> tuple[float, float]:
@@ -129,9 +137,16 @@ def tune(scenario: Scenario, method: str, design: Callable[[dict[str, Any]], Dis
     Returns
     -------
     Tuning
+        Without a move (no carriage travels) or when the passive table does not settle within the run, no
+        search: the method's own defaults.
     """
+    ranges = travel(scenario)
+    if not ranges.size or not np.any(ranges[:, 1] > ranges[:, 0]):
+        return Tuning({}, math.nan, [])
     sim = Simulator(scenario)
     passive = sim.run(p=parameters)
+    if not math.isfinite(_slowest(passive.settling_time)[0]):
+        return Tuning({}, math.nan, [])
     band = Band.of_baseline("passive", passive.peak)
     limits = np.array([a.max_force for a in scenario.actuators])
     trials: list[Trial] = []
