@@ -299,11 +299,13 @@ def _search_report(designs: Sequence[SensorDesign]) -> list[str]:
              f"in the passive band against the passive table's {fmt(passive)} s, the peak command within "
              f"{searched[0].controller.settings['search']['force_share']:.0%} of `max_force`, the margins over the "
              "travel kept:", "",
-             *table_header(["design", "weights chosen", "settling / passive", "method's own default / passive",
+             *table_header(["design", "weights chosen (per world axis x, y, z)", "settling / passive",
+                            "method's own default / passive",
                             "peak command / max_force", "candidates"])]
     for d in searched:
         search = d.controller.settings["search"]
-        chosen = ", ".join(f"{k} {v}" for k, v in search["chosen"].items()) or "the method's own"
+        chosen = ", ".join(f"{k} " + (", ".join(f"{x:.3g}" for x in v) if isinstance(v, list) else f"{v:.3g}")
+                           for k, v in search["chosen"].items()) or "the method's own"
         ratio = None if d.settling_time_max is None else d.settling_time_max / passive
         own = None if d.unsearched is None else d.unsearched / passive
         lines.append(table_row([d.method, chosen, fmt(ratio, ".3f"), fmt(own, ".3f"), fmt(d.force_share, ".2f"),

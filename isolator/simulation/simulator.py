@@ -153,7 +153,7 @@ class Simulator:
         """
         substeps = self.substeps_for(omega_max)
         omega = max(omega_max, self._forcing, 1e-12)
-        check_step_count(omega, float(self.grid.nodes[-1]), DENSE_STEP_ANGLE)
+        check_step_count(omega, float(self.grid.nodes[-1]), DENSE_STEP_ANGLE, self.scenario)
         key = max(0, math.ceil(8 * math.log2(MAX_DENSE_STEP * omega / DENSE_STEP_ANGLE)))
         if key not in self._plans:
             self._plans[key] = step_plan(self.grid.samples, self._breakpoints, MAX_DENSE_STEP * 2.0 ** (-key / 8),

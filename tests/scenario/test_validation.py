@@ -177,3 +177,31 @@ def test_a_frame_under_the_table_is_within_the_margin():
     for iso in data["isolators"]:
         iso["position"] = [1.3 * iso["position"][0], 1.3 * iso["position"][1], -0.8]
     make(data)
+
+
+def test_positions_in_mm_without_a_size_are_named_by_the_equilibrium():
+    """Without table.size nothing bounds the positions; the failed rest names the isolator's lever, not a mass
+    centre too high (the table would not tip)."""
+    from isolator import Simulator, UnstableTableError
+
+    data = base_dict()
+    data["table"] = {"mass": 4400.0, "inertia": [400.0, 1500.0, 1800.0]}
+    for iso in data["isolators"]:
+        iso["position"] = [1000 * v for v in iso["position"]]
+    with pytest.raises(UnstableTableError, match=r"would not tip .*isolators\[\d\]\.position lies 1\d{3} m from "
+                                                 r"the table's mass centre \(positions in mm\?"):
+        Simulator(make(data)).run()
+
+
+def test_a_step_count_refusal_names_the_input_that_makes_the_mode_fast():
+    from isolator.simulation.stepping import MAX_STEPS, check_step_count
+
+    data = base_dict()
+    data["isolators"][2]["stiffness"] = [1e5, 1e5, 1e13]
+    scenario = make(data)
+    omega = math.sqrt(1e13 / 4400.0) * 2
+    with pytest.raises(ScenarioError, match=r"^isolators\[2\]\.stiffness: the table's fastest mode .* 1e\+13 N/m on a "
+                                            r"table of 4800 kg"):
+        check_step_count(omega, 10 * MAX_STEPS / omega, 1.0, scenario)
+    with pytest.raises(ScenarioError, match=r"^isolators: .*far beyond a real isolator's"):
+        check_step_count(omega * 1e3, 10 * MAX_STEPS / omega, 1.0, scenario)  # nothing that fast: no one named
