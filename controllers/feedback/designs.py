@@ -172,7 +172,7 @@ def per_axis(value: float | Sequence[float], key: str) -> np.ndarray:
         if len(value) != 3:
             raise ParameterError(f"{key}: must be a number or three (x, y, z), got {len(value)}")
         return np.array([positive(v, f"{key}[{k}]") for k, v in enumerate(value)])
-    return np.full(3, positive(value, key))  # type: ignore[arg-type]
+    return np.full(3, positive(value, key))
 
 
 def as_given(values: np.ndarray) -> float | list[float]:

@@ -61,7 +61,8 @@ def check_positions(scenario: Scenario) -> None:
     half = np.asarray(size, dtype=float) / 2.0
     margin = FRAME_MARGIN * float(max(size))
     sensors = [(i, s) for i, s in enumerate(scenario.sensors) if s.on == "table"]
-    groups = [(f"isolators[{i}].position", x.position) for i, x in enumerate(scenario.isolators)]
+    isolators: list[Isolator | PneumaticIsolator] = list(scenario.isolators)
+    groups = [(f"isolators[{i}].position", x.position) for i, x in enumerate(isolators)]
     groups += [(f"actuators[{i}].position", x.position) for i, x in enumerate(scenario.actuators)]
     groups += [(f"sensors[{i}].position", x.position) for i, x in sensors]
     groups += [(f"points[{i}].position", x.position) for i, x in enumerate(scenario.points)]

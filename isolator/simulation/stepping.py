@@ -19,7 +19,7 @@ from isolator.numerics.dop853 import DenseStepper, StepPlan
 from isolator.numerics.native import MappedFunction
 from isolator.numerics.rk4 import Stepper
 from isolator.numerics.systems import Unstaged
-from isolator.scenario.definitions import Scenario
+from isolator.scenario.definitions import Isolator, Scenario
 from isolator.simulation.time_grid import inputs_at
 
 __all__ = [
@@ -195,7 +195,7 @@ def fastest_input(scenario: Scenario, omega: float) -> tuple[str, str] | None:
     mass, inertia = scenario.total_mass, float(min(scenario.table.inertia))
     best: tuple[float, str, str] | None = None
     for i, iso in enumerate(scenario.isolators):
-        if not hasattr(iso, "stiffness"):
+        if not isinstance(iso, Isolator):  # pneumatic: its stiffness is the air's
             continue
         r2 = float(np.dot(iso.position, iso.position))
         gain = 1.0 / mass + r2 / inertia
