@@ -17,8 +17,8 @@ the noise model the ratio is ``chi2(nu) / nu`` with ``nu`` the experiment's effe
 A fit fails the test where the ratio exceeds the ``1 -`` :data:`SIGNIFICANCE` quantile of ``chi2(nu) / nu``.
 A misfit is then explained where it can be: a record whose channels are a power of ten (within a factor of 2)
 or ``1 / g`` times the model's (least-squares scale of the record on the fitted model) is in other units; a
-channel about ``-1`` times the model's is a sensor whose direction is flipped; the table sensor whose channel
-holds the largest mean square residual is named.
+channel about ``-1`` times the model's (within a factor of 2) is a sensor whose direction is flipped; the table
+sensor whose channel holds the largest mean square residual is named.
 """
 
 from __future__ import annotations
@@ -148,7 +148,7 @@ def _power_of_ten(k: float) -> int | None:
 def _diagnosis(kind: str, file: str, sensors: tuple[Sensor, ...], scales: dict[str, float]) -> str:
     """A record in other units, or flipped sensors, from each channel's scale on the model."""
     by_unit: dict[tuple[str, str], list[str]] = {}
-    flipped = [s.name for s in sensors if -1.5 < scales[s.name] < -1 / 1.5]
+    flipped = [s.name for s in sensors if -2.0 < scales[s.name] < -0.5]  # -1 within a factor of 2
     for s in sensors:
         k = scales[s.name]
         if s.quantity == "acceleration" and kind == "move" and abs(k * GRAVITY - 1) < 0.1:
