@@ -61,11 +61,13 @@ def register(sub: Any) -> None:
     ctl.add_argument("--calibration-json", type=Path, default=None, metavar="FILE",
                      help="check over the 95 %% intervals of a calibration ('isolator calibrate --json' output)")
     ctl.add_argument("--gain", type=float, default=None, metavar="N_S_PER_M",
-                     help="skyhook: damping per actuator (default: the most damping of the table's modes)")
+                     help="skyhook: damping per actuator (default: chosen per world axis by a search judged by the "
+                     "simulated move's settling, the force limits and the margins)")
     ctl.add_argument("--highpass", type=float, default=None, metavar="HZ",
                      help="skyhook: the geophone loop's high-pass corner (default: a fifth of the lowest mode)")
     ctl.add_argument("--max-velocity", type=float, default=None, metavar="M_PER_S",
-                     help="lqg and hinf: the acceptable table velocity (and angular velocity, rad/s) (default 0.01)")
+                     help="lqg and hinf: the acceptable table velocity (and angular velocity, rad/s) (default: lqg "
+                     "chosen per axis by a search as for --gain, hinf 0.01)")
     ctl.add_argument("--json", action="store_true", help="print JSON instead of text")
     ctl.set_defaults(handler=_controller)
 
