@@ -117,6 +117,18 @@ class _Progress:
             print(f"  robustness: {done}/{total} cases", file=sys.stderr, flush=True)
 
 
+def _search_line(settings: Any) -> list[str]:
+    """The line on the weights a search chose (none without a search)."""
+    search = settings.get("search")
+    if not search or not search["chosen"]:
+        return []
+    chosen = ", ".join(f"{k} " + "/".join(f"{x:.3g}" for x in (v if isinstance(v, list) else [v]))
+                       for k, v in search["chosen"].items())
+    ratio = (f"settles the move in {search['settling'] / search['passive_settling']:.3g} of the passive time"
+             if search["settling"] is not None and search["passive_settling"] else "")
+    return [f"weights chosen by a search of {search['candidates']} designs ({chosen}): {ratio}".rstrip(": ")]
+
+
 def _controller(args: argparse.Namespace) -> int:
     from controllers.feedback import (
         check_robustness,
@@ -152,6 +164,6 @@ def _controller(args: argparse.Namespace) -> int:
              + (", one sample of delay" if controller.delay else "")
              + (f", scheduled over {controller.carriages[controller.schedule_carriage]} at "
                 f"{len(controller.schedule)} points" if controller.schedule else ""),
-             *robustness.summary()]
+             *_search_line(controller.settings), *robustness.summary()]
     return report(args.json, data, "\n".join(lines),
                   [("controller data", target), ("C header", header), ("C source", source)])
