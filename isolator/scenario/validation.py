@@ -44,10 +44,10 @@ def check_isolator_layout(isolators: tuple[Isolator, ...] | tuple[PneumaticIsola
         raise ScenarioError("isolators: positions all lie on one line; the table could roll about it")
 
 
-#: how far beyond the table's box (``table.size``) a position in the table frame may lie, as a fraction of the
-#: table's largest dimension: isolators and actuators under a frame, sensors on its legs, points on a tool above
-#: the table (a position in mm instead of m lies a thousand times farther)
-FRAME_MARGIN = 0.5
+#: how far beyond the table's box (``table.size``) a position in the table frame may lie, in the table's largest
+#: dimension: isolators and actuators under a tall frame, sensors on its legs, points on a tool above the table
+#: (a position in mm instead of m lies a thousand times farther, in cm a hundred)
+FRAME_MARGIN = 2.0
 
 
 def check_positions(scenario: Scenario) -> None:
@@ -73,7 +73,8 @@ def check_positions(scenario: Scenario) -> None:
         if np.any(beyond > 0):
             axis = int(np.argmax(beyond))
             shown = ", ".join(f"{v:.4g}" for v in p)
-            mm = " (a position in mm? the table frame is in m)" if np.all(np.abs(p) / 1000 <= half + margin) else ""
+            mm = " (a position in mm? the table frame is in m)" if np.all(np.abs(p) / 1000 <= half + margin) and \
+                np.max(np.abs(p)) > 100 * np.max(half) else ""
             raise ScenarioError(
                 f"{key}: [{shown}] m lies {beyond[axis]:.4g} m beyond what the table reaches along "
                 f"{'xyz'[axis]}: its extent is +-{half[axis]:.4g} m from the mass centre (table.size = "

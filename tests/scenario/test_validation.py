@@ -150,7 +150,7 @@ def test_positions_in_mm_are_refused_naming_the_key_and_the_table():
         make(data)
     text = str(err.value)
     assert text.startswith("isolators[0].position: [1000, 500, -150] m lies"), text
-    assert "+-1 m from the mass centre (table.size = [2, 1, 0.3] m)" in text
+    assert "+-1 m from the mass centre (table.size = [2, 1, 0.3] m), with 4 m for parts under a frame" in text
     assert "in mm?" in text
 
 
@@ -167,15 +167,15 @@ def test_every_table_position_is_checked_against_the_size(section, key):
                         "quantity": "velocity"}]
     make(copy.deepcopy(data))  # a floor sensor is not on the table; the margin lets a tool point stand above it
     index = 1 if section == "sensors" else 0
-    data[section][index][key] = [0.0, 0.0, 2.0]  # 1.85 m above a 0.3 m thick table: beyond the 1 m margin
-    with pytest.raises(ScenarioError, match=rf"^{section}\[{index}\]\.{key}: \[0, 0, 2\] m lies 0\.85 m beyond"):
+    data[section][index][key] = [0.0, 0.0, 5.0]  # 4.85 m above a 0.3 m thick table: beyond the 4 m margin
+    with pytest.raises(ScenarioError, match=rf"^{section}\[{index}\]\.{key}: \[0, 0, 5\] m lies 0\.85 m beyond"):
         make(data)
 
 
 def test_a_frame_under_the_table_is_within_the_margin():
     data = base_dict()
     for iso in data["isolators"]:
-        iso["position"] = [1.3 * iso["position"][0], 1.3 * iso["position"][1], -0.8]
+        iso["position"] = [1.5 * iso["position"][0], 1.5 * iso["position"][1], -2.5]
     make(data)
 
 
