@@ -20,6 +20,7 @@ from isolator.scenario.windows import check_windows
 __all__ = [
     "check_carriage_tree",
     "check_duration",
+    "check_extent",
     "check_isolator_layout",
     "check_motion",
     "check_phases",
@@ -131,6 +132,12 @@ def check_strokes(scenario: Scenario) -> None:
             f"{coordinate:.4g} m at t = {times[k]:.4g} s, beyond the table's "
             f"{which} {half:.4g} m (table.size)"
         )
+
+
+def check_extent(scenario: Scenario) -> None:
+    """Everything against ``table.size``: :func:`check_positions`, then :func:`check_strokes`."""
+    check_positions(scenario)
+    check_strokes(scenario)
 
 
 def check_sequence(scenario: Scenario) -> None:
