@@ -61,11 +61,13 @@ def register(sub: Any) -> None:
     ctl.add_argument("--calibration-json", type=Path, default=None, metavar="FILE",
                      help="check over the 95 %% intervals of a calibration ('isolator calibrate --json' output)")
     ctl.add_argument("--gain", type=float, default=None, metavar="N_S_PER_M",
-                     help="skyhook: damping per actuator (default: the most damping of the table's modes)")
+                     help="skyhook: damping per actuator (default: chosen per world axis by a search judged by the "
+                     "simulated move's settling, the force limits and the margins)")
     ctl.add_argument("--highpass", type=float, default=None, metavar="HZ",
                      help="skyhook: the geophone loop's high-pass corner (default: a fifth of the lowest mode)")
     ctl.add_argument("--max-velocity", type=float, default=None, metavar="M_PER_S",
-                     help="lqg and hinf: the acceptable table velocity (and angular velocity, rad/s) (default 0.01)")
+                     help="lqg and hinf: the acceptable table velocity (and angular velocity, rad/s) (default: lqg "
+                     "chosen per axis by a search as for --gain, hinf 0.01)")
     ctl.add_argument("--fmu", action="store_true",
                      help="also write controller.fmu: the controller as an FMI 2.0 Co-Simulation FMU (inputs "
                      "y:<sensor>, q:<carriage>; outputs u:<actuator>; one step per sample); needs a C compiler")
@@ -118,6 +120,18 @@ class _Progress:
             print(f"  robustness: {done}/{total} cases", file=sys.stderr, flush=True)
 
 
+def _search_line(settings: Any) -> list[str]:
+    """The line on the weights a search chose (none without a search)."""
+    search = settings.get("search")
+    if not search or not search["chosen"]:
+        return []
+    chosen = ", ".join(f"{k} " + "/".join(f"{x:.3g}" for x in (v if isinstance(v, list) else [v]))
+                       for k, v in search["chosen"].items())
+    ratio = (f"settles the move in {search['settling'] / search['passive_settling']:.3g} of the passive time"
+             if search["settling"] is not None and search["passive_settling"] else "")
+    return [f"weights chosen by a search of {search['candidates']} designs ({chosen}): {ratio}".rstrip(": ")]
+
+
 def _controller(args: argparse.Namespace) -> int:
     from controllers.feedback import (
         check_robustness,
@@ -162,7 +176,7 @@ def _controller(args: argparse.Namespace) -> int:
              + (", one sample of delay" if controller.delay else "")
              + (f", scheduled over {controller.carriages[controller.schedule_carriage]} at "
                 f"{len(controller.schedule)} points" if controller.schedule else ""),
-             *robustness.summary()]
+             *_search_line(controller.settings), *robustness.summary()]
     return report(args.json, data, "\n".join(lines),
                   [("controller data", target), ("C header", header), ("C source", source),
                    ("FMU", folder / "controller.fmu" if args.fmu else None)])

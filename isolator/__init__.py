@@ -151,3 +151,10 @@ __all__ = [
 __version__ = "0.1.0"
 
 check_public(globals(), foreign=True)  # what the modules defining them do not check (the sweep's result)
+
+
+def __getattr__(name: str) -> object:
+    """Names that left the public API, for one release with a DeprecationWarning (``static_equilibrium``)."""
+    from isolator.model.deprecated import deprecated
+
+    return deprecated(name)

@@ -8,7 +8,7 @@ argument; only a scenario whose own content makes the request impossible (no
 a :class:`ScenarioError` naming the scenario key; an optimiser or synthesis
 that finds no answer is an :class:`OptimisationError`; an executor that can no
 longer run a sweep's chunks (its cluster gone) is an :class:`ExecutorError`
-naming ``--resume``.
+naming ``resume=True`` (``--resume`` on the command line).
 """
 
 from __future__ import annotations
@@ -16,6 +16,7 @@ from __future__ import annotations
 __all__ = [
     "ExecutorError",
     "IsolatorError",
+    "MisfitError",
     "OptimisationError",
     "ParameterError",
     "ScenarioError",
@@ -68,6 +69,22 @@ class UnidentifiableError(IsolatorError):
         self.groups = groups or []
 
 
+class MisfitError(IsolatorError):
+    """A calibration's fit does not explain its records (its weighted residuals are beyond their chi-square
+    distribution); the message names each experiment, its ratio and what it most likely means.
+
+    Attributes
+    ----------
+    result : object
+        The :class:`~isolator.calibration.CalibrationResult` that was refused (``fit_ok`` False).
+    """
+
+    def __init__(self, message: str, result: object = None) -> None:
+        super().__init__(message)
+        self.result = result
+
+
 class ExecutorError(IsolatorError):
     """The executor running a sweep's chunks can no longer run them (a Dask scheduler that is gone, a broken
-    pool the sweep cannot renew); the rows written are kept and the message names ``--resume``."""
+    pool the sweep cannot renew); the rows written are kept and the message names ``resume=True`` (``isolator
+    sweep`` names ``--resume``)."""

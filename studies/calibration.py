@@ -65,7 +65,7 @@ class CalibrationStudy:
 
 
 def run_calibration_study(out: str | Path, calibration: str | Path | None = None, truth: str | Path | None = None,
-                          fraction: float = 0.01, progress: bool = True) -> CalibrationStudy:
+                          fraction: float = 0.01, progress: bool = False) -> CalibrationStudy:
     """Run the study (see the module's description); figures and ``report.md`` in ``out``.
 
     Parameters
@@ -81,7 +81,7 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
         on the true table for the runs there); 1 %: a precision machine's tolerance, where the residual
         vibration a wrong model leaves shows (in 5 % both optimised designs are inside at once).
     progress : bool
-        Print what it does.
+        Print what it does on stderr (off by default; ``isolator study`` turns it on).
     """
     folder = output_folder(out)
     say = progress_printer(progress, "calibration study: ")

@@ -134,7 +134,7 @@ def _paper(args: argparse.Namespace) -> int:
 
     output_folder(args.out, "--out")
     use_agg()
-    print(f"report: {run_paper_study(args.out, quick=args.quick)}")
+    print(f"report: {run_paper_study(args.out, quick=args.quick, progress=True)}")
     return 0
 
 
@@ -147,7 +147,8 @@ def _control(args: argparse.Namespace) -> int:
     scenario = _scenario(args, CONTROL_SCENARIO)
     if args.floor is not None:
         scenario = on_floor(scenario, args.floor, "--floor")
-    control = run_control_study(args.out, scenario, args.controller, args.feedforward, sample_rate=args.sample_rate)
+    control = run_control_study(args.out, scenario, args.controller, args.feedforward, sample_rate=args.sample_rate,
+                                progress=True)
     for run in ("passive", "feedforward", "feedback", "both"):
         value = control.settling_time_max(run)
         settle, rate = control.window_cycle(run)
@@ -176,7 +177,7 @@ def _tradeoff(args: argparse.Namespace) -> int:
     stiffness = [0.5, 1.0, 2.0] if args.quick else None
     damping = [0.5, 1.0, 2.0, 4.0] if args.quick else None
     tradeoff = run_tradeoff_study(args.out, _scenario(args, None), stiffness, damping, reference_hz=frequency,
-                                  workers=_checked_workers(args))
+                                  workers=_checked_workers(args), progress=True)
     front = tradeoff.pareto()
     print(f"{len(front)} Pareto-optimal designs of {tradeoff.stiffness.size * tradeoff.damping.size}")
     if tradeoff.has_throughput:
@@ -199,7 +200,7 @@ def _pneumatic(args: argparse.Namespace) -> int:
         own = default_diameters(scenario)
         diameters, ratios = own[[2, 7, 12]], [1.0, 2.0, 4.0]  # 0.52, 1 and 1.92 x the scenario's orifice
     pneumatic = run_pneumatic_study(args.out, scenario, diameters, ratios, reference_hz=frequency,
-                                    workers=_checked_workers(args))
+                                    workers=_checked_workers(args), progress=True)
     for o, c in zip(pneumatic.optima, pneumatic.closed_form, strict=True):
         print(f"N = {o.ratio:.3g}: optimal orifice {o.diameter * 1e3:.4g} mm, heave peak {o.peak:.4g} "
               f"(one-mass closed form {c.peak:.4g} with {c.diameter * 1e3:.4g} mm)")
@@ -215,7 +216,7 @@ def _calibration(args: argparse.Namespace) -> int:
     use_agg()
     if not (math.isfinite(args.fraction) and 0 < args.fraction < 1):
         raise ParameterError(f"--fraction: must be a fraction between 0 and 1, got {args.fraction}")
-    study = run_calibration_study(args.out, args.scenario, args.truth, args.fraction)
+    study = run_calibration_study(args.out, args.scenario, args.truth, args.fraction, progress=True)
     for name, m in study.actual.items():
         settled = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3g} s"
         print(f"{name:>10}: settling on the true table {settled}")
@@ -237,7 +238,8 @@ def _robustness(args: argparse.Namespace) -> int:
     with scheduler_client(args) as client:  # before any work or file
         scenario = _scenario(args, None)
         study = run_robustness_study(args.out, scenario, tolerances, samples, args.seed, args.workers,
-                                     optimiser=settings, executor=None if client is None else client.get_executor())
+                                     optimiser=settings, executor=None if client is None else client.get_executor(),
+                                     progress=True)
     for name, m in study.methods.items():
         print(f"{name:>10}: settling P50 {m.percentile(50):.3g} s, P95 {m.percentile(95):.3g} s, "
               f"worst {m.worst:.3g} s")
@@ -256,7 +258,7 @@ def _profiles(args: argparse.Namespace) -> int:
     if scenario.sequence is not None:
         return _sequence_profiles(args, scenario)
     variants = (ModelVariant(),) if args.quick else ROBUSTNESS_VARIANTS
-    profiles = run_profile_study(args.out, scenario, variants, source=args.scenario)
+    profiles = run_profile_study(args.out, scenario, variants, source=args.scenario, progress=True)
     for name, m in profiles.methods.items():
         settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
         print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
@@ -268,7 +270,7 @@ def _sequence_profiles(args: argparse.Namespace, scenario: Scenario) -> int:
     from studies.profiles_sequence import run_sequence_profile_study
 
     study = run_sequence_profile_study(args.out, scenario, source=args.scenario or DEFAULT_SCENARIO,
-                                       samples=8 if args.quick else 32)
+                                       samples=8 if args.quick else 32, progress=True)
     for name, run in study.runs.items():
         total = "did not settle" if run.total_time is None else f"total {run.total_time:.2f} s"
         rate = "" if run.throughput is None else f", {run.throughput:.0f} steps/h"

@@ -187,7 +187,7 @@ def run_control_study(
     scenario: Scenario,
     controller: str = "skyhook",
     feedforward: str = "allocation",
-    progress: bool = True,
+    progress: bool = False,
     sample_rate: float = 2000.0,
 ) -> ControlStudy:
     """Run the study and write its figures and report into ``out``.

@@ -68,6 +68,12 @@ class SensorDesign:
         isolators: margins along the travel.
     peak_force, rms_force : float
         Largest and RMS applied actuator force over the run [N] (over all actuators).
+    unsearched : float or None
+        The slowest signal's settling time [s] of the method's own default design (``search=False``), when the
+        design's weights came from the search (:mod:`controllers.feedback.output_tuning`); None otherwise or
+        when it did not settle.
+    force_share : float
+        The largest of the actuators' peak commands over their ``max_force``.
     budget : DesignBudget or None
         The error budget at the tool, passive and with this controller (:func:`studies.control_budget.design_budget`).
     """
@@ -82,6 +88,8 @@ class SensorDesign:
     travel: tuple[fb.RobustnessCase, ...]
     peak_force: float
     rms_force: float
+    unsearched: float | None = None
+    force_share: float = math.nan
     budget: DesignBudget | None = None
 
     @property
@@ -94,7 +102,8 @@ class SensorDesign:
         """JSON-ready summary."""
         return {"method": self.method, "sample_rate": self.controller.sample_rate, "states": self.controller.states,
                 "settling": self.settling, "settling_time_max": self.settling_time_max,
-                "peak_force": self.peak_force, "rms_force": self.rms_force,
+                "peak_force": self.peak_force, "rms_force": self.rms_force, "force_share": self.force_share,
+                "unsearched_settling_time_max": self.unsearched,
                 "noise_table_rms": self.noise.table_rms, "noise_force_rms_max": float(np.max(self.noise.force_rms)),
                 "sensitivity_peak": float(np.max(self.loops.sensitivity)),
                 "complementary_peak": float(np.max(self.loops.complementary)),
@@ -132,6 +141,7 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
     middle, _ = fb.design_positions(scenario)
     plant = fb.sensor_plant(linearise(scenario, positions=middle[0]))
     f = np.logspace(-1, math.log10(0.45 * sample_rate), 400)
+    limits = np.array([a.max_force for a in scenario.actuators])
     out = []
     for method in methods:
         say(f"sensor feedback: {method} at {sample_rate:g} Hz")
@@ -145,9 +155,14 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
         along = fb.check_robustness(scenario, ctrl, positions=[tuple(q) for q in _along_travel(scenario)])
         response = sim.run(controller=ctrl)
         forces = response.actuator_forces
+        unsearched = None
+        if "search" in ctrl.settings:  # the method's own default weights, for the comparison
+            own = settle(sim.run(controller=fb.design_controller(scenario, method, sample_rate, search=False)), band)
+            unsearched = None if any(v is None for v in own.values()) else max(v for v in own.values() if v is not None)
         out.append(SensorDesign(method, ctrl, response, settle(response, band), loop_response(plant, ctrl, f),
                                 noise_motion(plant, ctrl), robust.to_dict(), along.cases,
-                                float(np.max(np.abs(forces))), float(np.sqrt(np.mean(forces**2))),
+                                float(np.max(np.abs(forces))), float(np.sqrt(np.mean(forces**2))), unsearched,
+                                float(np.max(np.max(np.abs(forces), axis=1) / limits)),
                                 design_budget(scenario, ctrl)))
     return out, skipped
 
@@ -286,11 +301,36 @@ def sensor_report(designs: Sequence[SensorDesign], left_out: dict[str, str] | No
                                 f"{max(c.spectral_radius for c in d.travel):.5f}",
                                 "stable in all " + str(d.robustness["cases_checked"]) + " cases"
                                 if d.robustness["stable"] else "UNSTABLE somewhere"]))
+    lines += _search_report(designs)
     lines += ["", *skipped, "", "The noise columns: the stationary RMS that the sensors' own noise (their `noise`, "
               "per sample; a `noise_psd` spectrum is counted in the error budget below, not here) causes through "
               "the sampled loop, exact (discrete Lyapunov equation), carriages mid-travel.", ""]
     budgets = {d.method: d.budget for d in designs if d.budget is not None}
     return lines + (budget_section(budgets) if budgets else [])
+
+
+def _search_report(designs: Sequence[SensorDesign]) -> list[str]:
+    """The weights the search chose against the methods' own defaults (markdown lines; none without a search)."""
+    searched = [d for d in designs if "search" in d.controller.settings]
+    if not searched:
+        return []
+    passive = searched[0].controller.settings["search"]["passive_settling"]
+    lines = ["", f"Default weights chosen by a search (`controllers.feedback.output_tuning`): the move's settling "
+             f"in the passive band against the passive table's {fmt(passive)} s, the peak command within "
+             f"{searched[0].controller.settings['search']['force_share']:.0%} of `max_force`, the margins over the "
+             "travel kept:", "",
+             *table_header(["design", "weights chosen (per world axis x, y, z)", "settling / passive",
+                            "method's own default / passive",
+                            "peak command / max_force", "candidates"])]
+    for d in searched:
+        search = d.controller.settings["search"]
+        chosen = ", ".join(f"{k} " + (", ".join(f"{x:.3g}" for x in v) if isinstance(v, list) else f"{v:.3g}")
+                           for k, v in search["chosen"].items()) or "the method's own"
+        ratio = None if d.settling_time_max is None else d.settling_time_max / passive
+        own = None if d.unsearched is None else d.unsearched / passive
+        lines.append(table_row([d.method, chosen, fmt(ratio, ".3f"), fmt(own, ".3f"), fmt(d.force_share, ".2f"),
+                                search["candidates"]]))
+    return lines
 
 
 check_public(globals())

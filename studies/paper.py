@@ -121,7 +121,7 @@ def _tilt_excess(exact: Response, paper: Response, i: int) -> float:
     return float(exact.final[i] / paper.final[i] - 1.0)
 
 
-def run_paper_study(out: str | Path, quick: bool = False) -> Path:
+def run_paper_study(out: str | Path, quick: bool = False, progress: bool = False) -> Path:
     """Reproduce the paper's figures and settling time; write them and ``report.md`` to ``out``.
 
     Parameters
@@ -130,6 +130,8 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
         Output folder (created).
     quick : bool
         Shorter runs and a looser multibody tolerance (for tests).
+    progress : bool
+        A line per stage on stderr (off by default; ``isolator study`` turns it on).
 
     Returns
     -------
@@ -137,7 +139,7 @@ def run_paper_study(out: str | Path, quick: bool = False) -> Path:
         The report.
     """
     out = output_folder(out)
-    say = progress_printer(prefix="study paper: ")
+    say = progress_printer(progress, prefix="study paper: ")
     case1 = load_scenario("paper-table-3-1")
     case2 = load_scenario("paper-table-3-2")
     if quick:

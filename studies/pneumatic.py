@@ -144,7 +144,7 @@ def run_pneumatic_study(
     diameters: Sequence[float] | np.ndarray | None = None,
     ratios: Sequence[float] | np.ndarray | None = None,
     reference_hz: float = 10.0,
-    progress: bool = True,
+    progress: bool = False,
     workers: int | None = None,
 ) -> PneumaticStudy:
     """Sweep every isolator's orifice and damping-chamber volume; write figures, ``designs.csv``, ``report.md``.
@@ -162,7 +162,7 @@ def run_pneumatic_study(
     reference_hz : float
         Frequency of the isolation figure [Hz], > 0.
     progress : bool
-        Print a line per stage.
+        Print a line per stage on stderr (off by default; ``isolator study`` turns it on).
     workers : int, optional
         Processes of the runs' sweeps (default: the machine's cores; 1: in this process).
 

@@ -103,7 +103,7 @@ def run_profile_study(
     folder: str | Path,
     scenario: Scenario,
     variants: tuple[ModelVariant, ...] = ROBUSTNESS_VARIANTS,
-    progress: bool = True,
+    progress: bool = False,
     source: str | Path | None = None,
 ) -> ProfileStudy:
     """Compare the profile methods on a scenario; write figures and ``report.md`` to ``folder``.
@@ -116,7 +116,7 @@ def run_profile_study(
     variants : tuple of ModelVariant
         Optimised over, and every method checked on.
     progress : bool
-        Print a line per step.
+        Print a line per step on stderr (off by default; ``isolator study`` turns it on).
     source : str or Path, optional
         The scenario's file (or bundled name): each method that a scenario file can hold is written to
         ``scenarios/<method>.toml``.

@@ -86,7 +86,7 @@ class SequenceProfileStudy:
 
 
 def run_sequence_profile_study(
-    folder: str | Path, scenario: Scenario, progress: bool = True, source: str | Path | None = None,
+    folder: str | Path, scenario: Scenario, progress: bool = False, source: str | Path | None = None,
     samples: int = 32,
 ) -> SequenceProfileStudy:
     """Compare the ways of moving through the scenario's sequence; write figures and ``report.md``.
@@ -97,7 +97,7 @@ def run_sequence_profile_study(
     scenario : Scenario
         With a ``[sequence]`` and ``[[windows]]``.
     progress : bool
-        A line per method.
+        A line per method on stderr (off by default; ``isolator study`` turns it on).
     source : str or Path, optional
         The scenario's file (or bundled name): the optimised sequence is written to
         ``scenarios/optimised.toml``.

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
@@ -38,11 +39,12 @@ def output_folder(out: str | Path) -> Path:
 
 
 def progress_printer(enabled: bool = True, prefix: str = "") -> Callable[[str], None]:
-    """A function printing ``prefix + text`` at once, or nothing when not ``enabled``."""
+    """A function printing ``prefix + text`` on stderr at once (progress, apart from results), or nothing when
+    not ``enabled``."""
 
     def say(text: str) -> None:
         if enabled:
-            print(f"{prefix}{text}", flush=True)
+            print(f"{prefix}{text}", file=sys.stderr, flush=True)
 
     return say
 

@@ -63,7 +63,7 @@ def run_robustness_study(
     samples: int = 200,
     seed: int = 0,
     workers: int | None = None,
-    progress: bool = True,
+    progress: bool = False,
     optimiser: ProfileSettings | None = None,
     executor: Executor | None = None,
     scheduler: str | None = None,
@@ -85,7 +85,7 @@ def run_robustness_study(
     workers : int, optional
         Processes of the sweeps (default: the machine's cores).
     progress : bool
-        Progress lines and bars.
+        Progress lines and bars on stderr (off by default; ``isolator study`` turns it on).
     optimiser : ProfileSettings, optional
         Of the optimised profile (default: the settling-time objective on the nominal model).
     executor : concurrent.futures.Executor, optional

@@ -75,7 +75,7 @@ def run_tradeoff_study(
     stiffness: Sequence[float] | np.ndarray | None = None,
     damping: Sequence[float] | np.ndarray | None = None,
     reference_hz: float = 10.0,
-    progress: bool = True,
+    progress: bool = False,
     workers: int | None = None,
 ) -> TradeoffStudy:
     """Sweep the isolators' stiffness and damping; write figures, ``designs.csv`` and ``report.md``.
@@ -90,7 +90,7 @@ def run_tradeoff_study(
     reference_hz : float
         Frequency of the transmissibility figure [Hz], > 0.
     progress : bool
-        Print a line per stage.
+        Print a line per stage on stderr (off by default; ``isolator study`` turns it on).
     workers : int, optional
         Processes of the sweep (default: the machine's cores; 1: in this process).
 

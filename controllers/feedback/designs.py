@@ -23,6 +23,7 @@ The designs ignore the actuators' lag and saturation; the checks
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import control
@@ -36,7 +37,8 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.rules import check_value
 
-__all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "decentralised", "lead", "pid", "positive", "skyhook"]
+__all__ = ["MEASUREMENTS", "SAMPLE_RATE", "Controller", "as_given", "decentralised", "lead", "per_axis", "pid",
+           "positive", "skyhook"]
 
 MEASUREMENTS = STATE_NAMES
 #: default controller sample rate [Hz]
@@ -161,6 +163,21 @@ def positive(value: float, key: str, allow_zero: bool = False) -> float:
     if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
         raise ParameterError(f"{key}: must be a finite number {'>=' if allow_zero else '>'} 0, got {value}")
     return v
+
+
+def per_axis(value: float | Sequence[float], key: str) -> np.ndarray:
+    """A setting given once or per world axis (x, y, z) as three positive numbers (3,), or a
+    :class:`ParameterError` naming ``key``."""
+    if isinstance(value, Sequence) and not isinstance(value, str):
+        if len(value) != 3:
+            raise ParameterError(f"{key}: must be a number or three (x, y, z), got {len(value)}")
+        return np.array([positive(v, f"{key}[{k}]") for k, v in enumerate(value)])
+    return np.full(3, positive(value, key))
+
+
+def as_given(values: np.ndarray) -> float | list[float]:
+    """A per-axis setting as JSON: one number when the three agree."""
+    return float(values[0]) if np.all(values == values[0]) else [float(v) for v in values]
 
 
 def skyhook(lin: LinearModel, damping: float, sample_rate: float = SAMPLE_RATE) -> Controller:

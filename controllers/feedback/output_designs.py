@@ -21,7 +21,9 @@ interpolate (gain scheduling); the H-infinity design is in :mod:`.hinf_output`.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import control
 import numpy as np
@@ -30,7 +32,7 @@ from scipy.linalg import solve_discrete_are
 from isolator.errors import OptimisationError, ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 
-from .designs import positive
+from .designs import as_given, per_axis, positive
 from .sensor_plant import DISTURBANCES, SensorPlant, loop_matrix
 
 __all__ = [
@@ -67,7 +69,7 @@ class DiscreteDesign:
     B: np.ndarray
     C: np.ndarray
     D: np.ndarray
-    settings: dict[str, float | str | bool]
+    settings: dict[str, Any]
 
     @property
     def matrices(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -138,8 +140,8 @@ def lowest_mode_hz(plant: SensorPlant) -> float:
     return float(np.sort(np.abs(plant.lin.eigenvalues))[plant.held_air]) / (2 * math.pi)
 
 
-def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, gain: float | None = None,
-                   highpass_hz: float | None = None) -> DiscreteDesign:
+def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False,
+                   gain: float | Sequence[float] | None = None, highpass_hz: float | None = None) -> DiscreteDesign:
     """Decentralised skyhook damping from collocated geophones, discrete at ``sample_rate``.
 
     Every actuator commands ``u_i = -c s_i H(z) y_i``: ``y_i`` its collocated sensor's reading, ``s_i`` the
@@ -153,9 +155,11 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
         [Hz].
     delay : bool
         Design for one sample of computation delay (``u_k`` acting from ``t_{k+1}``).
-    gain : float, optional
-        ``c`` per actuator [N s/m]. Default: the gain, on a logarithmic grid from 10 to 10^6 N s/m,
-        that gives the sampled loop's least-damped pole the highest damping ratio.
+    gain : float or sequence of 3 floats, optional
+        ``c`` per actuator [N s/m], or one for the actuators along each world axis (x, y, z: an actuator's
+        largest direction component). Default: one gain, on a logarithmic grid from 10 to 10^6 N s/m, that
+        gives the sampled loop's least-damped pole the highest damping ratio (``isolator controller`` searches
+        further: :mod:`controllers.feedback.output_tuning`).
     highpass_hz : float, optional
         The high-pass corner [Hz]; default a fifth of the table's lowest mode.
 
@@ -186,8 +190,11 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
         d[i, j] = -sign * float(np.asarray(f.D)[0, 0])
     sampled = plant.discrete(sample_rate, delay)
 
-    def damping(value: float) -> tuple[float, float]:
-        return loop_damping(loop_matrix(sampled, (a, value * b, c, value * d)), sample_rate, plant.held_air)
+    axis = np.array([int(np.argmax(np.abs(act.direction))) for act in plant.lin.scenario.actuators])
+
+    def damping(value: float | np.ndarray) -> tuple[float, float]:
+        scale = np.broadcast_to(np.asarray(value, dtype=float), (m,))[:, None]
+        return loop_damping(loop_matrix(sampled, (a, b, scale * c, scale * d)), sample_rate, plant.held_air)
 
     if gain is None:
         grid = np.logspace(1, 6, 61)
@@ -196,12 +203,13 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
         if not math.isfinite(scores[best]):
             raise OptimisationError("skyhook: no gain from 10 to 1e6 N s/m gives a stable sampled loop (raise "
                                     "--sample-rate or the actuators' bandwidth)")
-        c_gain = float(grid[best])
+        gains = np.full(3, float(grid[best]))
     else:
-        c_gain = positive(gain, "gain")
-    radius, zeta = damping(c_gain)
-    return DiscreteDesign(a, c_gain * b, c, c_gain * d,
-                          {"gain": c_gain, "highpass_hz": corner, "gain_chosen": gain is None,
+        gains = per_axis(gain, "gain")
+    scale = gains[axis]
+    radius, zeta = damping(scale)
+    return DiscreteDesign(a, b, scale[:, None] * c, scale[:, None] * d,
+                          {"gain": as_given(gains), "highpass_hz": corner, "gain_chosen": gain is None,
                            "least_damping": zeta, "spectral_radius": radius})
 
 
@@ -307,9 +315,9 @@ def noise_model(plant: SensorPlant, sampled: control.StateSpace, noise_floor: fl
     return NoiseModel(wrench, walk, noise, corner, mk)
 
 
-def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_velocity: float = 1e-2,
-               max_rate: float = 1e-2, noise_floor: float = NOISE_FLOOR, washout_hz: float | None = None
-               ) -> DiscreteDesign:
+def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False,
+               max_velocity: float | Sequence[float] = 1e-2, max_rate: float | Sequence[float] = 1e-2,
+               noise_floor: float = NOISE_FLOOR, washout_hz: float | None = None) -> DiscreteDesign:
     """LQG from the sensors: Kalman filter (current estimator) and LQR on the sampled plant.
 
     Cost ``sum (v / max_velocity)^2 + (w / max_rate)^2 + (u_i / max_force_i)^2`` over the table's
@@ -328,8 +336,10 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
         [Hz].
     delay : bool
         Design for one sample of computation delay: the plant's delay states are part of the estimate.
-    max_velocity, max_rate : float
-        Acceptable table velocity [m/s] and angular velocity [rad/s] (Bryson's rule).
+    max_velocity, max_rate : float or sequence of 3 floats
+        Acceptable table velocity [m/s] and angular velocity [rad/s] (Bryson's rule), one for all three axes or
+        one per world axis (x, y, z). ``isolator controller`` chooses them per axis when not given
+        (:mod:`controllers.feedback.output_tuning`).
     noise_floor : float
         Smallest sensor noise RMS assumed [SI units].
     washout_hz : float, optional
@@ -341,7 +351,7 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
         A Riccati equation has no stabilising solution.
     """
     refuse_held_air(plant, "lqg")
-    v_max, w_max = positive(max_velocity, "max_velocity"), positive(max_rate, "max_rate")
+    v_max, w_max = per_axis(max_velocity, "max_velocity"), per_axis(max_rate, "max_rate")
     floor = positive(noise_floor, "noise_floor")
     sampled = plant.discrete(sample_rate, delay)
     m = plant.n_actuators
@@ -350,7 +360,7 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
     bu, du = b[:, :m], d[:, :m]
     n = ad.shape[0]
     cz = np.zeros((6, n))
-    cz[np.arange(6), 6 + np.arange(6)] = 1.0 / np.array([v_max] * 3 + [w_max] * 3)
+    cz[np.arange(6), 6 + np.arange(6)] = 1.0 / np.concatenate([v_max, w_max])
     limits = np.array([a.max_force for a in plant.lin.scenario.actuators])
     q = cz.T @ cz
     r = np.diag(1.0 / limits**2)
@@ -369,7 +379,8 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
     ac = ad @ (eye - mk @ cy) + (bu - ad @ mk @ du) @ cc
     bcm = ad @ mk + (bu - ad @ mk @ du) @ dc
     radius, zeta = loop_damping(loop_matrix(sampled, (ac, bcm, cc, dc)), sample_rate)
-    return DiscreteDesign(ac, bcm, cc, dc, {"max_velocity": v_max, "max_rate": w_max, "noise_floor": floor,
+    return DiscreteDesign(ac, bcm, cc, dc, {"max_velocity": as_given(v_max), "max_rate": as_given(w_max),
+                                            "noise_floor": floor,
                                             "process_force": float(wrench[0]), "washout_hz": corner,
                                             "position_walk": walk, "least_damping": zeta,
                                             "spectral_radius": radius})

@@ -19,6 +19,7 @@ import inspect
 import math
 import numbers
 from collections.abc import Callable, Mapping
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -33,6 +34,7 @@ from isolator.simulation.discrete_controller import DiscreteController, Schedule
 
 from .hinf_output import hinf_design
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
+from .output_tuning import TUNED, travel, tune
 from .sensor_plant import SensorPlant, sensor_plant
 
 __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positions", "travel"]
@@ -40,12 +42,6 @@ __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positi
 #: the output-feedback designs, by name
 METHODS: dict[str, Callable[..., DiscreteDesign]] = {"skyhook": skyhook_design, "lqg": lqg_design,
                                                      "hinf": hinf_design}
-
-
-def travel(scenario: Scenario) -> np.ndarray:
-    """Each carriage's least and greatest position over the run [m], (carriages, 2), file order."""
-    t_end = scenario.simulation.duration
-    return np.array([c.profile.position_range(t_end) for c in scenario.carriages], dtype=float).reshape(-1, 2)
 
 
 def _carried_mass(scenario: Scenario, index: int) -> float:
@@ -116,7 +112,7 @@ def checked_sample_rate(sample_rate: float) -> float:
 def design_controller(scenario: Scenario, method: str, sample_rate: float, delay: bool = False,
                       schedule: int = 1, schedule_carriage: str | None = None,
                       options: Mapping[str, Any] | None = None,
-                      parameters: np.ndarray | None = None) -> DiscreteController:
+                      parameters: np.ndarray | None = None, search: bool = True) -> DiscreteController:
     """Design a discrete output-feedback controller from the scenario's sensors to its actuators.
 
     Parameters
@@ -137,6 +133,11 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
         ``{"max_velocity": 5e-3}`` for lqg and hinf [m/s]).
     parameters : ndarray, optional
         The model's parameter vector to design with (e.g. a calibrated one); default the scenario's.
+    search : bool
+        ``lqg`` and ``skyhook`` without their weights in ``options`` (``max_velocity``/``max_rate``,
+        ``gain``): choose them by a small search judged by the simulated move's settling, the actuators' force
+        limits and the margins (:mod:`controllers.feedback.output_tuning`; its outcome under
+        ``settings["search"]``); False: the design function's own defaults.
 
     Returns
     -------
@@ -174,6 +175,14 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
     if unknown := sorted(set(settings) - known):
         raise ParameterError(f"options: {method} has no setting '{unknown[0]}' (it takes {', '.join(sorted(known))})")
     points, index = design_positions(scenario, schedule, schedule_carriage)
+    if search and method in TUNED and not set(TUNED[method]) & set(settings):
+        def design(weights: dict[str, Any]) -> DiscreteController:
+            return design_controller(scenario, method, sample_rate, delay, schedule, schedule_carriage,
+                                     {**settings, **weights}, parameters, search=False)
+
+        outcome = tune(scenario, method, design, parameters)
+        chosen = design(outcome.settings)
+        return _with_settings(chosen, {**chosen.settings, "search": outcome.to_dict()})
     if method == "hinf" and len(points) > 1:
         raise ParameterError("schedule (--schedule): an H-infinity design's states are the synthesis's own, so two "
                              "designs have no common coordinates to interpolate; use --method lqg or skyhook to "
@@ -194,6 +203,11 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
         return DiscreteController(**common, A=designs[0].A, B=designs[0].B, C=designs[0].C, D=designs[0].D)
     entries = [ScheduleEntry(tuple(q), *d.matrices) for q, d in zip(points, designs, strict=True)]
     return DiscreteController(**common, schedule=entries, schedule_carriage=index)
+
+
+def _with_settings(controller: DiscreteController, settings: dict[str, Any]) -> DiscreteController:
+    """The controller with other design settings (the same matrices)."""
+    return replace(controller, settings=settings)
 
 
 check_public(globals())

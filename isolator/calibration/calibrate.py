@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import replace
 from pathlib import Path
@@ -12,10 +13,11 @@ from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes
 from isolator.calibration.definition import Calibration, load_calibration
 from isolator.calibration.experiments import FloorExperiment, MoveExperiment, prepare
-from isolator.calibration.fit import fit_parameters
+from isolator.calibration.fit import Fit, fit_parameters
+from isolator.calibration.goodness import Goodness, goodness_of_fit, misfit_message
 from isolator.calibration.records import Record, read_record
 from isolator.calibration.result import CalibrationResult, Curves, ParameterEstimate
-from isolator.errors import ParameterError, ScenarioError, UnidentifiableError
+from isolator.errors import MisfitError, ParameterError, ScenarioError, UnidentifiableError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.reader import scenario_from_dict
@@ -43,6 +45,7 @@ def calibrate(
     allow_unidentifiable: bool = False,
     progress: Callable[[str], None] | None = None,
     jacobian: str = "model",
+    accept_misfit: bool = False,
 ) -> CalibrationResult:
     """Fit a scenario's parameters to measured records.
 
@@ -60,6 +63,10 @@ def calibrate(
     jacobian : {"model", "differences"}
         The fit's Jacobian: the model's (floor: exact derivatives; move: the perturbed runs in one batch of SIMD
         lanes), or scipy's forward differences run by run (a baseline for ``benchmarks/bench_calibration.py``).
+    accept_misfit : bool
+        Give the fit (``fit_ok`` False, and a warning naming the misfit) even when it does not explain the
+        records: an experiment's weighted residual variance beyond its chi-square limit
+        (:mod:`isolator.calibration.goodness`).
 
     Returns
     -------
@@ -73,6 +80,9 @@ def calibrate(
         ``calibration`` of a wrong type, or a ``fit`` name the file does not fit.
     UnidentifiableError
         The records cannot tell some fitted parameters apart (they are named), unless ``allow_unidentifiable``.
+    MisfitError
+        The fit does not explain some experiment's record (the experiment, its ratio and the likely cause are
+        named; the refused result is the error's ``result``), unless ``accept_misfit``.
 
     Examples
     --------
@@ -97,10 +107,12 @@ def calibrate(
                                   "experiments that separate them, or --allow-unidentifiable)", outcome.unidentifiable)
     data, scenario = _fitted(calibration, outcome.values)
     p0, p1 = calibration.vector(), calibration.vector(outcome.values)
+    curves = {e.name: _curves(e, p0, p1) for e in experiments}
+    goodness = _goodness(calibration, experiments, outcome, curves)
     parameters = {f.name: ParameterEstimate(f.initial, float(v), float(s), (float(lo), float(hi)), f.bounds)
                   for f, v, s, (lo, hi) in zip(calibration.parameters, outcome.values, outcome.std, outcome.ci95,
                                                strict=True)}
-    return CalibrationResult(
+    result = CalibrationResult(
         calibration=calibration,
         parameters=parameters,
         scenario=scenario,
@@ -109,12 +121,21 @@ def calibrate(
         correlation=outcome.correlation,
         experiments={e.name: {"kind": e.kind, "residual_before": outcome.residuals_before[e.name],
                               "residual_after": outcome.residuals_after[e.name],
-                              "points": int(_points(e))} for e in experiments},
+                              "points": int(_points(e)), "fit_ok": goodness[e.name].ok,
+                              "fit_ratio": goodness[e.name].ratio, "fit_limit": goodness[e.name].limit,
+                              "worst_sensor": goodness[e.name].worst} for e in experiments},
         modes={"nominal": _modes(calibration.scenario), "fitted": _modes(scenario)},
         fit=outcome,
-        curves={e.name: _curves(e, p0, p1) for e in experiments},
+        curves=curves,
         fitted_data=data,
+        goodness=goodness,
     )
+    failed = [g for g in goodness.values() if not g.ok]
+    if failed and not accept_misfit:
+        raise MisfitError(misfit_message(failed), result)
+    if failed:
+        warnings.warn(misfit_message(failed, accepted=True), stacklevel=2)
+    return result
 
 
 def _restricted(calibration: Calibration, fit: Sequence[str]) -> Calibration:
@@ -143,6 +164,17 @@ def _fitted(calibration: Calibration, values: np.ndarray) -> tuple[dict, Scenari
             set_parameter(data, layout.names[e], float(v), current)
     return data, scenario_from_dict(data, base_dir=calibration.scenario_file.parent,
                                     default_name=calibration.scenario_file.stem)
+
+
+def _goodness(calibration: Calibration, experiments: list[FloorExperiment | MoveExperiment], outcome: Fit,
+              curves: dict[str, Curves]) -> dict[str, Goodness]:
+    """Each experiment's goodness of fit, its share of the parameters by its share of the residuals."""
+    total = sum(outcome.residuals[e.name].size for e in experiments)
+    files = {e.name: e.file.name for e in calibration.experiments}
+    return {e.name: goodness_of_fit(e, files[e.name], outcome.residuals[e.name],
+                                    len(calibration.parameters) * outcome.residuals[e.name].size / total,
+                                    curves[e.name].fitted)
+            for e in experiments}
 
 
 def _modes(scenario: Scenario) -> dict[str, list[float]]:

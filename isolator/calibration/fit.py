@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
@@ -60,6 +60,8 @@ class Fit:
         Model evaluations the fit took.
     residuals_before, residuals_after : dict of str to float
         RMS of each experiment's weighted residuals at the start and at the fit.
+    residuals : dict of str to ndarray
+        Each experiment's weighted residuals at the fit.
     """
 
     values: np.ndarray
@@ -71,6 +73,7 @@ class Fit:
     evaluations: int
     residuals_before: dict[str, float]
     residuals_after: dict[str, float]
+    residuals: dict[str, np.ndarray] = field(default_factory=dict, repr=False)
 
 
 def _tangents(calibration: Calibration, values: np.ndarray) -> np.ndarray:
@@ -157,7 +160,8 @@ def fit_parameters(calibration: Calibration, experiments: Sequence[FloorExperime
         j = names.index(name)
         std[j] = math.inf
         ci[j] = calibration.parameters[j].bounds
-    return Fit(values, std, ci, correlation, groups, s2, count[0], before, after)
+    return Fit(values, std, ci, correlation, groups, s2, count[0], before, after,
+               {e.name: f.r for e, f in zip(experiments, final, strict=True)})
 
 
 def _rms(r: np.ndarray) -> float:

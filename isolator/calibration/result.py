@@ -12,6 +12,7 @@ import numpy as np
 
 from isolator.calibration.definition import Calibration
 from isolator.calibration.fit import Fit
+from isolator.calibration.goodness import Goodness
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.writing import write_toml
 
@@ -95,13 +96,17 @@ class CalibrationResult:
         In the order of ``parameters``.
     experiments : dict of str to dict
         Per experiment: ``kind``, ``residual_before`` and ``residual_after`` (RMS of the noise-weighted
-        residuals, about 1 at a fit within the noise), ``points`` (residuals).
+        residuals, about 1 at a fit within the noise), ``points`` (residuals), ``fit_ok``, ``fit_ratio`` and
+        ``fit_limit`` (the goodness-of-fit test: :mod:`isolator.calibration.goodness`), ``worst_sensor`` (the
+        table sensor whose channel misfits most).
     modes : dict
         ``nominal`` and ``fitted``: ``frequencies_hz`` and ``damping_ratios`` at the scenario's start.
     fit : Fit
     curves : dict of str to Curves
     fitted_data : dict
         The fitted scenario's keys (what :meth:`write_scenario` writes).
+    goodness : dict of str to Goodness
+        Each experiment's goodness of fit, by name.
     """
 
     calibration: Calibration
@@ -115,13 +120,20 @@ class CalibrationResult:
     fit: Fit
     curves: dict[str, Curves] = field(default_factory=dict, repr=False)
     fitted_data: dict[str, Any] = field(default_factory=dict, repr=False)
+    goodness: dict[str, Goodness] = field(default_factory=dict, repr=False)
+
+    @property
+    def fit_ok(self) -> bool:
+        """Whether the fit explains every experiment's record within its noise (the goodness-of-fit test)."""
+        return all(g.ok for g in self.goodness.values())
 
     def to_dict(self) -> dict[str, Any]:
         """The contract's JSON: ``parameters``, ``identifiable``, ``unidentifiable``, ``correlation``,
-        ``experiments``, ``modes``; with ``residual_variance`` and ``evaluations``."""
+        ``experiments``, ``modes``; with ``fit_ok``, ``residual_variance`` and ``evaluations``."""
         return {
             "parameters": {n: e.to_dict() for n, e in self.parameters.items()},
             "identifiable": self.identifiable,
+            "fit_ok": self.fit_ok,
             "unidentifiable": [list(g) for g in self.unidentifiable],
             "correlation": [[float(v) for v in row] for row in self.correlation],
             "experiments": self.experiments,
@@ -141,8 +153,10 @@ class CalibrationResult:
             lines.append(f"{n:<32} {e.initial:>11.5g} {e.value:>11.5g} {e.std:>10.3g}  "
                          f"[{e.ci95[0]:.5g}, {e.ci95[1]:.5g}]")
         for n, x in self.experiments.items():
+            verdict = "within the noise" if x["fit_ok"] else f"MISFIT, {x['worst_sensor']} most"
             lines.append(f"experiment {n} ({x['kind']}): weighted RMS residual {x['residual_before']:.4g} -> "
-                         f"{x['residual_after']:.4g}")
+                         f"{x['residual_after']:.4g}; residual variance {x['fit_ratio']:.4g} times the noise's "
+                         f"(limit {x['fit_limit']:.4g}: {verdict})")
         nominal, fitted = self.modes["nominal"], self.modes["fitted"]
         lines.append("modes [Hz]: " + ", ".join(f"{a:.4g} -> {b:.4g}" for a, b in
                                                 zip(nominal["frequencies_hz"], fitted["frequencies_hz"], strict=False)))

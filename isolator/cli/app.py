@@ -66,6 +66,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``isolator`` command; returns the exit status."""
     parser = build_parser()
     args, extra = parser.parse_known_args(argv)
+    args.argv = list(sys.argv[1:] if argv is None else argv)  # the command as typed (e.g. to name its --resume)
     if extra:  # an option of another subcommand (or none): name the subcommand whose help lists the real ones
         prog = " ".join(["isolator", args.command, *([args.study] if getattr(args, "study", None) else [])])
         parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {escaped(' '.join(extra))} "

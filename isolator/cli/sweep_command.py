@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import argparse
 import math
+import shlex
+import sys
 from concurrent.futures import Executor
 from pathlib import Path
 from typing import Any
@@ -22,10 +24,10 @@ from isolator.cli.helpers import (
     seed,
     use_agg,
 )
-from isolator.errors import ParameterError
+from isolator.errors import ExecutorError, ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.sweep import METHODS, sweep
-from isolator.sweep.output import SUFFIXES, staging_path
+from isolator.sweep.output import SUFFIXES, read_columns, staging_path
 from isolator.sweep.sweep import check_workers
 
 __all__ = ["parse_values", "register"]
@@ -147,6 +149,34 @@ def _swept(args: argparse.Namespace) -> dict[str, dict[str, list[float]]]:
     return out
 
 
+#: how :func:`isolator.sweep.sweep`'s messages name its arguments, and the options this command names them by
+_WORDS = {"out: ": "--out: ", "force=True": "--force", "resume=True": "--resume", "the same sweep": "the same command"}
+
+
+def _options_named(message: str) -> str:
+    """A message of :func:`isolator.sweep.sweep` in this command's words (``--force``, not ``force=True``)."""
+    for api, cli in _WORDS.items():
+        message = message.replace(api, cli)
+    return message
+
+
+def _rows_kept(out: Path) -> int:
+    """The rows an interrupted sweep left in ``out`` (0 when there are none yet)."""
+    try:
+        return len(read_columns(out, ["design"]).get("design", ()))
+    except (OSError, ValueError, StopIteration, ParameterError):
+        return 0
+
+
+def _resume_command(args: argparse.Namespace) -> str:
+    """The command line that continues an interrupted sweep: this one with --resume instead of --force."""
+    argv = getattr(args, "argv", None)
+    if argv is None:
+        return "the same command with --resume"
+    words = [w for w in argv if w != "--force"]
+    return shlex.join(["isolator", *words, *([] if "--resume" in words else ["--resume"])])
+
+
 def _sweep(args: argparse.Namespace) -> int:
     swept = _swept(args)
     if args.workers is not None:
@@ -155,13 +185,20 @@ def _sweep(args: argparse.Namespace) -> int:
     figure = figure_path(args.plot, "--plot")
     if (out.exists() or staging_path(out).exists()) and not (args.resume or args.force):
         raise ParameterError(f"--out: '{out}' exists; --resume continues it, --force overwrites it")
-    with scheduler_client(args) as client:
-        executor: Executor | None = None if client is None else client.get_executor()
-        result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip,
-                       samples=args.samples, method=args.method, seed=args.seed, model=args.model, executor=executor,
-                       workers=args.workers, frequencies=args.frequency, modes=args.modes,
-                       budget=",".join(args.budget) or None, out=out,
-                       resume=args.resume, force=args.force, progress=True, chunk_size=args.chunk_size)
+    try:
+        with scheduler_client(args) as client:
+            executor: Executor | None = None if client is None else client.get_executor()
+            result = sweep(args.scenario, swept["set"] or None, swept["scale"] or None, zip=args.zip,
+                           samples=args.samples, method=args.method, seed=args.seed, model=args.model,
+                           executor=executor, workers=args.workers, frequencies=args.frequency, modes=args.modes,
+                           budget=",".join(args.budget) or None, out=out, resume=args.resume, force=args.force,
+                           progress=True, chunk_size=args.chunk_size)
+    except (ParameterError, ExecutorError) as exc:  # the API's words for its arguments, as this command's options
+        raise type(exc)(_options_named(str(exc))) from None
+    except KeyboardInterrupt:
+        print(f"isolator: interrupted: {_rows_kept(out)} row(s) kept in {out}; continue with: "
+              f"{_resume_command(args)}", file=sys.stderr)
+        return 130
     print(result.summary())
     if figure is not None:
         from isolator.sweep.figure import plot_sweep

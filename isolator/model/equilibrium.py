@@ -262,6 +262,15 @@ def static_equilibria(
     if failed.any():
         i = int(np.argmax(failed))
         rock = rocking_stiffness(model, params[i], qs[i], np.zeros(model.n_static))
+        if rock.margin > 0:  # the table would not tip: the solve failed on the inputs' magnitudes, name the lever
+            names = model.layout.names
+            starts = [k for k, n in enumerate(names) if n.startswith("isolators[") and n.endswith(".position.x")]
+            reach = [(float(np.linalg.norm(params[i][k:k + 3])), names[k][:-2]) for k in starts]
+            far, key = max(reach, default=(0.0, ""))
+            cause = (f"{key} lies {far:.4g} m from the table's mass centre (positions in mm? the table frame is in m)"
+                     if far > 100.0 else "masses, stiffness or damping many orders of magnitude apart")
+            raise UnstableTableError(f"{label(i)}no static equilibrium {where}: the solve does not converge although "
+                                     f"the table would not tip ({rock.describe()}); {cause}")
         raise UnstableTableError(
             f"{label(i)}no static equilibrium {where}: the isolators cannot hold the table upright; "
             f"{rock.describe()} (the mass centre is too high for the isolator spacing, or they are too soft)"

@@ -42,10 +42,10 @@ from isolator.scenario.sequence import StepSequence, held, read_sequence
 from isolator.scenario.tables import load_spectrum, read_csv_columns, read_samples
 from isolator.scenario.validation import (
     check_carriage_tree,
+    check_extent,
     check_isolator_layout,
     check_pneumatics,
     check_sequence,
-    check_strokes,
     check_unique_names,
 )
 from isolator.scenario.windows_reader import read_windows
@@ -195,7 +195,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
     )
     check_scenario_values(scenario)  # the rules the parameter vectors are checked by (isolator.scenario.rules)
     check_sequence(scenario)
-    check_strokes(scenario)
+    check_extent(scenario)  # positions and strokes against table.size
     check_pneumatics(scenario)
     return scenario
 

@@ -21,10 +21,12 @@ from isolator.scenario.windows import check_windows
 __all__ = [
     "check_carriage_tree",
     "check_duration",
+    "check_extent",
     "check_isolator_layout",
     "check_motion",
     "check_phases",
     "check_pneumatics",
+    "check_positions",
     "check_sequence",
     "check_strokes",
     "check_unique_names",
@@ -42,6 +44,43 @@ def check_isolator_layout(isolators: tuple[Isolator, ...] | tuple[PneumaticIsola
     scale = max(float(np.abs(pts).max()), 1e-12)
     if span[1] <= 1e-9 * scale:
         raise ScenarioError("isolators: positions all lie on one line; the table could roll about it")
+
+
+#: how far beyond the table's box (``table.size``) a position in the table frame may lie, in the table's largest
+#: dimension: isolators and actuators under a tall frame, sensors on its legs, points on a tool above the table
+#: (a position in mm instead of m lies a thousand times farther, in cm a hundred)
+FRAME_MARGIN = 2.0
+
+
+def check_positions(scenario: Scenario) -> None:
+    """Every position in the table frame (isolators, actuators, table sensors, points, carriage origins) within
+    the table's box grown by :data:`FRAME_MARGIN` of its largest dimension on every side, when ``table.size`` is
+    given; else one error naming the key, the table's extent along the axis and, when a thousandth of it would
+    lie inside, the likely cause (millimetres)."""
+    size = scenario.table.size
+    if size is None:
+        return
+    half = np.asarray(size, dtype=float) / 2.0
+    margin = FRAME_MARGIN * float(max(size))
+    sensors = [(i, s) for i, s in enumerate(scenario.sensors) if s.on == "table"]
+    isolators: list[Isolator | PneumaticIsolator] = list(scenario.isolators)
+    groups = [(f"isolators[{i}].position", x.position) for i, x in enumerate(isolators)]
+    groups += [(f"actuators[{i}].position", x.position) for i, x in enumerate(scenario.actuators)]
+    groups += [(f"sensors[{i}].position", x.position) for i, x in sensors]
+    groups += [(f"points[{i}].position", x.position) for i, x in enumerate(scenario.points)]
+    groups += [(f"carriages[{i}].origin", x.origin) for i, x in enumerate(scenario.carriages)]
+    for key, position in groups:
+        p = np.asarray(position, dtype=float)
+        beyond = np.abs(p) - half - margin
+        if np.any(beyond > 0):
+            axis = int(np.argmax(beyond))
+            shown = ", ".join(f"{v:.4g}" for v in p)
+            mm = " (a position in mm? the table frame is in m)" if np.all(np.abs(p) / 1000 <= half + margin) and \
+                np.max(np.abs(p)) > 100 * np.max(half) else ""
+            raise ScenarioError(
+                f"{key}: [{shown}] m lies {beyond[axis]:.4g} m beyond what the table reaches along "
+                f"{'xyz'[axis]}: its extent is +-{half[axis]:.4g} m from the mass centre (table.size = "
+                f"[{', '.join(f'{v:g}' for v in size)}] m), with {margin:.4g} m for parts under a frame{mm}")
 
 
 def check_unique_names(names: list[str], section: str) -> None:
@@ -92,6 +131,12 @@ def check_strokes(scenario: Scenario) -> None:
             f"{coordinate:.4g} m at t = {times[k]:.4g} s, beyond the table's "
             f"{which} {half:.4g} m (table.size)"
         )
+
+
+def check_extent(scenario: Scenario) -> None:
+    """Everything against ``table.size``: :func:`check_positions`, then :func:`check_strokes`."""
+    check_positions(scenario)
+    check_strokes(scenario)
 
 
 def check_sequence(scenario: Scenario) -> None:
@@ -288,6 +333,7 @@ def validate_scenario(scenario: Scenario) -> Scenario:
         The first check that fails, naming its key.
     """
     check_scenario_values(scenario)
+    check_positions(scenario)
     check_isolator_layout(scenario.isolators)
     check_carriage_tree(scenario.carriages)
     check_unique_names([a.name for a in scenario.actuators], "actuators")

@@ -29,7 +29,7 @@ from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Settling
 
-__all__ = ["BAND_KINDS", "MOTION_FLOOR", "Band", "as_band", "format_half_widths", "parse_half_widths"]
+__all__ = ["BAND_KINDS", "MOTION_FLOOR", "READ_BACK", "Band", "as_band", "format_half_widths", "parse_half_widths"]
 
 #: peaks below this are numerical noise: such a signal does not move [m or rad]
 MOTION_FLOOR = 1e-13
@@ -69,6 +69,10 @@ def _widths(values: Mapping[str, float] | Sequence[float] | np.ndarray, key: str
             raise ParameterError(f"{key}: {name} must be a finite half-width > 0 [m or rad], got {v!r}")
         out.append(f)
     return tuple(out)
+
+
+#: the baseline of an own band read back (``from_dict``): resolved on the run it was written from
+READ_BACK = "written-from"
 
 
 @dataclass(frozen=True)
@@ -143,6 +147,8 @@ class Band:
         if kind == "absolute" or fraction is None:
             return cls("absolute", None, None, widths)
         baseline = data.get("baseline")
+        if kind == "own" and widths is not None:  # resolved on the run it was written from: that run's peaks,
+            kind, baseline = "baseline", baseline or READ_BACK  # not the peaks of the run it is given to
         return cls(kind, _fraction(fraction, f"{key}.fraction"), None if baseline is None else str(baseline), widths)
 
     # -- using -------------------------------------------------------------------
@@ -179,6 +185,8 @@ class Band:
         """How the band was chosen, in words."""
         if self.kind == "own":
             return f"{100 * float(self.fraction):g} % of each signal's own peak"  # type: ignore[arg-type]
+        if self.kind == "baseline" and self.baseline == READ_BACK:
+            return f"{100 * float(self.fraction):g} % of the peaks of the run it was written from"  # type: ignore[arg-type]
         if self.kind == "baseline":
             return f"{100 * float(self.fraction):g} % of the {self.baseline} run's peaks"  # type: ignore[arg-type]
         return "absolute half-widths"

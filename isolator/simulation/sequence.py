@@ -293,7 +293,7 @@ def run_sequence(
         omega = max(omega, runner.equilibrium(target).max_frequency)
         h = runner.max_step(omega)
         available = duration - now
-        check_step_count(omega, max(available, 0.0), DENSE_STEP_ANGLE)
+        check_step_count(omega, max(available, 0.0), DENSE_STEP_ANGLE, runner.scenario)
         timeline.append((now, profiles))
         settled_points.append(settled)
         found: float | None = None

@@ -19,12 +19,13 @@ from isolator.numerics.dop853 import DenseStepper, StepPlan
 from isolator.numerics.native import MappedFunction
 from isolator.numerics.rk4 import Stepper
 from isolator.numerics.systems import Unstaged
-from isolator.scenario.definitions import Scenario
+from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.profiles import SineProfile
 from isolator.simulation.time_grid import inputs_at
 
 __all__ = [
     "DENSE_STEP_ANGLE",
+    "LEVER_LIMIT",
     "MAX_DENSE_STEP",
     "MAX_STEPS",
     "MAX_TURN",
@@ -34,6 +35,7 @@ __all__ = [
     "check_turn",
     "clear_caches",
     "dense_stepper",
+    "fastest_input",
     "hold_time",
     "plan_stage_inputs",
     "rk4_stepper",
@@ -169,8 +171,9 @@ MAX_STEPS = 2e7
 
 def check_step_count(omega: float, duration: float, angle: float, scenario: Scenario | None = None) -> None:
     """Refuse a run whose fastest eigenvalue ``omega`` [1/s] needs more than :data:`MAX_STEPS` explicit steps
-    of ``|lambda| h <= angle`` over ``duration`` [s] (a stiffness or damping far beyond a real isolator's); with
-    ``scenario``, a sine drive (a carriage's or the floor's) at least as fast is named as the cause instead."""
+    of ``|lambda| h <= angle`` over ``duration`` [s], naming the scenario's input that most likely makes it when
+    ``scenario`` is given: a sine drive (a carriage's or the floor's) at least as fast, else
+    :func:`fastest_input`."""
     steps = duration * omega / angle
     if math.isfinite(steps) and steps <= MAX_STEPS:
         return
@@ -184,8 +187,44 @@ def check_step_count(omega: float, duration: float, angle: float, scenario: Scen
         raise ScenarioError(f"{fastest[1]}.omega: a sine of {fastest[0]:.3g} rad/s needs about {steps:.3g} "
                             f"integration steps for this {duration:g} s run (at most {MAX_STEPS:g}): faster than "
                             "any stage or floor moves")
+    cause = fastest_input(scenario, omega) if scenario is not None else None
+    key, why = cause or ("isolators", "a stiffness or damping far beyond a real isolator's, or much too light "
+                                      "a table")
     raise ScenarioError(
-        f"isolators: the table's fastest mode (|lambda| = {omega:.3g} 1/s) needs about {steps:.3g} integration "
-        f"steps for this {duration:g} s run (at most {MAX_STEPS:g}): a stiffness or damping far beyond a real "
-        "isolator's, or much too light a table"
+        f"{key}: the table's fastest mode (|lambda| = {omega:.3g} 1/s) needs about {steps:.3g} integration "
+        f"steps for this {duration:g} s run (at most {MAX_STEPS:g}): {why}"
     )
+
+
+#: a lever ``r^2 m / I`` beyond this is not a table's (a uniform box's corner: 3; its isolators in mm: 1e7)
+LEVER_LIMIT = 1e3
+
+
+def fastest_input(scenario: Scenario, omega: float) -> tuple[str, str] | None:
+    """The key of the spring-damper isolator whose stiffness, damping or lever arm most likely makes a mode as
+    fast as ``omega`` [1/s], and why: the rates ``sqrt(k g)`` and ``c g`` with ``g = 1/m + r^2/I`` (total mass,
+    distance from the mass centre, least principal inertia; the position named when its lever ``r^2 m / I``
+    exceeds :data:`LEVER_LIMIT`); None when none reaches a tenth of ``omega``."""
+    mass, inertia = scenario.total_mass, float(min(scenario.table.inertia))
+    best: tuple[float, str, str] | None = None
+    for i, iso in enumerate(scenario.isolators):
+        if not isinstance(iso, Isolator):  # pneumatic: its stiffness is the air's
+            continue
+        r2 = float(np.dot(iso.position, iso.position))
+        gain = 1.0 / mass + r2 / inertia
+        arm = r2 * mass / inertia > LEVER_LIMIT
+        for rate, kind, value, unit in ((math.sqrt(max(iso.stiffness) * gain), "stiffness", max(iso.stiffness),
+                                         "N/m"), (max(iso.damping) * gain, "damping", max(iso.damping), "N s/m")):
+            if best is None or rate > best[0]:
+                if arm:
+                    text = (f"it lies {math.sqrt(r2):.4g} m from the table's mass centre (inertia {inertia:.4g} "
+                            f"kg m^2), a lever that makes its {kind} of {value:.3g} {unit} act "
+                            f"{r2 * mass / inertia:.3g} times harder on the rotations (a position in mm? the table "
+                            "frame is in m)")
+                    best = (rate, f"isolators[{i}].position", text)
+                else:
+                    best = (rate, f"isolators[{i}].{kind}", f"{value:.3g} {unit} on a table of {mass:.4g} kg, far "
+                                                            "beyond a real isolator's (or much too light a table)")
+    if best is None or best[0] < 0.1 * omega:
+        return None
+    return best[1], best[2]

@@ -186,16 +186,16 @@ def _check_row(path: Path, design: float, got: np.ndarray, values: np.ndarray) -
     """A row's design index is one of this sweep's and its swept values are that design's."""
     if not (design.is_integer() and 0 <= design < values.shape[0]):
         raise ParameterError(f"out: '{path}' holds another sweep's rows (design {design:g} is not one of this "
-                             f"sweep's {values.shape[0]}); --force (force=True) starts again")
+                             f"sweep's {values.shape[0]}); force=True starts again")
     if not np.array_equal(got, values[int(design)]):
         raise ParameterError(f"out: '{path}' holds another sweep's rows (design {int(design)} differs); "
-                             "--force (force=True) starts again")
+                             "force=True starts again")
 
 
 def _check_header(path: Path, header: Sequence[str], columns: Sequence[str]) -> None:
     if list(header) != list(columns):
         raise ParameterError(f"out: '{path}' holds other columns than this sweep's ({', '.join(header[:4])}, ...); "
-                             "--force (force=True) starts again")
+                             "force=True starts again")
 
 
 def sidecar_path(path: Path) -> Path:
@@ -231,7 +231,7 @@ def check_sidecar(path: Path, identity: Mapping[str, Any]) -> None:
     try:
         stored = json.loads(sidecar.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
-        raise ParameterError(f"out: cannot read '{sidecar}' ({exc}); --force (force=True) starts again") from None
+        raise ParameterError(f"out: cannot read '{sidecar}' ({exc}); force=True starts again") from None
     wanted = _plain(identity)
     differ = [k for k in wanted if not isinstance(stored, dict) or stored.get(k) != wanted[k]]
     if differ:
@@ -239,4 +239,4 @@ def check_sidecar(path: Path, identity: Mapping[str, Any]) -> None:
             differ.remove("scenario_key")
         shown = ", ".join("the scenario" if k == "scenario_key" else k for k in differ)
         raise ParameterError(f"out: '{path}' was written by another sweep (it differs in: {shown}; see "
-                             f"'{sidecar.name}'); --force (force=True) starts again")
+                             f"'{sidecar.name}'); force=True starts again")

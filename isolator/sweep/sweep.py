@@ -229,8 +229,8 @@ def sweep(
             raise ParameterError("resume, force: choose one (resume continues the file, force starts again)")
         exists = path.exists() or staging_path(path).exists()
         if exists and not (resume or force):
-            raise ParameterError(f"out: '{path}' exists; resume=True (--resume) continues it, force=True "
-                                 "(--force) overwrites it")
+            raise ParameterError(f"out: '{path}' exists; resume=True continues it, force=True "
+                                 "overwrites it")
         if exists and resume:
             output.check_sidecar(path, identity)
             done = done_designs(path, columns, designs.names, designs.values)
@@ -241,7 +241,7 @@ def sweep(
         tally.count(on_disk["design"].astype(int), on_disk[tally.column], on_disk["status"])
         if path is not None and not staging_path(path).exists():  # a finished .parquet
             if not done.all():
-                raise ParameterError(f"out: '{path}' is a finished sweep of other designs; --force starts again")
+                raise ParameterError(f"out: '{path}' is a finished sweep of other designs; force=True starts again")
             return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
     with contextlib.ExitStack() as cluster:
         if scheduler is not None:  # connected once the arguments are known good, before anything is written
@@ -283,7 +283,7 @@ def sweep(
         except ExecutorError as exc:
             kept = f"the {tally.resumed + tally.runs} rows done are kept in '{path}'" if path is not None else \
                 "the rows are lost (out= keeps them as they arrive)"
-            raise ExecutorError(f"{exc}; {kept}: run the same sweep with --resume (resume=True) to finish it") from None
+            raise ExecutorError(f"{exc}; {kept}: run the same sweep with resume=True to finish it") from None
         finally:
             if sink is not None:
                 sink.close(complete)

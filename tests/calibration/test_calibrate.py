@@ -73,7 +73,8 @@ def test_json_has_the_contract_keys(tmp_path, mujoco_records, write_calibration,
 def test_fit_option_fits_only_the_names_given(tmp_path, mujoco_records, write_calibration):
     move, floor = mujoco_records
     path = write_calibration(tmp_path, move, floor, 9, ("move",))
-    result = calibrate(path, fit=["isolators[*].stiffness.z", "isolators[*].damping.z"])
+    # x and y stay 15-30 % off: a misfit the goodness-of-fit test refuses unless accepted
+    result = calibrate(path, fit=["isolators[*].stiffness.z", "isolators[*].damping.z"], accept_misfit=True)
     assert list(result.parameters) == ["isolators[*].stiffness.z", "isolators[*].damping.z"]
 
 

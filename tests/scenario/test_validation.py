@@ -138,3 +138,70 @@ def test_bundled_scenarios_load():
         sc = load_scenario(name)
         assert sc.table.mass == 4400.0
         assert len(sc.isolators) == 4
+
+
+def test_positions_in_mm_are_refused_naming_the_key_and_the_table():
+    """Isolator positions in mm (600 m from a 2 m table) named at their key, not as an isolator 'far beyond a
+    real one's' stiffness."""
+    data = base_dict()
+    for iso in data["isolators"]:
+        iso["position"] = [1000 * v for v in iso["position"]]
+    with pytest.raises(ScenarioError) as err:
+        make(data)
+    text = str(err.value)
+    assert text.startswith("isolators[0].position: [1000, 500, -150] m lies"), text
+    assert "+-1 m from the mass centre (table.size = [2, 1, 0.3] m), with 4 m for parts under a frame" in text
+    assert "in mm?" in text
+
+
+@pytest.mark.parametrize(("section", "key"), [("points", "position"), ("actuators", "position"),
+                                              ("sensors", "position"), ("carriages", "origin")])
+def test_every_table_position_is_checked_against_the_size(section, key):
+    from conftest import active_dict
+
+    data = active_dict()
+    data["points"] = [{"name": "tool", "position": [0.0, 0.0, 0.5]}]
+    data["sensors"] = [{"name": "floor", "on": "floor", "position": [50.0, 0.0, -3.0], "direction": [0, 0, 1.0],
+                        "quantity": "velocity"},
+                       {"name": "g", "on": "table", "position": [0.9, 0.4, 0.15], "direction": [0, 0, 1.0],
+                        "quantity": "velocity"}]
+    make(copy.deepcopy(data))  # a floor sensor is not on the table; the margin lets a tool point stand above it
+    index = 1 if section == "sensors" else 0
+    data[section][index][key] = [0.0, 0.0, 5.0]  # 4.85 m above a 0.3 m thick table: beyond the 4 m margin
+    with pytest.raises(ScenarioError, match=rf"^{section}\[{index}\]\.{key}: \[0, 0, 5\] m lies 0\.85 m beyond"):
+        make(data)
+
+
+def test_a_frame_under_the_table_is_within_the_margin():
+    data = base_dict()
+    for iso in data["isolators"]:
+        iso["position"] = [1.5 * iso["position"][0], 1.5 * iso["position"][1], -2.5]
+    make(data)
+
+
+def test_positions_in_mm_without_a_size_are_named_by_the_equilibrium():
+    """Without table.size nothing bounds the positions; the failed rest names the isolator's lever, not a mass
+    centre too high (the table would not tip)."""
+    from isolator import Simulator, UnstableTableError
+
+    data = base_dict()
+    data["table"] = {"mass": 4400.0, "inertia": [400.0, 1500.0, 1800.0]}
+    for iso in data["isolators"]:
+        iso["position"] = [1000 * v for v in iso["position"]]
+    with pytest.raises(UnstableTableError, match=r"would not tip .*isolators\[\d\]\.position lies 1\d{3} m from "
+                                                 r"the table's mass centre \(positions in mm\?"):
+        Simulator(make(data)).run()
+
+
+def test_a_step_count_refusal_names_the_input_that_makes_the_mode_fast():
+    from isolator.simulation.stepping import MAX_STEPS, check_step_count
+
+    data = base_dict()
+    data["isolators"][2]["stiffness"] = [1e5, 1e5, 1e13]
+    scenario = make(data)
+    omega = math.sqrt(1e13 / 4400.0) * 2
+    with pytest.raises(ScenarioError, match=r"^isolators\[2\]\.stiffness: the table's fastest mode .* 1e\+13 N/m on a "
+                                            r"table of 4800 kg"):
+        check_step_count(omega, 10 * MAX_STEPS / omega, 1.0, scenario)
+    with pytest.raises(ScenarioError, match=r"^isolators: .*far beyond a real isolator's"):
+        check_step_count(omega * 1e3, 10 * MAX_STEPS / omega, 1.0, scenario)  # nothing that fast: no one named

@@ -108,3 +108,7 @@ def test_the_control_study_leaves_out_a_design_the_sensors_cannot_carry(tmp_path
     assert "lqg (sensors): settling" in out
     report = (tmp_path / "out" / "report.md").read_text()
     assert "- skyhook left out: sensors: skyhook needs a table velocity or acceleration sensor collocated" in report
+    assert "Default weights chosen by a search" in report  # the chosen weights against the method's own
+    row = next(line for line in report.splitlines() if line.startswith("| lqg | max_velocity"))
+    searched, own = (float(v) for v in row.split(" | ")[2:4])
+    assert searched < own

@@ -161,7 +161,7 @@ def test_a_pool_the_sweep_cannot_renew_ends_it_with_resume_named(monkeypatch, tm
     context = multiprocessing.get_context("fork")
     with ProcessPoolExecutor(2, mp_context=context) as pool:  # the caller's: the sweep cannot make another
         on_each_chunk(monkeypatch, lambda n, _: kill_a_worker(True) if n == 2 else None)
-        with pytest.raises(ExecutorError, match=r"rows done are kept in .*--resume \(resume=True\)"):
+        with pytest.raises(ExecutorError, match=r"rows done are kept in .*resume=True to finish"):
             sweep(SCENARIO, scale=DAMPING, executor=pool, workers=2, chunk_size=4, out=out)
     monkeypatch.undo()
     kept = out.read_bytes()

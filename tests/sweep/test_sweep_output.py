@@ -32,7 +32,7 @@ def test_an_interrupted_sweep_resumes_to_the_clean_result(tmp_path: Path, monkey
     lines = (tmp_path / "clean.csv").read_text().splitlines(keepends=True)
     cut = tmp_path / "cut.csv"
     cut.write_text("".join(lines[:5]) + lines[5][:17])  # four rows, then an interrupt mid-row
-    with pytest.raises(ParameterError, match=r"exists; resume=True .* continues it"):
+    with pytest.raises(ParameterError, match=r"exists; resume=True continues it, force=True overwrites it"):
         sweep(SCENARIO, scale=GRID, workers=1, out=cut)
     assert cut.read_text() == "".join(lines[:5]) + lines[5][:17]  # nothing overwritten
     ran: list[int] = []
