@@ -195,10 +195,11 @@ def _sweep(args: argparse.Namespace) -> int:
                            progress=True, chunk_size=args.chunk_size)
     except (ParameterError, ExecutorError) as exc:  # the API's words for its arguments, as this command's options
         raise type(exc)(_options_named(str(exc))) from None
-    except KeyboardInterrupt:
-        print(f"isolator: interrupted: {_rows_kept(out)} row(s) kept in {out}; continue with: "
+    except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (the app's Terminated: exit status 143)
+        how = "terminated" if type(stop).__name__ == "Terminated" else "interrupted"
+        print(f"isolator: {how}: {_rows_kept(out)} row(s) kept in {out}; continue with: "
               f"{_resume_command(args)}", file=sys.stderr)
-        return 130
+        return 143 if how == "terminated" else 130
     print(result.summary())
     if figure is not None:
         from isolator.sweep.figure import plot_sweep
