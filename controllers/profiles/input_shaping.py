@@ -71,6 +71,12 @@ def dominant_modes(scenario: Scenario, carriage: int, peaks: Sequence[float] | N
         Each signal's scale [m, rad] (e.g. its peak in the baseline run, which
         sets its settling band); default 1 for all.
 
+    Returns
+    -------
+    list of ExcitedMode
+        Each mode's frequency [Hz], damping ratio and weight (its largest amplitude over the signals, in
+        units of ``peaks``), most excited first.
+
     Notes
     -----
     Accelerating carriage ``c`` along its axis ``e`` (world axes) at ``a``
@@ -114,6 +120,12 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
     modes : int
         Shape for this many of each carriage's most excited modes (the
         shapers convolved; each adds its own duration).
+
+    Returns
+    -------
+    Scenario
+        The scenario with each carriage's profile shaped (a piecewise polynomial), longer by the shapers'
+        durations.
 
     Examples
     --------

@@ -232,6 +232,12 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
     samples : int
         Positions per carriage (>= 2).
 
+    Returns
+    -------
+    ModeTravel
+        Each carriage's positions [m] and the table's modes at each (frequencies, damping ratios, dominant
+        motions).
+
     Examples
     --------
     >>> from isolator import load_scenario, modes_over_travel

@@ -201,6 +201,12 @@ def transmissibility(lin: LinearSystem, frequency_hz: np.ndarray | None = None) 
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
 
+    Returns
+    -------
+    FrequencyResponse
+        ``response`` (6, 6, frequencies), complex: table x, y, z [m] and rx, ry, rz [rad] per floor x, y, z
+        [m] and rx, ry, rz [rad] (dimensionless on the diagonal).
+
     Examples
     --------
     >>> from isolator import linearise, load_scenario, transmissibility
@@ -222,6 +228,12 @@ def compliance(lin: LinearSystem, frequency_hz: np.ndarray | None = None) -> Fre
     lin : LinearModel or ClosedLoop
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
+
+    Returns
+    -------
+    FrequencyResponse
+        ``response`` (6, 6, frequencies), complex: table x, y, z [m] and rx, ry, rz [rad] per force x, y, z
+        [N] and torque about x, y, z [N m] at the mass centre.
     """
     return _response(lin, "compliance", FORCE_INPUTS, frequency_hz)
 

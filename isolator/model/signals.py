@@ -61,6 +61,19 @@ def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
     Displacement of the mass centre [m] and rotation vector of R R_ref^T [rad],
     relative to the state ``reference`` (one state, or one per row).
+
+    Parameters
+    ----------
+    states : ndarray
+        (N, >= 7): the table's position [m] and orientation quaternion (w, x, y, z) in its first seven
+        entries per row.
+    reference : ndarray
+        (>= 7,) or (N, >= 7): the state the signals are measured from (one, or one per row).
+
+    Returns
+    -------
+    ndarray
+        (6, N): x, y, z [m] and rx, ry, rz [rad] from the reference.
     """
     reference = np.asarray(reference, dtype=float)
     angles = relative_rotation_vector(states[:, 3:7], reference[..., 3:7])

@@ -63,7 +63,19 @@ DEFAULT_SCENARIO = "paper-table-3-2"
 
 
 def bundled_scenarios() -> dict[str, Path]:
-    """The scenarios shipped with the package, by name."""
+    """The scenarios shipped with the package, by name.
+
+    Returns
+    -------
+    dict of str to Path
+        Each bundled scenario's TOML file by its name (as :func:`load_scenario` takes it).
+
+    Examples
+    --------
+    >>> from isolator import bundled_scenarios
+    >>> sorted(bundled_scenarios())[:2]
+    ['paper-table-3-1', 'paper-table-3-2']
+    """
     folder = resources.files("isolator") / "data" / "scenarios"
     return {
         Path(str(entry)).stem: Path(str(entry))
@@ -96,12 +108,28 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     Parameters
     ----------
     spec : str or Path or None
-        A TOML file, or the name of a bundled scenario (``paper-table-3-1``,
-        ``paper-table-3-2``); None loads ``paper-table-3-2``.
+        A TOML file, or the name of a bundled scenario (:func:`bundled_scenarios`; ``isolator scenarios``
+        lists them); None loads ``paper-table-3-2``. The bundled scenarios:
+
+        - ``paper-table-3-1``: the paper's Table 3.1 case, one carriage in sinusoidal motion (the case
+          the paper checked against a multibody code);
+        - ``paper-table-3-2``: the paper's Table 3.2 case, an LCD-inspection XY stage on a 4-isolator
+          table (the default);
+        - ``paper-table-3-2-active``: the same with a vertical and two horizontal 500 N force actuators
+          at each isolator;
+        - ``paper-table-3-2-geophones``: the active table with a geophone collocated with each actuator
+          (the sensors controllers are designed from);
+        - ``paper-table-3-2-pneumatic``: the Table 3.2 table and stage on four air springs in three
+          leveling groups;
+        - ``paper-table-3-2-pneumatic-3``: the same on three air springs, one leveling valve each;
+        - ``paper-table-3-2-pneumatic-active``: the pneumatic table with the active one's actuators;
+        - ``paper-table-3-2-sequence``: the Table 3.2 stage inspecting a 5 x 4 grid step by step, a
+          probe window of +-50 nm.
 
     Returns
     -------
     Scenario
+        The validated, frozen scenario.
 
     Raises
     ------
@@ -113,6 +141,8 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     >>> from isolator import load_scenario
     >>> round(load_scenario("paper-table-3-2").stop_time, 3)
     7.9
+    >>> [carriage.name for carriage in load_scenario("paper-table-3-2").carriages]
+    ['x-stage', 'y-stage']
     """
     path = resolve_scenario_path(spec)
     return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=path.stem)
@@ -131,6 +161,25 @@ def scenario_from_dict(
         Folder that relative file names (sampled profiles) are read from.
     default_name : str
         Name used when the data has none.
+
+    Returns
+    -------
+    Scenario
+        The validated, frozen scenario.
+
+    Raises
+    ------
+    ScenarioError
+        A missing or bad key, named with its path and the reason.
+
+    Examples
+    --------
+    >>> import tomllib
+    >>> from isolator import bundled_scenarios, scenario_from_dict
+    >>> data = tomllib.loads(bundled_scenarios()["paper-table-3-2"].read_text(encoding="utf-8"))
+    >>> data["table"]["mass"] = 5000.0
+    >>> scenario_from_dict(data).table.mass
+    5000.0
     """
     with reading():
         return _scenario_from_dict(data, Path(base_dir), default_name)

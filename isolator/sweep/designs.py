@@ -75,6 +75,30 @@ def build_designs(
 ) -> Designs:
     """The designs of :func:`isolator.sweep.sweep`'s arguments (there documented), checked.
 
+    Parameters
+    ----------
+    layout : ParameterLayout
+        The scenario's structure.
+    base : ndarray
+        The scenario's parameter vector, which ``scale`` multiplies and the unswept entries keep.
+    set : mapping of str to values, optional
+        Absolute values by name, as :func:`isolator.sweep.sweep` takes them.
+    scale : mapping of str to values, optional
+        Factors on the scenario's values by name.
+    zip : bool
+        Lists zipped (one design per position) instead of crossed.
+    samples : int, optional
+        Designs drawn over ``(low, high)`` ranges instead of a grid.
+    method : {"sobol", "lhs"}
+        How ``samples`` are drawn.
+    seed : int
+        Seed of the samples.
+
+    Returns
+    -------
+    Designs
+        The swept columns, their values per design and the base vector.
+
     Raises
     ------
     ParameterError

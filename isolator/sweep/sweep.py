@@ -37,13 +37,32 @@ MAX_CHUNK = 512
 
 
 def default_workers() -> int:
-    """Worker processes of the default pool: the cores this process may use."""
+    """Worker processes of the default pool: the cores this process may use.
+
+    Returns
+    -------
+    int
+        The number of cores this process may use (its CPU affinity where the system has one), >= 1.
+    """
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
 def chunk_size_for(designs: int, workers: int) -> int:
     """Designs per chunk: about four chunks per worker (every worker gets work when there are at least as
-    many designs as workers), at most :data:`MAX_CHUNK`."""
+    many designs as workers), at most :data:`MAX_CHUNK`.
+
+    Parameters
+    ----------
+    designs : int
+        Number of designs.
+    workers : int
+        Number of workers.
+
+    Returns
+    -------
+    int
+        Designs per chunk, >= 1.
+    """
     return max(1, min(MAX_CHUNK, math.ceil(designs / (4 * max(1, workers)))))
 
 
