@@ -149,6 +149,8 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
     Parameters
     ----------
     plant : SensorPlant
+        The sensor plant (:class:`SensorPlant`): commands to sensors with the actuators' lag, at the design
+        position.
     sample_rate : float
         [Hz].
     delay : bool
@@ -158,6 +160,11 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False, 
         that gives the sampled loop's least-damped pole the highest damping ratio.
     highpass_hz : float, optional
         The high-pass corner [Hz]; default a fifth of the table's lowest mode.
+
+    Returns
+    -------
+    DiscreteDesign
+        The controller's matrices ``(A, B, C, D)`` at ``sample_rate`` and the settings chosen.
 
     Raises
     ------
@@ -322,6 +329,8 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
     Parameters
     ----------
     plant : SensorPlant
+        The sensor plant (:class:`SensorPlant`): commands to sensors with the actuators' lag, at the design
+        position.
     sample_rate : float
         [Hz].
     delay : bool
@@ -332,6 +341,11 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max_
         Smallest sensor noise RMS assumed [SI units].
     washout_hz : float, optional
         The slowest rate [Hz] of the filter's estimate (default a fifth of the table's lowest mode).
+
+    Returns
+    -------
+    DiscreteDesign
+        The controller's matrices ``(A, B, C, D)`` at ``sample_rate`` and the settings chosen.
 
     Raises
     ------

@@ -65,6 +65,7 @@ def dominant_modes(scenario: Scenario, carriage: int, peaks: Sequence[float] | N
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     carriage : int
         Index of the carriage.
     peaks : sequence of float, optional
@@ -114,6 +115,7 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     kind : {"zv", "zvd", "ei"}
     peaks : sequence of float, optional
         Signal scales for ranking the modes (see :func:`dominant_modes`).

@@ -334,6 +334,7 @@ def move_time(scenario: Scenario, command: float | None = None) -> float:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     command : float, optional
         When the move is commanded [s] (default: the earliest carriage start).
 

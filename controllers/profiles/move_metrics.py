@@ -169,6 +169,7 @@ def evaluate_move(
     scenario : Scenario
         With the profiles to judge.
     label : str
+        The method's name, in reports and figures.
     command : float
         When the move is commanded [s] (the move time counts from there).
     variant : ModelVariant, optional

@@ -123,6 +123,8 @@ def modes(lin: LinearModel) -> Modes:
     Returns
     -------
     Modes
+        Frequencies [Hz], damping ratios, shapes and each mode's dominant motion, lowest first; relaxation
+        poles [1/s] apart.
 
     Examples
     --------
@@ -229,6 +231,7 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     samples : int
         Positions per carriage (>= 2).
 

@@ -198,6 +198,8 @@ def transmissibility(lin: LinearSystem, frequency_hz: np.ndarray | None = None) 
     Parameters
     ----------
     lin : LinearModel or ClosedLoop
+        The linearised table (:func:`linearise`), or a closed loop
+        (:func:`controllers.feedback.closed_loop`).
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
 
@@ -226,6 +228,8 @@ def compliance(lin: LinearSystem, frequency_hz: np.ndarray | None = None) -> Fre
     Parameters
     ----------
     lin : LinearModel or ClosedLoop
+        The linearised table (:func:`linearise`), or a closed loop
+        (:func:`controllers.feedback.closed_loop`).
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
 

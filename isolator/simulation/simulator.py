@@ -61,6 +61,7 @@ class Simulator:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     model : {"exact", "paper"}
         The exact rigid-body model, or the paper's small-angle model.
 
