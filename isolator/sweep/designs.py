@@ -52,6 +52,11 @@ class Designs:
         """The swept names as given."""
         return tuple(c.name for c in self.columns)
 
+    @property
+    def scaled(self) -> tuple[str, ...]:
+        """The swept names whose values are factors on the scenario's."""
+        return tuple(c.name for c in self.columns if c.mode == "scale")
+
     def parameters(self, start: int, stop: int) -> np.ndarray:
         """Parameter vectors (stop - start, parameters) of designs ``start`` to ``stop - 1``."""
         values = self.values[start:stop]

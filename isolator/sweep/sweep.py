@@ -233,7 +233,8 @@ def sweep(
         if path is not None and not staging_path(path).exists():  # a finished .parquet
             if not done.all():
                 raise ParameterError(f"out: '{path}' is a finished sweep of other designs; --force starts again")
-            return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
+            return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time,
+                                    designs.scaled)
     with contextlib.ExitStack() as cluster:
         if scheduler is not None:  # connected once the arguments are known good, before anything is written
             client = connect(scheduler, security)
@@ -277,7 +278,8 @@ def sweep(
             if sink is not None:
                 sink.close(complete)
             bar(-1)
-        return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
+        return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time,
+                                designs.scaled)
 
 
 def _rows(designs: Designs, result: ChunkResult) -> list[list[Any]]:
