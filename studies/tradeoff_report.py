@@ -6,6 +6,8 @@ from __future__ import annotations
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
+from matplotlib.legend import Legend
+from matplotlib.lines import Line2D
 
 from isolator.scenario.arguments import check_public
 
@@ -64,7 +66,8 @@ def plot_maps(study: TradeoffStudy) -> None:
     save_figure(fig, study.folder / "maps.png", dpi=110)
 
 
-def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tuple[int, int]]) -> None:
+def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tuple[int, int]],
+             scale_at: str = "lower left") -> None:
     """Every design at (``x``, transmissibility), coloured by damping and sized by stiffness; the front and the
     scenario's design."""
     ok = np.isfinite(x) & np.isfinite(study.transmissibility)
@@ -76,6 +79,7 @@ def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tupl
                             label="design (size: stiffness)")
         bar = ax.figure.colorbar(points, ax=ax, label="damping scale (x the scenario's) [-]")
         plain_log_axis(bar.ax.yaxis)
+        ax.add_artist(_size_scale(ax, study.stiffness, scale_at))
     if front:
         ax.plot([x[p] for p in front], [study.transmissibility[p] for p in front], "-o", color="tab:red", ms=5,
                 lw=1.5, label="Pareto front")
@@ -87,6 +91,17 @@ def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tupl
     plain_log_axis(ax.yaxis)
     ax.set_ylabel(f"floor-to-table transmissibility at {study.reference_hz:g} Hz, worst of x, y, z [m/m]")
     ax.grid(True, which="both", alpha=0.3)
+
+
+def _size_scale(ax: plt.Axes, stiffness: np.ndarray, where: str) -> Legend:
+    """The markers' size scale: a marker for the smallest, a middle and the largest stiffness factor, sized as
+    :func:`_scatter` sizes them (area ``14 + 30 k / k_max`` points^2)."""
+    factors = np.unique(np.asarray(stiffness, dtype=float))
+    shown = sorted({float(factors[0]), float(factors[factors.size // 2]), float(factors[-1])})
+    handles = [Line2D([], [], ls="", marker="o", color="0.55", markersize=float(np.sqrt(14 + 30 * k / factors[-1])),
+                      label=f"x{k:.3g}") for k in shown]
+    return ax.legend(handles=handles, title="stiffness scale\n(x the scenario's)", loc=where, fontsize=8,
+                     title_fontsize=8, labelspacing=1.0)
 
 
 def plot_tradeoff(study: TradeoffStudy) -> None:
@@ -104,7 +119,7 @@ def plot_tradeoff(study: TradeoffStudy) -> None:
 def plot_throughput(study: TradeoffStudy) -> None:
     """``throughput.png``: transmissibility against moves (or steps) per hour, with its own Pareto front."""
     fig, ax = plt.subplots(figsize=(9, 6), constrained_layout=True)
-    _scatter(study, ax, study.per_hour, study.throughput_pareto())
+    _scatter(study, ax, study.per_hour, study.throughput_pareto(), scale_at="upper left")
     what = ("steps per hour of the sequence" if study.sequence else
             "moves per hour (move + window settling, repeated)")
     ax.set_xlabel(f"{what} [1/h]")
