@@ -3,6 +3,8 @@
 
 from __future__ import annotations
 
+from typing import Literal
+
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
@@ -15,6 +17,9 @@ from .figures import log_mesh_edges, plain_log_axis, save_figure
 from .reporting import band_lines, fmt, table_header, write_report
 from .tradeoff_pneumatic import pneumatic_note
 from .tradeoff_results import TradeoffStudy
+
+#: where a legend goes in an axes
+Corner = Literal["lower left", "upper left"]
 
 __all__ = ["plot_maps", "plot_throughput", "plot_tradeoff", "write_tradeoff_report"]
 
@@ -67,7 +72,7 @@ def plot_maps(study: TradeoffStudy) -> None:
 
 
 def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tuple[int, int]],
-             scale_at: str = "lower left") -> None:
+             scale_at: Corner = "lower left") -> None:
     """Every design at (``x``, transmissibility), coloured by damping and sized by stiffness; the front and the
     scenario's design."""
     ok = np.isfinite(x) & np.isfinite(study.transmissibility)
@@ -93,7 +98,7 @@ def _scatter(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tupl
     ax.grid(True, which="both", alpha=0.3)
 
 
-def _size_scale(ax: plt.Axes, stiffness: np.ndarray, where: str) -> Legend:
+def _size_scale(ax: plt.Axes, stiffness: np.ndarray, where: Corner) -> Legend:
     """The markers' size scale: a marker for the smallest, a middle and the largest stiffness factor, sized as
     :func:`_scatter` sizes them (area ``14 + 30 k / k_max`` points^2)."""
     factors = np.unique(np.asarray(stiffness, dtype=float))
