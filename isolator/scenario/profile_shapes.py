@@ -124,6 +124,15 @@ def trapezoid(
     -----
     When the stroke is too short to reach ``velocity`` the profile is
     triangular with peak speed ``sqrt(2 |stroke| a d / (a + d))``.
+
+    Examples
+    --------
+    A stroke too short for the speed limit: a triangle, peak speed ``sqrt(2 |stroke| a d / (a + d))``
+
+    >>> from isolator import trapezoid
+    >>> move = trapezoid(start=0.0, stroke=0.1, velocity=1.0, acceleration=2.0)
+    >>> round(move.stop_time, 4), round(2 * (0.1 / 2.0) ** 0.5, 4)   # [s]: two halves of sqrt(s / a)
+    (0.4472, 0.4472)
     """
     check_arguments(start=start, stroke=stroke, velocity=velocity, acceleration=acceleration, t0=t0,
                     **({} if deceleration is None else {"deceleration": deceleration}))

@@ -69,6 +69,15 @@ def shaper(kind: str, frequency: float, damping: float) -> Shaper:
     -------
     Shaper
         The impulse amplitudes (summing to 1) and times [s].
+
+    Examples
+    --------
+    The ZV shaper of an undamped mode: two halves, half a period apart.
+
+    >>> from controllers.profiles import shaper
+    >>> zv = shaper("zv", 2.0, 0.0)
+    >>> [round(a, 6) for a in zv.amplitudes], [round(t, 6) for t in zv.times]
+    ([0.5, 0.5], [0.0, 0.25])
     """
     if kind not in SHAPERS:
         raise ParameterError(f"kind: must be one of {', '.join(SHAPERS)}, got '{kind}'")
