@@ -10,6 +10,9 @@ code does now.
   succeed; a command shown without output only has to succeed;
 - ``bash`` blocks: each ``isolator`` line runs and must succeed; a line with placeholders (``[--json]``,
   ``SCENARIO``, ``...``) is a synopsis, and each of its options must be one its subcommand takes;
+- a command whose output the page does not show runs in a reduced form, to keep this module to minutes: a
+  study with ``--quick`` (every study takes it: shorter runs, the same code), a sweep of more than
+  :data:`MAX_SAMPLES` samples with that many (:func:`_reduced`); what a page shows is never reduced;
 - ``toml`` blocks must parse, a ``c`` block of the controller's interface must match the header
   :func:`controllers.feedback.write_c` writes.
 
@@ -45,6 +48,15 @@ SLOW = {"docs/guide/calibration", "docs/guide/control", "docs/guide/export", "do
 FLAGS = doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE
 _CHECKER = doctest.OutputChecker()
 _PLACEHOLDER = re.compile(r"\[|\.\.\.|\b[A-Z][A-Z0-9_]{2,}\b")
+#: a sweep whose output a page does not show runs at most this many samples
+MAX_SAMPLES = 64
+
+
+def _reduced(command: str) -> str:
+    """``command`` as run when its output is not shown: studies ``--quick``, samples at most MAX_SAMPLES."""
+    if re.match(r"isolator study \w", command) and "--quick" not in command:
+        command = re.sub(r"(isolator study [\w-]+(?: [^-#\s][^\s#]*)?)", r"\1 --quick", command, count=1)
+    return re.sub(r"--samples (\d+)", lambda m: f"--samples {min(int(m.group(1)), MAX_SAMPLES)}", command)
 
 
 def _commands(block: str) -> list[tuple[str, str]]:
@@ -75,7 +87,7 @@ def _shell(command: str, cwd: Path) -> subprocess.CompletedProcess[str]:
 def _console(example: Example) -> str | None:
     cwd = example.namespace["__folder__"]
     for command, shown in _commands(example.parsed):
-        done = _shell(command, cwd)
+        done = _shell(command if shown else _reduced(command), cwd)
         fails = "isolator: error:" in shown
         got = done.stdout + done.stderr if fails else done.stdout
         if (done.returncode != 0) != fails:
@@ -116,7 +128,7 @@ def _bash(example: Example) -> str | None:
             if unknown:
                 return f"{line}\n{argv[1]} takes no option {sorted(unknown)}"
             continue
-        done = _shell(line, example.namespace["__folder__"])
+        done = _shell(_reduced(line), example.namespace["__folder__"])
         if done.returncode != 0:
             return f"{line}\nexit status {done.returncode}\n{done.stderr[-3000:]}"
     return None
@@ -211,6 +223,12 @@ def test_console_blocks_are_read_as_commands_and_output():
     block = "$ isolator a \\\n      --b c\nline 1\n...\n$ isolator d\n"
     assert _commands(block) == [("isolator a --b c", "line 1\n..."), ("isolator d", "")]
     assert _isolator_lines("isolator x --y 1   # comment\npip install .\n") == ["isolator x --y 1"]
+    assert _reduced("isolator study tradeoff --out d") == "isolator study tradeoff --quick --out d"
+    assert _reduced("isolator study tradeoff paper-table-3-2-sequence --out d") == \
+        "isolator study tradeoff paper-table-3-2-sequence --quick --out d"
+    assert _reduced("isolator study robustness --out r --samples 200") == \
+        "isolator study robustness --quick --out r --samples 64"
+    assert _reduced("isolator sweep x --samples 10 --out s.csv") == "isolator sweep x --samples 10 --out s.csv"
 
 
 def test_there_are_blocks_on_every_page():

@@ -33,6 +33,7 @@ def test_the_marker_size_has_a_scale(figures):
     scale = scales[0]
     assert scale.get_title().get_text() == "stiffness scale\n(x the scenario's)"
     assert [t.get_text() for t in scale.get_texts()] == ["x0.5", "x1", "x2"]
+    assert list(study.stiffness) == [0.5, 1.0, 2.0]
     # each marker of the scale is as large as the designs' markers of that stiffness
     designs = ax.collections[0]
     sizes = designs.get_sizes()  # points^2, one per design drawn, stiffness-major
