@@ -202,14 +202,6 @@ def run_control_study(
     feedforward : {"allocation", "optimal"}
     sample_rate : float
         The sensor-based designs' rate [Hz] (with ``[[sensors]]``: :mod:`studies.control_sensors`).
-    progress : bool
-        Print what it does.
-
-    Returns
-    -------
-    ControlStudy
-        The runs (passive, feedforward, feedback, both; the sensor-based designs with ``[[sensors]]``),
-        their settling times [s] and the figures written.
     """
     if not scenario.actuators:
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")

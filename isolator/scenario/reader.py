@@ -6,9 +6,7 @@ with the key path, for example ``carriages[1].profile.acceleration: must be > 0`
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
@@ -16,6 +14,8 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public, reading, register_conversion
+from isolator.scenario.bundled import DEFAULT_SCENARIO as DEFAULT_SCENARIO
+from isolator.scenario.bundled import bundled_scenarios, resolve_scenario_path
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -59,49 +59,6 @@ from isolator.scenario.windows_reader import read_windows
 __all__ = ["bundled_scenarios", "load_scenario", "load_spectrum", "read_csv_columns", "resolve_scenario_path",
            "scenario_from_dict"]
 
-DEFAULT_SCENARIO = "paper-table-3-2"
-
-
-def bundled_scenarios() -> dict[str, Path]:
-    """The scenarios shipped with the package, by name.
-
-    Returns
-    -------
-    dict of str to Path
-        Each bundled scenario's TOML file by its name (as :func:`load_scenario` takes it).
-
-    Examples
-    --------
-    >>> from isolator import bundled_scenarios
-    >>> sorted(bundled_scenarios())[:2]
-    ['paper-table-3-1', 'paper-table-3-2']
-    """
-    folder = resources.files("isolator") / "data" / "scenarios"
-    return {
-        Path(str(entry)).stem: Path(str(entry))
-        for entry in folder.iterdir()
-        if str(entry).endswith(".toml")
-    }
-
-
-def resolve_scenario_path(spec: str | Path | None) -> Path:
-    """A scenario file path from a path or a bundled scenario's name (None: the default)."""
-    if spec is None:
-        spec = DEFAULT_SCENARIO
-    path = Path(spec)
-    if path.is_file():
-        return path
-    if path.is_dir():
-        raise ScenarioError(f"{spec}: is a folder, not a scenario file")
-    bundled = bundled_scenarios()
-    name = path.name[:-5] if path.name.endswith(".toml") else path.name
-    if name in bundled and not path.exists():
-        return bundled[name]
-    close = difflib.get_close_matches(name, sorted(bundled), n=1, cutoff=0.8)
-    hint = f"did you mean '{close[0]}'? " if close else ""
-    raise ScenarioError(f"{spec}: no such scenario file ({hint}bundled scenarios: {', '.join(sorted(bundled))})")
-
-
 def load_scenario(spec: str | Path | None = None) -> Scenario:
     """Read and validate a scenario.
 
@@ -111,20 +68,14 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
         A TOML file, or the name of a bundled scenario (:func:`bundled_scenarios`; ``isolator scenarios``
         lists them); None loads ``paper-table-3-2``. The bundled scenarios:
 
-        - ``paper-table-3-1``: the paper's Table 3.1 case, one carriage in sinusoidal motion (the case
-          the paper checked against a multibody code);
-        - ``paper-table-3-2``: the paper's Table 3.2 case, an LCD-inspection XY stage on a 4-isolator
-          table (the default);
-        - ``paper-table-3-2-active``: the same with a vertical and two horizontal 500 N force actuators
-          at each isolator;
-        - ``paper-table-3-2-geophones``: the active table with a geophone collocated with each actuator
-          (the sensors controllers are designed from);
-        - ``paper-table-3-2-pneumatic``: the Table 3.2 table and stage on four air springs in three
-          leveling groups;
-        - ``paper-table-3-2-pneumatic-3``: the same on three air springs, one leveling valve each;
+        - ``paper-table-3-1``: the paper's Table 3.1 case, one carriage in sinusoidal motion;
+        - ``paper-table-3-2``: the paper's Table 3.2 case, an LCD-inspection XY stage on 4 isolators;
+        - ``paper-table-3-2-active``: the same with three 500 N force actuators at each isolator;
+        - ``paper-table-3-2-geophones``: the active table with a geophone at each actuator;
+        - ``paper-table-3-2-pneumatic``: on four air springs in three leveling groups;
+        - ``paper-table-3-2-pneumatic-3``: on three air springs, one leveling valve each;
         - ``paper-table-3-2-pneumatic-active``: the pneumatic table with the active one's actuators;
-        - ``paper-table-3-2-sequence``: the Table 3.2 stage inspecting a 5 x 4 grid step by step, a
-          probe window of +-50 nm.
+        - ``paper-table-3-2-sequence``: the stage inspecting a 5 x 4 grid, step and settle.
 
     Returns
     -------
@@ -445,4 +396,4 @@ def _read_settling(r: KeyReader) -> Settling:
 
 register_conversion(Scenario, load_scenario)
 register_field_checks()
-check_public(globals(), ("bundled_scenarios", "load_scenario", "scenario_from_dict"))
+check_public(globals(), ("load_scenario", "scenario_from_dict"))

@@ -70,18 +70,15 @@ class Response:
     sensor_set : tuple of Sensor
         The scenario's ``[[sensors]]`` (read their signals with :meth:`sensor`, :attr:`sensor_signals`).
     pneumatic_result : PneumaticResult or callable or None
-        A pneumatic run's pressures, heights and leveling times, or a function computing them (read
-        :attr:`pneumatic`); None for spring-dampers.
+        Pressures, heights, leveling times of a pneumatic run, or their function (read :attr:`pneumatic`).
     deadbands : dict of str to float
         Each leveling group's valve dead zone [m] (pneumatic runs).
     remeasure : callable or None
         Measures the run again in another band (what :meth:`with_band` calls).
     point_history : ndarray or None
-        (3 n_points, N): the ``[[points]]``' world displacement [m], when computed with the run (read with
-        :meth:`point`).
+        (3 n_points, N): the ``[[points]]``' world displacement [m] (read with :meth:`point`).
     sensor_history : ndarray or callable or None
-        (n_sensors, N): the ``[[sensors]]``' readings [SI], or a function computing them (read
-        :attr:`sensor_signals`).
+        (n_sensors, N): the sensors' readings [SI], or their function (read :attr:`sensor_signals`).
     """
 
     name: str
