@@ -64,7 +64,8 @@ from isolator.simulation.response import Response
 from isolator.simulation.sequence import run_sequence
 from isolator.simulation.sequence_result import SequenceResult, StepResult
 from isolator.simulation.settling import SettlingResult, settling_time
-from isolator.simulation.simulator import Simulator, simulate
+from isolator.simulation.simulator import Simulator
+from isolator.simulation.single_run import simulate
 from isolator.sweep import SweepResult
 
 __all__ = [

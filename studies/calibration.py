@@ -82,6 +82,12 @@ def run_calibration_study(out: str | Path, calibration: str | Path | None = None
         vibration a wrong model leaves shows (in 5 % both optimised designs are inside at once).
     progress : bool
         Print what it does on stderr (off by default; ``isolator study`` turns it on).
+
+    Returns
+    -------
+    CalibrationStudy
+        The calibration, the designs optimised on the datasheet and the calibrated model, and each design's
+        predicted and true settling times [s].
     """
     folder = output_folder(out)
     say = progress_printer(progress, "calibration study: ")

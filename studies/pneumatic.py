@@ -152,6 +152,7 @@ def run_pneumatic_study(
     Parameters
     ----------
     folder : str or Path
+        The output folder (created if missing): figures, ``report.md`` and the study's data files.
     scenario : Scenario
         With pneumatic isolators, each with a damping chamber and an orifice, and carriage
         moves that stop (without carriages only the linear figures and the optima are computed).
@@ -169,6 +170,8 @@ def run_pneumatic_study(
     Returns
     -------
     PneumaticStudy
+        The grid of orifice diameters and volume ratios, each design's peaks, settling and leveling times,
+        the optimal orifice per ratio and the Pareto front.
 
     Raises
     ------

@@ -111,6 +111,7 @@ def run_profile_study(
     Parameters
     ----------
     folder : str or Path
+        The output folder (created if missing): figures, ``report.md`` and the study's data files.
     scenario : Scenario
         Carriages with trapezoids or S-curves (the "paper" profile).
     variants : tuple of ModelVariant
@@ -120,6 +121,11 @@ def run_profile_study(
     source : str or Path, optional
         The scenario's file (or bundled name): each method that a scenario file can hold is written to
         ``scenarios/<method>.toml``.
+
+    Returns
+    -------
+    ProfileStudy
+        Each method's move, settling and cycle times [s] and their spread over the model variants.
     """
     out = output_folder(folder)
     say = progress_printer(progress)

@@ -94,6 +94,7 @@ def run_sequence_profile_study(
     Parameters
     ----------
     folder : str or Path
+        The output folder (created if missing): figures, ``report.md`` and the study's data files.
     scenario : Scenario
         With a ``[sequence]`` and ``[[windows]]``.
     progress : bool
@@ -103,6 +104,11 @@ def run_sequence_profile_study(
         ``scenarios/optimised.toml``.
     samples : int
         Of the optimisation (:func:`optimise_sequence`).
+
+    Returns
+    -------
+    SequenceProfileStudy
+        Each way of moving's total time [s] and throughput [steps per hour].
 
     Raises
     ------

@@ -74,6 +74,7 @@ def run_robustness_study(
     Parameters
     ----------
     folder : str or Path
+        The output folder (created if missing): figures, ``report.md`` and the study's data files.
     scenario : Scenario
         Carriages with trapezoids or S-curves (the "paper" profile).
     tolerances : sequence of str or Tolerance, optional
@@ -95,6 +96,12 @@ def run_robustness_study(
         (:func:`isolator.sweep.cluster.connect`, connected once before any work).
     security : distributed.Security, optional
         The TLS certificates of a ``tls://`` scheduler (:func:`isolator.sweep.cluster.tls_security`).
+
+    Returns
+    -------
+    RobustnessStudy
+        The machines drawn, each profile's settling time [s] on each, its percentiles and the tolerances'
+        rank correlations.
 
     Raises
     ------

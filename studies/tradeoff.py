@@ -83,6 +83,7 @@ def run_tradeoff_study(
     Parameters
     ----------
     folder : str or Path
+        The output folder (created if missing): figures, ``report.md`` and the study's data files.
     scenario : Scenario
         With carriage moves that stop (a sine never settles), or a ``[sequence]``.
     stiffness, damping : ndarray, optional
@@ -93,6 +94,12 @@ def run_tradeoff_study(
         Print a line per stage on stderr (off by default; ``isolator study`` turns it on).
     workers : int, optional
         Processes of the sweep (default: the machine's cores; 1: in this process).
+
+    Returns
+    -------
+    TradeoffStudy
+        The grid of stiffness and damping factors, each design's settling time [s] and transmissibility, and
+        the Pareto front.
 
     Raises
     ------

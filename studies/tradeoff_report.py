@@ -4,10 +4,13 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Literal
 
 import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.colors import LogNorm
+from matplotlib.legend import Legend
+from matplotlib.lines import Line2D
 
 from isolator.scenario.arguments import check_public
 
@@ -15,6 +18,9 @@ from .figures import log_mesh_edges, plain_log_axis, save_figure
 from .reporting import band_lines, fmt, table_header, write_report
 from .tradeoff_pneumatic import pneumatic_note
 from .tradeoff_results import TradeoffStudy
+
+#: where a legend goes in an axes
+Corner = Literal["lower left", "upper left"]
 
 __all__ = ["plot_maps", "plot_throughput", "plot_tradeoff", "scatter_designs", "write_tradeoff_report"]
 
@@ -67,9 +73,10 @@ def plot_maps(study: TradeoffStudy) -> None:
 
 
 def scatter_designs(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: list[tuple[int, int]],
-                    y: np.ndarray | None = None, ylabel: str | None = None) -> None:
+                    y: np.ndarray | None = None, ylabel: str | None = None, scale_at: Corner = "lower left") -> None:
     """Every design at (``x``, ``y``) (default: transmissibility at the reference frequency, log axis),
-    coloured by damping and sized by stiffness; the front and the scenario's design."""
+    coloured by damping and sized by stiffness (the size scale's legend at ``scale_at``); the front and the
+    scenario's design."""
     y = study.transmissibility if y is None else y
     ok = np.isfinite(x) & np.isfinite(y)
     kk = np.broadcast_to(study.stiffness[:, None], ok.shape)
@@ -80,6 +87,7 @@ def scatter_designs(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: li
                             label="design (size: stiffness)")
         bar = ax.figure.colorbar(points, ax=ax, label="damping scale (x the scenario's) [-]")
         plain_log_axis(bar.ax.yaxis)
+        ax.add_artist(_size_scale(ax, study.stiffness, scale_at))
     if front:
         ax.plot([x[p] for p in front], [y[p] for p in front], "-o", color="tab:red", ms=5,
                 lw=1.5, label="Pareto front")
@@ -91,6 +99,17 @@ def scatter_designs(study: TradeoffStudy, ax: plt.Axes, x: np.ndarray, front: li
     plain_log_axis(ax.yaxis)
     ax.set_ylabel(ylabel or f"floor-to-table transmissibility at {study.reference_hz:g} Hz, worst of x, y, z [m/m]")
     ax.grid(True, which="both", alpha=0.3)
+
+
+def _size_scale(ax: plt.Axes, stiffness: np.ndarray, where: Corner) -> Legend:
+    """The markers' size scale: a marker for the smallest, a middle and the largest stiffness factor, sized as
+    :func:`scatter_designs` sizes them (area ``14 + 30 k / k_max`` points^2)."""
+    factors = np.unique(np.asarray(stiffness, dtype=float))
+    shown = sorted({float(factors[0]), float(factors[factors.size // 2]), float(factors[-1])})
+    handles = [Line2D([], [], ls="", marker="o", color="0.55", markersize=float(np.sqrt(14 + 30 * k / factors[-1])),
+                      label=f"x{k:.3g}") for k in shown]
+    return ax.legend(handles=handles, title="stiffness scale\n(x the scenario's)", loc=where, fontsize=8,
+                     title_fontsize=8, labelspacing=1.0)
 
 
 def plot_tradeoff(study: TradeoffStudy) -> None:
@@ -108,7 +127,7 @@ def plot_tradeoff(study: TradeoffStudy) -> None:
 def plot_throughput(study: TradeoffStudy) -> None:
     """``throughput.png``: transmissibility against moves (or steps) per hour, with its own Pareto front."""
     fig, ax = plt.subplots(figsize=(9, 6), constrained_layout=True)
-    scatter_designs(study, ax, study.per_hour, study.throughput_pareto())
+    scatter_designs(study, ax, study.per_hour, study.throughput_pareto(), scale_at="upper left")
     what = ("steps per hour of the sequence" if study.sequence else
             "moves per hour (move + window settling, repeated)")
     ax.set_xlabel(f"{what} [1/h]")

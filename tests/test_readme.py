@@ -1,51 +1,20 @@
-"""The README is the door and the user guide the rooms: every Python snippet of both runs as written, on its
-own, in an empty folder; the README keeps its set-up commands, its size and its links into the site."""
+"""The README is the door and the user guide the rooms: the README keeps its set-up commands, its size and its
+links into the site (every code and console block of both runs in tests/test_docs.py)."""
 
 from __future__ import annotations
 
 import re
-import subprocess
-import sys
 from pathlib import Path
-
-import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 #: the user guide's pages (docs/guide/*.md), where the README's examples moved
 GUIDE = sorted((ROOT / "docs" / "guide").glob("*.md"))
-_PYTHON = re.compile(r"```python\n(.*?)```", re.S)
-SNIPPETS = [("README", code) for code in _PYTHON.findall(README)] + [
-    (page.stem, code) for page in GUIDE for code in _PYTHON.findall(page.read_text(encoding="utf-8"))
-]
 #: the two set-up commands (.ci/run runs the second's install and test steps)
 SETUP = (
     'python3 -m venv .venv && . .venv/bin/activate && pip install . && isolator simulate',
     'python3 -m venv .venv && . .venv/bin/activate && pip install -e ".[test]" && python -m pytest',
 )
-
-
-def _ids() -> list[str]:
-    seen: dict[str, int] = {}
-    ids = []
-    for where, _ in SNIPPETS:
-        seen[where] = seen.get(where, -1) + 1
-        ids.append(f"{where}-{seen[where]}")
-    return ids
-
-
-@pytest.mark.slow
-@pytest.mark.parametrize(("where", "code"), SNIPPETS, ids=_ids())
-def test_snippet_runs(where: str, code: str, tmp_path: Path):
-    script = tmp_path / "snippet.py"
-    script.write_text("import matplotlib\nmatplotlib.use('Agg')\n" + code, encoding="utf-8")
-    done = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=600)
-    assert done.returncode == 0, f"{where}: " + done.stderr[-2000:]
-
-
-def test_there_are_snippets():
-    assert len(_PYTHON.findall(README)) >= 1, "the README's tour has no Python"
-    assert len(SNIPPETS) >= 12, "the guide pages lost their examples"
 
 
 def test_the_readme_keeps_its_setup_commands():

@@ -136,6 +136,16 @@ def decentralised(
         ``G(s)``, proper, in N/m (displacement) or N s/m (velocity).
     measure : {"displacement", "velocity"}
     name : str
+        The design's name (``skyhook``, ``pid``, ``lead``).
+    sample_rate : float
+        The rate the controller runs at in the simulation [Hz].
+    description : str
+        How the design is described in reports.
+
+    Returns
+    -------
+    Controller
+        The continuous-time design and its sample rate.
     """
     if not isinstance(transfer, control.TransferFunction | control.StateSpace):
         raise ParameterError(f"transfer: must be a control.TransferFunction, got {type(transfer).__name__}")
@@ -187,6 +197,16 @@ def skyhook(lin: LinearModel, damping: float, sample_rate: float = SAMPLE_RATE) 
     ----------
     damping : float
         ``c`` per actuator [N s/m].
+    lin : LinearModel
+        The plant linearised at the design configuration, with ``[[actuators]]`` (their geometry, limits and
+        lag are used).
+    sample_rate : float
+        The rate the controller runs at in the simulation [Hz].
+
+    Returns
+    -------
+    Controller
+        The continuous-time design and its sample rate.
     """
     c = positive(damping, "damping")
     return decentralised(lin, control.tf([c], [1.0]), "velocity", "skyhook", sample_rate,
@@ -231,6 +251,16 @@ def pid(
         [N s/m] (added damping).
     derivative_filter_hz : float
         Corner of the derivative's low-pass [Hz].
+    lin : LinearModel
+        The plant linearised at the design configuration, with ``[[actuators]]`` (their geometry, limits and
+        lag are used).
+    sample_rate : float
+        The rate the controller runs at in the simulation [Hz].
+
+    Returns
+    -------
+    Controller
+        The continuous-time design and its sample rate.
     """
     kp, ki, kd = (positive(v, k, allow_zero=True) for v, k in ((kp, "kp"), (ki, "ki"), (kd, "kd")))
     wf = 2 * math.pi * positive(derivative_filter_hz, "derivative_filter_hz")
@@ -276,6 +306,16 @@ def lead(
     zero_hz, pole_hz : float
         Corners [Hz], zero below pole (most phase lead at their geometric mean;
         above the pole it acts as damping ``k / w_z`` plus stiffness).
+    lin : LinearModel
+        The plant linearised at the design configuration, with ``[[actuators]]`` (their geometry, limits and
+        lag are used).
+    sample_rate : float
+        The rate the controller runs at in the simulation [Hz].
+
+    Returns
+    -------
+    Controller
+        The continuous-time design and its sample rate.
     """
     k = positive(gain, "gain")
     fz, fp = positive(zero_hz, "zero_hz"), positive(pole_hz, "pole_hz")

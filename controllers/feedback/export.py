@@ -45,9 +45,17 @@ def write_c(controller: DiscreteController, folder: str | Path) -> tuple[Path, P
     Both are rendered from the templates ``templates/controller.h.j2`` and ``templates/controller.c.j2``
     shipped with this package.
 
+    Parameters
+    ----------
+    controller : DiscreteController
+        The controller.
+    folder : str or Path
+        The folder to write into (created if missing).
+
     Returns
     -------
     header, source : Path
+        The two files written, ``controller.h`` and ``controller.c``.
     """
     if not isinstance(controller, DiscreteController):
         raise ParameterError(f"controller: must be a DiscreteController, got {type(controller).__name__}")
@@ -99,6 +107,26 @@ def from_statespace(system: control.StateSpace, sample_rate: float, sensors: Seq
         inputs held over each sample).
     settings, delay, method, carriages
         Recorded in the controller (see :class:`DiscreteController`).
+    sensors : sequence of str
+        The sensors' names, the system's inputs in order (the scenario's ``[[sensors]]``).
+    actuators : sequence of str
+        The actuators' names, its outputs in order (the scenario's ``[[actuators]]``).
+
+    Returns
+    -------
+    DiscreteController
+        The controller as data, which :func:`write_c` writes and the simulation runs.
+
+    Examples
+    --------
+    >>> import control
+    >>> import numpy as np
+    >>> from controllers.feedback import from_statespace
+    >>> gain = control.ss([], [], [], -2.0e4 * np.eye(2))     # u = -c v, c = 2e4 N s/m
+    >>> ctrl = from_statespace(gain, 1000.0, ["v1", "v2"], ["f1", "f2"])
+    >>> x, u = ctrl.step(ctrl.reset(), np.array([1e-6, 0.0]))  # 1 um/s on the first sensor
+    >>> u.tolist()
+    [-0.02, 0.0]
     """
     if not isinstance(system, control.StateSpace):
         raise ParameterError(f"system: must be a control.StateSpace, got {type(system).__name__}")

@@ -78,6 +78,8 @@ def hinf_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max
     Parameters
     ----------
     plant : SensorPlant
+        The sensor plant (:class:`SensorPlant`): commands to sensors with the actuators' lag, at the design
+        position.
     sample_rate : float
         [Hz].
     delay : bool
@@ -92,6 +94,11 @@ def hinf_design(plant: SensorPlant, sample_rate: float, delay: bool = False, max
         velocity makes the synthesis singular); the larger of it and the sensor's ``noise``.
     relax : float
         The controller's norm as a factor on the optimal one (>= 1).
+
+    Returns
+    -------
+    DiscreteDesign
+        The controller's matrices ``(A, B, C, D)`` at ``sample_rate`` and the settings chosen.
 
     Raises
     ------

@@ -30,6 +30,7 @@ class DiscreteLaw:
     Parameters
     ----------
     controller : Controller
+        The design it runs.
     reference : QuasiStaticPath, optional
         What the controller regulates to (default: the initial equilibrium).
     end : ClosedLoop, optional
@@ -94,6 +95,15 @@ def feedback_law(
     check : bool
         Raise :class:`UnstableClosedLoopError` when the sampled loop is unstable
         with the carriages at their start or their final positions.
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+    controller : Controller
+        The design (its sample rate is the law's).
+
+    Returns
+    -------
+    DiscreteLaw
+        The law :meth:`isolator.Simulator.run` takes as ``feedback``.
     """
     lin_start = linearise(scenario)
     finals = scenario.final_positions()

@@ -125,6 +125,21 @@ class ClosedLoop:
 def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) -> ClosedLoop:
     """Close the loop on the linear plant (actuator lag included, continuous time).
 
+    Parameters
+    ----------
+    lin : LinearModel
+        The plant.
+    controller : Controller
+        The design.
+    check : bool
+        Check the loop's stability (continuous and sampled) first.
+
+    Returns
+    -------
+    ClosedLoop
+        The loop, with the plant's inputs and outputs: :func:`isolator.transmissibility` and
+        :func:`isolator.compliance` take it.
+
     Raises
     ------
     UnstableClosedLoopError
@@ -173,6 +188,8 @@ class LoopStability:
         [Hz]
     where : str
         The configuration checked, in words.
+    controller : str
+        The controller's name.
     """
 
     continuous: np.ndarray
@@ -211,7 +228,23 @@ class LoopStability:
 
 
 def check_stability(lin: LinearModel, controller: Controller, where: str = "") -> LoopStability:
-    """Check the loop of ``controller`` around ``lin`` continuous and sampled."""
+    """Check the loop of ``controller`` around ``lin`` continuous and sampled.
+
+    Parameters
+    ----------
+    lin : LinearModel
+        The plant.
+    controller : Controller
+        The design.
+    where : str
+        Where the plant is (e.g. the carriages' positions), for the report and the error.
+
+    Returns
+    -------
+    LoopStability
+        Whether the loop is stable in continuous time and sampled at the controller's rate (the largest
+        closed-loop pole's real part and spectral radius).
+    """
     p = lagged_plant(lin)
     return _stability(lin, p, controller, _loop_matrix(p, controller), where)
 

@@ -151,6 +151,8 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False,
     Parameters
     ----------
     plant : SensorPlant
+        The sensor plant (:class:`SensorPlant`): commands to sensors with the actuators' lag, at the design
+        position.
     sample_rate : float
         [Hz].
     delay : bool
@@ -162,6 +164,11 @@ def skyhook_design(plant: SensorPlant, sample_rate: float, delay: bool = False,
         further: :mod:`controllers.feedback.output_tuning`).
     highpass_hz : float, optional
         The high-pass corner [Hz]; default a fifth of the table's lowest mode.
+
+    Returns
+    -------
+    DiscreteDesign
+        The controller's matrices ``(A, B, C, D)`` at ``sample_rate`` and the settings chosen.
 
     Raises
     ------
@@ -332,6 +339,8 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False,
     Parameters
     ----------
     plant : SensorPlant
+        The sensor plant (:class:`SensorPlant`): commands to sensors with the actuators' lag, at the design
+        position.
     sample_rate : float
         [Hz].
     delay : bool
@@ -344,6 +353,11 @@ def lqg_design(plant: SensorPlant, sample_rate: float, delay: bool = False,
         Smallest sensor noise RMS assumed [SI units].
     washout_hz : float, optional
         The slowest rate [Hz] of the filter's estimate (default a fifth of the table's lowest mode).
+
+    Returns
+    -------
+    DiscreteDesign
+        The controller's matrices ``(A, B, C, D)`` at ``sample_rate`` and the settings chosen.
 
     Raises
     ------

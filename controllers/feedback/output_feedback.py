@@ -65,6 +65,15 @@ def design_positions(scenario: Scenario, schedule: int = 1, carriage: str | None
         Design points (1: one design, every carriage at the middle of its travel).
     carriage : str, optional
         The carriage that schedules (default: the largest carried mass times stroke).
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+
+    Returns
+    -------
+    positions : ndarray
+        (points, carriages): the carriages' positions at each design point [m].
+    carriage : int
+        The index of the scheduling carriage.
     """
     if isinstance(schedule, bool) or not isinstance(schedule, numbers.Integral) or schedule < 1:
         raise ParameterError(f"schedule: must be a whole number of design points >= 1, got {schedule!r}")
@@ -142,6 +151,8 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
     Returns
     -------
     DiscreteController
+        The controller from the scenario's sensors to its actuators (gain-scheduled with ``schedule`` > 1),
+        as :func:`write_c` writes it.
 
     Raises
     ------

@@ -108,6 +108,13 @@ def loop_matrix(plant: control.StateSpace, controller: tuple[np.ndarray, np.ndar
     """The state matrix of the sampled loop: ``plant`` (discrete, its first ``m`` inputs the commands) with
     the controller ``(A, B, C, D)`` from its outputs to those inputs (``u = C x_c + D y``, the command itself).
 
+    Parameters
+    ----------
+    plant : control.StateSpace
+        The sampled plant, its first ``m`` inputs the commands [N].
+    controller : tuple of ndarray
+        The controller's ``(A, B, C, D)``, from the plant's outputs to the commands.
+
     Returns
     -------
     ndarray (plant states + controller states, same)

@@ -69,6 +69,16 @@ def lqr(
     max_displacement, max_rotation, max_velocity, max_rate : float
         Acceptable table displacement [m], rotation [rad], velocity [m/s] and
         angular velocity [rad/s].
+    lin : LinearModel
+        The plant linearised at the design configuration, with ``[[actuators]]`` (their geometry, limits and
+        lag are used).
+    sample_rate : float
+        The rate the controller runs at in the simulation [Hz].
+
+    Returns
+    -------
+    Controller
+        The continuous-time design and its sample rate.
     """
     _measured_state(lin, "lqr")
     a, b = actuated(lin)
@@ -104,6 +114,28 @@ def hinf(
     ``control.hinfsyn`` finds the optimal norm ``gamma``; the controller is
     the central suboptimal one at ``relax * gamma`` (slycot ``sb10ad``): the
     optimal one has poles far beyond any sample rate.
+
+    Parameters
+    ----------
+    lin : LinearModel
+        The plant linearised at the design configuration, with ``[[actuators]]`` (their geometry, limits and
+        lag are used).
+    max_displacement, max_rotation, max_velocity, max_rate : float
+        Acceptable table displacement [m], rotation [rad], velocity [m/s] and angular velocity [rad/s]: the
+        scaling of the states.
+    disturbance : float
+        The wrench disturbance per axis [N, N m].
+    noise : float
+        Sensor noise as a fraction of each state's acceptable size [-].
+    relax : float
+        The controller's norm as a factor on the optimal one (>= 1).
+    sample_rate : float
+        The rate the controller runs at in the simulation [Hz].
+
+    Returns
+    -------
+    Controller
+        The continuous-time design and its sample rate.
 
     Raises
     ------

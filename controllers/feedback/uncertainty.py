@@ -152,10 +152,27 @@ def parse_uncertainty(text: str) -> Uncertainty:
     damping. Named parameters' intervals come from a calibration (:func:`uncertainty_from_calibration`)
     or :class:`Uncertainty` directly.
 
+    Parameters
+    ----------
+    text : str
+        The option's value.
+
+    Returns
+    -------
+    Uncertainty
+        The relative bounds on every isolator's stiffness and damping.
+
     Raises
     ------
     ParameterError
         One line naming ``--uncertainty``, the item and what is wrong.
+
+    Examples
+    --------
+    >>> from controllers.feedback import parse_uncertainty
+    >>> uncertainty = parse_uncertainty("stiffness=+-20%,damping=+-30%")
+    >>> uncertainty.stiffness, uncertainty.damping
+    (0.2, 0.3)
     """
     bounds: dict[str, float] = {}
     items = [item.strip() for item in text.split(",")]
@@ -193,6 +210,11 @@ def uncertainty_from_calibration(path: str | Path, unidentified: bool = False) -
     unidentified : bool
         Include the parameters the records do not fix (``std`` null; their ``ci95`` is then the fit's
         bounds, usually far wider than the truth). Default: left out.
+
+    Returns
+    -------
+    Uncertainty
+        The named parameters' intervals (``intervals``), as the robustness check takes them.
 
     Raises
     ------

@@ -87,6 +87,11 @@ def feedforward_allocation(scenario: Scenario, limits: bool = True) -> Feedforwa
         Respect each actuator's ``max_force`` (bounded least squares where the
         minimum-norm solution exceeds one); False: the unconstrained solution.
 
+    Returns
+    -------
+    Feedforward
+        The force histories, the wrench asked and what was left (``residual``), the quasi-static path.
+
     Raises
     ------
     ScenarioError

@@ -23,7 +23,20 @@ __all__ = ["FeedforwardComparison", "compare_feedforward", "path_deviation", "ru
 
 def path_deviation(run: Response, quasi_static: np.ndarray) -> dict[str, float]:
     """Largest |signal - quasi-static path| per signal of a run [m or rad], the path given at the
-    run's samples, shape (6, N)."""
+    run's samples, shape (6, N).
+
+    Parameters
+    ----------
+    run : Response
+        A run of the scenario.
+    quasi_static : ndarray
+        (6, N): the quasi-static path at the run's samples [m, rad].
+
+    Returns
+    -------
+    dict of str to float
+        The largest deviation per signal name [m or rad].
+    """
     dev = np.max(np.abs(run.signals - quasi_static), axis=1)
     return dict(zip(SIGNALS, (float(v) for v in dev), strict=True))
 
@@ -33,7 +46,20 @@ def settling_in_band(run: Response, band: Band | Mapping[str, float]) -> dict[st
     signal [m or rad]), about the run's final value (None where the run cannot show it).
 
     Measured as the simulator measures its own band (``Response.with_band``: on the dense output or the
-    internal grid), so ``isolator simulate --band`` with the band's half-widths gives the same numbers."""
+    internal grid), so ``isolator simulate --band`` with the band's half-widths gives the same numbers.
+
+    Parameters
+    ----------
+    run : Response
+        A run.
+    band : Band or mapping of str to float
+        The band, or its half-widths by signal name [m or rad].
+
+    Returns
+    -------
+    dict of str to float or None
+        Settling time per signal [s after the stop]; None where the run cannot show it.
+    """
     chosen = band if isinstance(band, Band) else Band.absolute(band)
     return run.with_band(chosen).settling_time
 
@@ -55,6 +81,9 @@ class FeedforwardComparison:
         ``passive`` and ``controlled``: settling time per signal [s] (None if
         the run cannot show it) in that band.
     feedforward : Feedforward
+    controlled_quasi_static : ndarray (6, N) or None
+        Pneumatic tables: the controlled run's own quasi-static path [m, rad] (its valves move other air);
+        None otherwise.
     """
 
     passive: Response
@@ -128,6 +157,19 @@ def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = No
 
     Both runs' settling times use one band per signal: 5 % of the passive
     run's peak (the issue's criterion), about the final static equilibrium.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario, with ``[[actuators]]`` (or a bundled scenario's name, or a TOML file's path).
+    feedforward : Feedforward, optional
+        The forces to judge; default :func:`feedforward_allocation` of the scenario.
+
+    Returns
+    -------
+    FeedforwardComparison
+        Both runs, their deviations from the quasi-static path [m, rad], the band and the settling times [s]
+        of each.
     """
     ff = feedforward_allocation(scenario) if feedforward is None else feedforward
     sim = Simulator(scenario)
@@ -144,7 +186,20 @@ def compare_feedforward(scenario: Scenario, feedforward: Feedforward | None = No
 def run_quasi_static(sim: Simulator, run: Response) -> np.ndarray:
     """Pneumatic runs: the table signals (6, N) of the rest with the air each sample's groups hold,
     the carriages where they are (:func:`isolator.simulation.leveling.quasi_static_signals`), measured from
-    the run's first state, its initial equilibrium."""
+    the run's first state, its initial equilibrium.
+
+    Parameters
+    ----------
+    sim : Simulator
+        The simulator of the pneumatic scenario.
+    run : Response
+        One of its runs.
+
+    Returns
+    -------
+    ndarray
+        (6, N): x, y, z [m] and rx, ry, rz [rad] at the run's samples.
+    """
     return quasi_static_signals(sim.model, sim.parameters, run.t, run.states, run.q.T, run.states[0])
 
 

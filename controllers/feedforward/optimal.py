@@ -239,6 +239,8 @@ def feedforward_optimal(
     scenario : Scenario
         With ``[[actuators]]`` and moves that stop.
     settings : OptimalSettings, optional
+        Knot spacing, weights, the window after the stop and the solver's limits; default
+        :class:`OptimalSettings`.
     progress : bool
         Print what is being solved and how it went.
 

@@ -99,6 +99,18 @@ def quasi_static_path(scenario: Scenario, spacing: float = QS_SPACING) -> QuasiS
     is smooth within a stretch; its acceleration may jump at a breakpoint).
     Pneumatic tables: the rest with each group's air as at the start (the
     valves re-level more slowly than the stage moves).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+    spacing : float
+        Time between two equilibria [s].
+
+    Returns
+    -------
+    QuasiStaticPath
+        The path's splines per stretch (the table's pose [m, rad] at any time of the move).
     """
     sim = Simulator(scenario)
     model, p = sim.model, sim.parameters
@@ -209,6 +221,18 @@ def path_demand(
         [s]
     sides : ndarray (N,)
         Times that pick the profile piece at each time (one-sided at breakpoints).
+    scenario : Scenario
+        The scenario, with ``[[actuators]]`` (or a bundled scenario's name, or a TOML file's path).
+    lin : LinearModel
+        The table linearised at rest (its structure and names).
+    path : QuasiStaticPath
+        From :func:`quasi_static_path`.
+
+    Returns
+    -------
+    PathDemand
+        At each time: the cancelling wrench [N, N m], the table's mass, stiffness and damping matrices along
+        the path and the actuators' allocation matrix.
     """
     layout = ParameterLayout.of(scenario)
     signals = path(times, sides)

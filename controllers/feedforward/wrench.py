@@ -20,6 +20,19 @@ def allocation_matrix(scenario: Scenario, rot: np.ndarray) -> np.ndarray:
 
     Rows: force [N] and moment about the table's mass centre [N m], world axes,
     with the table turned by ``rot`` (..., 3, 3) (table to world).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario, with ``[[actuators]]`` (or a bundled scenario's name, or a TOML file's path).
+    rot : ndarray
+        (..., 3, 3): the table's orientation, table to world.
+
+    Returns
+    -------
+    ndarray
+        (..., 6, n_actuators): force [N] and moment [N m] at the table's mass centre per newton of each
+        actuator's force.
     """
     d = np.array([a.direction for a in scenario.actuators], dtype=float)  # (n, 3)
     p = np.array([a.position for a in scenario.actuators], dtype=float)
@@ -35,6 +48,22 @@ def reaction_wrench(scenario: Scenario, t: np.ndarray, piece_time: np.ndarray | 
     ``sum m_i a_i`` and ``sum m_i d_i x a_i`` with ``d_i`` the carriage masses'
     positions and ``a_i`` their accelerations relative to the table, about its
     mass centre, turned by the table's orientation ``rot`` (N, 3, 3).
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+    t : ndarray
+        (N,): times [s].
+    piece_time : ndarray or None
+        (N,): times that pick each profile's piece (one-sided at breakpoints); None: ``t``.
+    rot : ndarray
+        (N, 3, 3): the table's orientation, table to world.
+
+    Returns
+    -------
+    ndarray
+        (N, 6): force [N] and moment [N m] in world axes.
     """
     t, rot = np.asarray(t, dtype=float), np.asarray(rot, dtype=float)
     if t.ndim != 1:
@@ -59,6 +88,20 @@ def carriage_inertia_wrench(scenario: Scenario, q: np.ndarray, qdd: np.ndarray) 
     at coordinates ``q`` (n, N) and ``a_i`` their accelerations relative to the
     table for coordinate accelerations ``qdd`` (n, N); a carriage's
     acceleration carries the carriages riding on it.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+    q : ndarray
+        (n_carriages, N): the carriages' coordinates [m].
+    qdd : ndarray
+        (n_carriages, N): their coordinate accelerations [m/s^2].
+
+    Returns
+    -------
+    ndarray
+        (N, 6): the force [N] and moment [N m] in the table's axes.
     """
     pos = scenario.carriage_positions(q)  # (n, 3, N)
     acc = scenario.carriage_positions(qdd) - scenario.carriage_positions(np.zeros_like(qdd))

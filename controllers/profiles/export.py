@@ -26,6 +26,11 @@ def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], pat
     path : str or Path
         The file to write; it loads with :func:`isolator.load_scenario`.
         Relative ``file`` keys of the source are made absolute.
+
+    Returns
+    -------
+    Path
+        The file written.
     """
     origin, data = scenario_data(source)
     by_name = {d.name: d for d in designs}
@@ -39,7 +44,24 @@ def write_scenario(source: str | Path | None, designs: Sequence[MoveDesign], pat
 def write_scenario_profiles(source: str | Path | None, scenario: Any, path: str | Path, name: str) -> Path | None:
     """Write the source scenario file with every carriage's profile taken from ``scenario`` (same carriages,
     by name) under the name ``name``; None (nothing written) when a profile has no scenario-file keys (an
-    input-shaped or time-optimal profile is a piecewise polynomial)."""
+    input-shaped or time-optimal profile is a piecewise polynomial).
+
+    Parameters
+    ----------
+    source : str or Path or None
+        The scenario file (or bundled name; None the default) to copy.
+    scenario : Scenario
+        The scenario whose carriages' profiles are written (same carriages, by name).
+    path : str or Path
+        The file to write.
+    name : str
+        The written scenario's ``name``.
+
+    Returns
+    -------
+    Path or None
+        The file written, or None when a profile has no scenario-file keys.
+    """
     profiles = {}
     for carriage in scenario.carriages:
         try:

@@ -65,11 +65,18 @@ def dominant_modes(scenario: Scenario, carriage: int, peaks: Sequence[float] | N
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     carriage : int
         Index of the carriage.
     peaks : sequence of float, optional
         Each signal's scale [m, rad] (e.g. its peak in the baseline run, which
         sets its settling band); default 1 for all.
+
+    Returns
+    -------
+    list of ExcitedMode
+        Each mode's frequency [Hz], damping ratio and weight (its largest amplitude over the signals, in
+        units of ``peaks``), most excited first.
 
     Notes
     -----
@@ -108,12 +115,19 @@ def shaped_scenario(scenario: Scenario, kind: str, peaks: Sequence[float] | None
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     kind : {"zv", "zvd", "ei"}
     peaks : sequence of float, optional
         Signal scales for ranking the modes (see :func:`dominant_modes`).
     modes : int
         Shape for this many of each carriage's most excited modes (the
         shapers convolved; each adds its own duration).
+
+    Returns
+    -------
+    Scenario
+        The scenario with each carriage's profile shaped (a piecewise polynomial), longer by the shapers'
+        durations.
 
     Examples
     --------

@@ -253,6 +253,11 @@ def move_designs(scenario: Scenario, shape: str | None = None) -> tuple[MoveDesi
         into an S-curve takes the jerk limit; its segments are shortened where
         needed so it still fits the stroke.
 
+    Returns
+    -------
+    tuple of MoveDesign
+        One per carriage, in the scenario's order: start, stroke, limits, start delay and shape of its move.
+
     Raises
     ------
     ScenarioError
@@ -300,7 +305,26 @@ def _fitted(move: MoveDesign) -> MoveDesign:
 
 
 def command_time(scenario: Scenario) -> float:
-    """When the scenario's move is commanded [s]: its first carriage start."""
+    """When the scenario's move is commanded [s]: its first carriage start.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+
+    Returns
+    -------
+    float
+        The earliest carriage start [s].
+
+    Examples
+    --------
+    >>> from isolator import load_scenario
+    >>> from controllers.profiles import command_time, move_time
+    >>> scenario = load_scenario("paper-table-3-2")
+    >>> command_time(scenario), round(move_time(scenario), 3)
+    (0.5, 7.4)
+    """
     return min(c.profile.knots[0] for c in scenario.carriages)  # type: ignore[attr-defined]
 
 
@@ -310,8 +334,14 @@ def move_time(scenario: Scenario, command: float | None = None) -> float:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     command : float, optional
         When the move is commanded [s] (default: the earliest carriage start).
+
+    Returns
+    -------
+    float
+        The move time [s], from ``command`` to the last carriage's stop.
     """
     begin = command_time(scenario) if command is None else command
     return float(scenario.stop_time - begin)

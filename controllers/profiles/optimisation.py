@@ -70,6 +70,8 @@ def optimise_profiles(
         Its carriages' trapezoids or S-curves are the baseline and the
         starting design; their ``limits`` bound the design.
     settings : ProfileSettings, optional
+        What to optimise and how (objective, transcription, variants, limits); default
+        :class:`ProfileSettings`.
     warm_start : ProfileOptimisation, optional
         Start from an earlier answer (its designs, and its solver point when
         the problem has the same shape).
@@ -79,6 +81,8 @@ def optimise_profiles(
     Returns
     -------
     ProfileOptimisation
+        The optimised designs and scenario, the baseline's and the optimised move's metrics, the solver's
+        status and times.
 
     Raises
     ------

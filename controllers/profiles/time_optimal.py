@@ -32,6 +32,11 @@ def time_optimal_profile(start: float, stroke: float, t0: float, velocity: float
         Start time [s].
     velocity, acceleration, jerk : float
         Limits [m/s, m/s^2, m/s^3], > 0.
+
+    Returns
+    -------
+    PiecewisePolynomialProfile
+        The move, at rest before ``t0`` and after it arrives.
     """
     from ruckig import InputParameter, Result, Ruckig, Trajectory
 
@@ -50,7 +55,19 @@ def time_optimal_profile(start: float, stroke: float, t0: float, velocity: float
 
 
 def time_optimal_scenario(scenario: Scenario) -> Scenario:
-    """The scenario with every carriage's move replaced by ruckig's time-optimal one within its limits."""
+    """The scenario with every carriage's move replaced by ruckig's time-optimal one within its limits.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
+
+    Returns
+    -------
+    Scenario
+        The scenario with each carriage's profile ruckig's time-optimal move (same start, stroke and start
+        time).
+    """
     profiles = [
         time_optimal_profile(d.start, d.stroke, d.t0, d.limits.velocity, d.limits.acceleration, d.limits.jerk)
         for d in move_designs(scenario)

@@ -20,5 +20,6 @@ print(result.summary())
 print("best design:", result.best())
 
 # %%
-# The largest settling time over the grid; crosses mark designs that do not settle within the run.
+# The largest settling time over the grid; crosses in the strip above mark designs that do not settle
+# within the run (a row per stiffness factor, in its line's colour).
 fig = plot_sweep(result, title="Table 3.2: settling over stiffness and damping factors")

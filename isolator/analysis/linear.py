@@ -294,6 +294,7 @@ def linearise(
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     positions : mapping or sequence, optional
         Carriage positions [m] by name or one per carriage (default: their start).
     time : float, optional
@@ -308,6 +309,8 @@ def linearise(
     Returns
     -------
     LinearModel
+        The ``control.StateSpace`` (``system``, named states, inputs and outputs) with the mass, stiffness
+        and damping matrices and the equilibrium it was taken about.
 
     Examples
     --------

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import groupby
 from typing import Any
 
 import numpy as np
@@ -124,6 +125,8 @@ def modes(lin: LinearModel) -> Modes:
     Returns
     -------
     Modes
+        Frequencies [Hz], damping ratios, shapes and each mode's dominant motion, lowest first; relaxation
+        poles [1/s] apart.
 
     Examples
     --------
@@ -193,12 +196,33 @@ class ModeTravel:
         Their coordinates swept [m], one array per carriage.
     frequencies_hz, damping_ratios : list of ndarray (n, 6)
         Per carriage, per position, the six modes ascending.
+    dominant : list of tuple of tuple of str
+        Per carriage, per position, each mode's dominant motion (``x`` .. ``rz``, as :attr:`Modes.dominant`).
     """
 
     carriages: tuple[str, ...]
     positions: list[np.ndarray]
     frequencies_hz: list[np.ndarray]
     damping_ratios: list[np.ndarray]
+    dominant: list[tuple[tuple[str, ...], ...]] = field(default_factory=list)
+
+    def motion(self, carriage: int, mode: int) -> str:
+        """The dominant motion of mode ``mode`` (0-based, ascending) over carriage ``carriage``'s travel.
+
+        Parameters
+        ----------
+        carriage, mode : int
+            Indices of the carriage (in :attr:`carriages`) and of the mode.
+
+        Returns
+        -------
+        str
+            The motion, e.g. ``rz``; where it changes along the travel, each in travel order
+            (``rz → rx → rz``); ``mode <n>`` without dominant motions.
+        """
+        if carriage >= len(self.dominant):
+            return f"mode {mode + 1}"
+        return " → ".join(motion for motion, _ in groupby(at[mode] for at in self.dominant[carriage]))
 
     def plot(self, title: str = "") -> Any:
         """Frequencies (top) and damping ratios (bottom) over each carriage's travel; returns the figure."""
@@ -209,17 +233,17 @@ class ModeTravel:
         for j, name in enumerate(self.carriages):
             q = self.positions[j] * 1e3
             for k in range(6):
-                axes[0, j].plot(q, self.frequencies_hz[j][:, k], label=f"mode {k + 1}")
-                axes[1, j].plot(q, self.damping_ratios[j][:, k], label=f"mode {k + 1}")
+                axes[0, j].plot(q, self.frequencies_hz[j][:, k], label=self.motion(j, k))
+                axes[1, j].plot(q, self.damping_ratios[j][:, k], label=self.motion(j, k))
             axes[0, j].set_title(f"carriage {name} travels (others at their start)")
             axes[1, j].set_xlabel(f"position of {name} [mm]")
             axes[0, j].set_ylabel("natural frequency [Hz]")
             axes[1, j].set_ylabel("damping ratio [-]")
             for ax in axes[:, j]:
                 ax.grid(alpha=0.3)
+            axes[0, j].legend(fontsize=8, loc="best", title="dominant motion", title_fontsize=8)
         if not self.carriages:
             axes[0, 0].text(0.5, 0.5, "no carriage moves", ha="center", transform=axes[0, 0].transAxes)
-        axes[0, -1].legend(fontsize=8, loc="best")
         fig.suptitle(title or "How the modes move as the stage travels")
         return fig
 
@@ -230,8 +254,15 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     samples : int
         Positions per carriage (>= 2).
+
+    Returns
+    -------
+    ModeTravel
+        Each carriage's positions [m] and the table's modes at each (frequencies, damping ratios, dominant
+        motions).
 
     Examples
     --------
@@ -239,12 +270,14 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
     >>> travel = modes_over_travel(load_scenario("paper-table-3-2"), samples=5)
     >>> travel.carriages
     ('x-stage', 'y-stage')
+    >>> [travel.motion(0, k) for k in range(6)]   # the modes' dominant motions over the x stage's travel
+    ['y', 'x', 'z', 'rz → rx → rz', 'ry', 'rx → rz → rx']
     >>> fig = travel.plot()
     """
     if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or not 2 <= samples <= 100_000:
         raise ParameterError(f"samples: must be a whole number from 2 to 100000, got {samples!r}")
     t_end = scenario.simulation.duration
-    names, positions, freqs, zetas = [], [], [], []
+    names, positions, freqs, zetas, dominant = [], [], [], [], []
     for carriage in scenario.carriages:
         lo, hi = carriage.profile.position_range(t_end)
         if hi - lo <= 0:
@@ -255,7 +288,8 @@ def modes_over_travel(scenario: Scenario, samples: int = 21) -> ModeTravel:
         positions.append(q)
         freqs.append(np.array([m.frequencies_hz for m in rows]))
         zetas.append(np.array([m.damping_ratios for m in rows]))
-    return ModeTravel(tuple(names), positions, freqs, zetas)
+        dominant.append(tuple(m.dominant for m in rows))
+    return ModeTravel(tuple(names), positions, freqs, zetas, dominant)
 
 
 check_public(globals(), ("Modes", "modes", "modes_over_travel"))

@@ -107,6 +107,8 @@ def equivalent_spring_damper(
     Returns
     -------
     EquivalentSpringDamper, or dict of isolator name to it (a scenario without ``isolator``)
+        The dynamic stiffness [N/m] and damping [N s/m] at each frequency, with the static and high-
+        frequency stiffness and the relaxation time [s].
 
     Notes
     -----

@@ -75,6 +75,7 @@ def stability(scenario: Scenario) -> StabilityReport:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
 
     Returns
     -------

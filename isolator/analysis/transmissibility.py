@@ -198,8 +198,16 @@ def transmissibility(lin: LinearSystem, frequency_hz: np.ndarray | None = None) 
     Parameters
     ----------
     lin : LinearModel or ClosedLoop
+        The linearised table (:func:`linearise`), or a closed loop
+        (:func:`controllers.feedback.closed_loop`).
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
+
+    Returns
+    -------
+    FrequencyResponse
+        ``response`` (6, 6, frequencies), complex: table x, y, z [m] and rx, ry, rz [rad] per floor x, y, z
+        [m] and rx, ry, rz [rad] (dimensionless on the diagonal).
 
     Examples
     --------
@@ -220,8 +228,16 @@ def compliance(lin: LinearSystem, frequency_hz: np.ndarray | None = None) -> Fre
     Parameters
     ----------
     lin : LinearModel or ClosedLoop
+        The linearised table (:func:`linearise`), or a closed loop
+        (:func:`controllers.feedback.closed_loop`).
     frequency_hz : ndarray, optional
         [Hz]; default :func:`default_frequencies`.
+
+    Returns
+    -------
+    FrequencyResponse
+        ``response`` (6, 6, frequencies), complex: table x, y, z [m] and rx, ry, rz [rad] per force x, y, z
+        [N] and torque about x, y, z [N m] at the mass centre.
     """
     return _response(lin, "compliance", FORCE_INPUTS, frequency_hz)
 

@@ -150,6 +150,12 @@ def vibration_criteria(
     low, high : float
         Band centres considered [Hz] (the VC curves: 1 to 80 Hz).
 
+    Returns
+    -------
+    VibrationCriteria
+        The band centres [Hz], the floor's and the table's one-third-octave RMS velocities [m/s] and the
+        best VC class each meets.
+
     Raises
     ------
     ScenarioError

@@ -71,6 +71,8 @@ def calibrate(
     Returns
     -------
     CalibrationResult
+        The fitted parameters with their standard deviations, 95 % intervals and correlations, each
+        experiment's data and curves, the fitted scenario and its modes.
 
     Raises
     ------

@@ -39,24 +39,29 @@ def calibration_figure(result: Any) -> Figure:
             mag, ph = fig.add_subplot(grid[s, col]), fig.add_subplot(grid[s, col + 1])
             shade = mag.twinx()
             coherence = c.coherence if c.coherence is not None else np.ones((len(c.outputs), c.x.size))
-            shade.fill_between(c.x, 0, coherence[s], color="0.85", step="mid", label="coherence")
+            shade.fill_between(c.x, 0, coherence[s], color="0.85", step="mid", label="coherence (right axis)")
             shade.set_ylim(0, 1.05)
             shade.set_yticks([0, 1])
+            shade.set_ylabel("coherence [-]", fontsize=7, color="0.45")
             mag.set_zorder(shade.get_zorder() + 1)
             mag.patch.set_visible(False)
+            reference = np.unwrap(np.angle(c.fitted[s, k]))  # the fitted model's phase, continuous
             for data, style, lab in ((c.measured, "k.", "measured H1"), (c.nominal, "C0--", "nominal model"),
                                      (c.fitted, "C3-", "fitted model")):
                 mag.semilogy(c.x, np.abs(data[s, k]), style, ms=2.5, lw=1.2, label=lab)
-                ph.plot(c.x, np.degrees(np.angle(data[s, k])), style, ms=2.5, lw=1.2)
+                # each curve on the branch nearest the fitted one's: no jumps at +-180 deg, and measured and
+                # model phases that agree drawn together (unwrapping each alone may part them by 360 deg)
+                ph.plot(c.x, np.degrees(reference + np.angle(data[s, k] / c.fitted[s, k])), style, ms=2.5, lw=1.2)
             mag.set_ylabel("|H| [-]" if c.units[s] else "|H|")
             mag.set_title(f"{name}: {label}", fontsize=8)
-            ph.set_ylabel("phase [deg]")
-            ph.set_ylim(-185, 185)
+            ph.set_ylabel("phase, unwrapped [deg]")
             if s == len(c.outputs) - 1:
                 mag.set_xlabel("frequency [Hz]")
                 ph.set_xlabel("frequency [Hz]")
             if s == 0:
-                mag.legend(fontsize=7, loc="lower left")
+                lines, texts = mag.get_legend_handles_labels()
+                fills, fill_texts = shade.get_legend_handles_labels()
+                mag.legend(lines + fills, texts + fill_texts, fontsize=7, loc="lower left")
         col += 2
     for name, c in moves:
         for s, sensor in enumerate(c.outputs):

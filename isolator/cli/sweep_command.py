@@ -205,7 +205,6 @@ def _sweep(args: argparse.Namespace) -> int:
         from isolator.sweep.figure import plot_sweep
 
         use_agg()
-        labels = {n: f"{n} (factor on the scenario's)" if n in swept["scale"] else n for n in result.names}
-        save_figure(plot_sweep(result, labels=labels), figure)
+        save_figure(plot_sweep(result), figure)
         print(f"figure: {figure}")
     return 0

@@ -24,6 +24,12 @@ def get_model(layout: ParameterLayout, variant: str | ModelVariant = EXACT) -> M
         The scenario's structure.
     variant : ModelVariant or {"exact", "paper"}
         Which equations; a bad name is a :class:`~isolator.errors.ParameterError` naming ``model``.
+
+    Returns
+    -------
+    Model
+        The casadi functions of the structure's equations of motion, built once per structure and variant
+        (and compiled, when a C compiler is there) and cached.
     """
     chosen = model_variant(variant)
     key = (layout, chosen)

@@ -43,6 +43,23 @@ class Column:
 def resolve(layout: ParameterLayout, name: object, mode: Literal["set", "scale"], key: str | None = None) -> Column:
     """The entries ``name`` matches (``key``: how errors name it, default ``mode['name']``).
 
+    Parameters
+    ----------
+    layout : ParameterLayout
+        The scenario's structure (its :attr:`~ParameterLayout.names`).
+    name : str
+        A parameter's name, ``[*]`` for every element (``isolators[*].stiffness.z``) and a vector's name for
+        all its components.
+    mode : {"set", "scale"}
+        Values given are the entries' values [SI units] or factors on the scenario's [-].
+    key : str, optional
+        How errors name the swept name; default ``mode['name']``.
+
+    Returns
+    -------
+    Column
+        The name and the parameter entries it drives, in ``layout.names`` order.
+
     Raises
     ------
     ParameterError

@@ -151,6 +151,8 @@ class ParameterLayout:
         Whether the floor moves (the inputs then hold its motion).
     names : tuple of str
         One name per entry of ``p``, e.g. ``isolators[2].stiffness.z``.
+    pneumatic : PneumaticStructure or None
+        The pneumatic isolators' structure (groups, valves, chambers); None for spring-dampers.
 
     Notes
     -----

@@ -62,6 +62,19 @@ def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
 
     Displacement of the mass centre [m] and rotation vector of R R_ref^T [rad],
     relative to the state ``reference`` (one state, or one per row).
+
+    Parameters
+    ----------
+    states : ndarray
+        (N, >= 7): the table's position [m] and orientation quaternion (w, x, y, z) in its first seven
+        entries per row.
+    reference : ndarray
+        (>= 7,) or (N, >= 7): the state the signals are measured from (one, or one per row).
+
+    Returns
+    -------
+    ndarray
+        (6, N): x, y, z [m] and rx, ry, rz [rad] from the reference.
     """
     states, reference = np.asarray(states, dtype=float), np.asarray(reference, dtype=float)
     if states.ndim != 2 or states.shape[1] < 7:

@@ -336,6 +336,8 @@ def build_model(layout: ParameterLayout, variant: str | ModelVariant = EXACT) ->
     Returns
     -------
     Model
+        The casadi functions of the structure's equations of motion (right-hand side, static residual,
+        Jacobians, linear matrices).
     """
     return model_variant(variant).build(layout)
 

@@ -224,6 +224,39 @@ class Scenario:
     (:class:`PneumaticIsolator`, with ``air`` and the ``leveling`` groups). With a ``sequence``
     (``[sequence]``, :func:`isolator.run_sequence`) the carriages' profiles hold them at the sequence's
     initial positions.
+
+    Attributes
+    ----------
+    name : str
+        The scenario's name (results and files are named after it).
+    table : Table
+        The rigid table: mass [kg], inertia [kg m^2], size [m].
+    isolators : tuple of Isolator or tuple of PneumaticIsolator
+        Three or more, all spring-dampers or all pneumatic.
+    carriages : tuple of Carriage
+        The moving masses, a chain or tree on the table, each with its profile.
+    actuators : tuple of Actuator
+        Force actuators between floor and table (``[[actuators]]``).
+    simulation : SimulationSettings
+        Duration [s] and output sample rate [Hz] of a run.
+    settling : Settling
+        The settling rule: band fraction (5 %) and tolerance.
+    gravity : float
+        [m/s^2].
+    ground : Ground or None
+        Prescribed floor motion and the floor's spectrum (``[ground]``).
+    points : tuple of Point
+        Named table points whose motion runs report (``[[points]]``).
+    air : Air or None
+        The air's properties; set for pneumatic isolators only.
+    leveling : tuple of LevelingGroup
+        The pneumatic isolators' leveling groups and valves.
+    windows : tuple of Window
+        Absolute windows at points, for window settling (``[[windows]]``).
+    sequence : StepSequence or None
+        Step-and-settle steps (``[sequence]``).
+    sensors : tuple of Sensor
+        Table or floor sensors (``[[sensors]]``).
     """
 
     name: str

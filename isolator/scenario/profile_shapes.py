@@ -47,6 +47,11 @@ def segments(
         Constant jerk within each segment [m/s^3].
     kind : str
         The name the profile reports.
+
+    Returns
+    -------
+    PiecewisePolynomialProfile
+        The move: cubic pieces, at rest before ``t0`` and after the last segment.
     """
     check_arguments(start=start, t0=t0)
     given = {name: _numbers(value, name) for name, value in
@@ -130,10 +135,24 @@ def trapezoid(
     t0 : float
         Start time [s].
 
+    Returns
+    -------
+    PiecewisePolynomialProfile
+        The move: accelerating, cruising (if the speed is reached) and braking at constant acceleration.
+
     Notes
     -----
     When the stroke is too short to reach ``velocity`` the profile is
     triangular with peak speed ``sqrt(2 |stroke| a d / (a + d))``.
+
+    Examples
+    --------
+    A stroke too short for the speed limit: a triangle, peak speed ``sqrt(2 |stroke| a d / (a + d))``
+
+    >>> from isolator import trapezoid
+    >>> move = trapezoid(start=0.0, stroke=0.1, velocity=1.0, acceleration=2.0)
+    >>> round(move.stop_time, 4), round(2 * (0.1 / 2.0) ** 0.5, 4)   # [s]: two halves of sqrt(s / a)
+    (0.4472, 0.4472)
     """
     check_arguments(start=start, stroke=stroke, velocity=velocity, acceleration=acceleration, t0=t0,
                     **({} if deceleration is None else {"deceleration": deceleration}))
@@ -190,6 +209,18 @@ def scurve(
         Limit of the braking phase [m/s^2]; defaults to ``acceleration``.
     deceleration_jerk : float, optional
         Jerk of the braking phase [m/s^3]; defaults to ``jerk``.
+
+    Returns
+    -------
+    PiecewisePolynomialProfile
+        The move: seven segments of constant jerk (fewer when a limit is not reached).
+
+    Examples
+    --------
+    >>> from isolator import scurve
+    >>> move = scurve(start=-0.4, stroke=0.8, velocity=0.4, acceleration=1.0, jerk=20.0)
+    >>> round(move.stop_time, 3), move.position(move.stop_time)
+    (2.45, 0.4)
     """
     optional = {k: v for k, v in (("deceleration", deceleration), ("deceleration_jerk", deceleration_jerk))
                 if v is not None}
@@ -249,6 +280,11 @@ def shaped(profile: PiecewisePolynomialProfile, amplitudes: Sequence[float], del
         Impulse times [s], >= 0.
     kind : str
         The name the shaped profile reports.
+
+    Returns
+    -------
+    PiecewisePolynomialProfile
+        The shaped move, ``max(delays)`` longer than ``profile``.
     """
     amps, lags = _numbers(amplitudes, "amplitudes"), _numbers(delays, "delays")
     if amps.shape != lags.shape or amps.size == 0:
@@ -287,6 +323,11 @@ def samples(t: ArrayLike, q: ArrayLike) -> PiecewisePolynomialProfile:
         Sample times [s], strictly increasing, at least two.
     q : array_like
         Positions [m] at those times.
+
+    Returns
+    -------
+    PiecewisePolynomialProfile
+        The spline as a profile (position, velocity, acceleration, jerk at any time).
     """
     try:
         t = np.asarray(t, dtype=float).ravel()

@@ -151,6 +151,8 @@ class SineProfile(Profile):
         [m]
     t0 : float
         Start time [s].
+    kind : str
+        The profile's type name, ``sine``.
     """
 
     amplitude: float

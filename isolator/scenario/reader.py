@@ -6,14 +6,14 @@ with the key path, for example ``carriages[1].profile.acceleration: must be > 0`
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
-from importlib import resources
 from pathlib import Path
 from typing import Any
 
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public, reading, register_conversion
+from isolator.scenario.bundled import DEFAULT_SCENARIO as DEFAULT_SCENARIO
+from isolator.scenario.bundled import bundled_scenarios, resolve_scenario_path
 from isolator.scenario.definitions import (
     SIGNALS,
     Actuator,
@@ -53,49 +53,28 @@ from isolator.scenario.windows_reader import read_windows
 __all__ = ["bundled_scenarios", "load_scenario", "load_spectrum", "read_csv_columns", "resolve_scenario_path",
            "scenario_from_dict"]
 
-DEFAULT_SCENARIO = "paper-table-3-2"
-
-
-def bundled_scenarios() -> dict[str, Path]:
-    """The scenarios shipped with the package, by name."""
-    folder = resources.files("isolator") / "data" / "scenarios"
-    return {
-        Path(str(entry)).stem: Path(str(entry))
-        for entry in folder.iterdir()
-        if str(entry).endswith(".toml")
-    }
-
-
-def resolve_scenario_path(spec: str | Path | None) -> Path:
-    """A scenario file path from a path or a bundled scenario's name (None: the default)."""
-    if spec is None:
-        spec = DEFAULT_SCENARIO
-    path = Path(spec)
-    if path.exists() and not path.is_dir():  # a FIFO or a device too: load_toml refuses it, naming what it is
-        return path
-    if path.is_dir():
-        raise ScenarioError(f"{spec}: is a folder, not a scenario file")
-    bundled = bundled_scenarios()
-    name = path.name[:-5] if path.name.endswith(".toml") else path.name
-    if name in bundled and not path.exists():
-        return bundled[name]
-    close = difflib.get_close_matches(name, sorted(bundled), n=1, cutoff=0.8)
-    hint = f"did you mean '{close[0]}'? " if close else ""
-    raise ScenarioError(f"{spec}: no such scenario file ({hint}bundled scenarios: {', '.join(sorted(bundled))})")
-
-
 def load_scenario(spec: str | Path | None = None) -> Scenario:
     """Read and validate a scenario.
 
     Parameters
     ----------
     spec : str or Path or None
-        A TOML file, or the name of a bundled scenario (``paper-table-3-1``,
-        ``paper-table-3-2``); None loads ``paper-table-3-2``.
+        A TOML file, or the name of a bundled scenario (:func:`bundled_scenarios`; ``isolator scenarios``
+        lists them); None loads ``paper-table-3-2``. The bundled scenarios:
+
+        - ``paper-table-3-1``: the paper's Table 3.1 case, one carriage in sinusoidal motion;
+        - ``paper-table-3-2``: the paper's Table 3.2 case, an LCD-inspection XY stage on 4 isolators;
+        - ``paper-table-3-2-active``: the same with three 500 N force actuators at each isolator;
+        - ``paper-table-3-2-geophones``: the active table with a geophone at each actuator;
+        - ``paper-table-3-2-pneumatic``: on four air springs in three leveling groups;
+        - ``paper-table-3-2-pneumatic-3``: on three air springs, one leveling valve each;
+        - ``paper-table-3-2-pneumatic-active``: the pneumatic table with the active one's actuators;
+        - ``paper-table-3-2-sequence``: the stage inspecting a 5 x 4 grid, step and settle.
 
     Returns
     -------
     Scenario
+        The validated, frozen scenario.
 
     Raises
     ------
@@ -107,6 +86,8 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     >>> from isolator import load_scenario
     >>> round(load_scenario("paper-table-3-2").stop_time, 3)
     7.9
+    >>> [carriage.name for carriage in load_scenario("paper-table-3-2").carriages]
+    ['x-stage', 'y-stage']
     """
     path = resolve_scenario_path(spec)
     return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=escaped(path.stem)[:MAX_NAME].strip())
@@ -125,6 +106,25 @@ def scenario_from_dict(
         Folder that relative file names (sampled profiles) are read from.
     default_name : str
         Name used when the data has none.
+
+    Returns
+    -------
+    Scenario
+        The validated, frozen scenario.
+
+    Raises
+    ------
+    ScenarioError
+        A missing or bad key, named with its path and the reason.
+
+    Examples
+    --------
+    >>> import tomllib
+    >>> from isolator import bundled_scenarios, scenario_from_dict
+    >>> data = tomllib.loads(bundled_scenarios()["paper-table-3-2"].read_text(encoding="utf-8"))
+    >>> data["table"]["mass"] = 5000.0
+    >>> scenario_from_dict(data).table.mass
+    5000.0
     """
     with reading():
         return _scenario_from_dict(data, Path(base_dir), default_name)
@@ -374,4 +374,4 @@ def _read_settling(r: KeyReader) -> Settling:
 
 register_conversion(Scenario, load_scenario)
 register_field_checks()
-check_public(globals(), ("bundled_scenarios", "load_scenario", "scenario_from_dict"))
+check_public(globals(), ("load_scenario", "scenario_from_dict"))

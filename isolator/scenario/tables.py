@@ -135,6 +135,11 @@ def load_spectrum(path: str | Path, kind: str, key: str = "spectrum") -> FloorSp
     key : str
         Key path named in errors.
 
+    Returns
+    -------
+    FloorSpectrum
+        The frequencies [Hz] and each axis' values, of the ``kind`` given.
+
     Raises
     ------
     ScenarioError

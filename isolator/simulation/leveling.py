@@ -154,8 +154,10 @@ def plot_leveling(result: PneumaticResult, t: np.ndarray, stop_time: float, dead
     import matplotlib.pyplot as plt
 
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(10, 7), sharex=True, constrained_layout=True)
+    styles = ("-", "--", "-.", ":")  # isolators of one group share a pressure: a style each keeps both in view
     for k, name in enumerate(result.isolator_names):
-        top.plot(t, result.pressures[k] / 1e5, lw=1.2, label=f"p:{name}")
+        top.plot(t, result.pressures[k] / 1e5, lw=1.6 if k % len(styles) == 0 else 1.3, ls=styles[k % len(styles)],
+                 label=f"p:{name}")
     top.set_ylabel("spring chamber gauge pressure [bar]")
     top.legend(loc="best", fontsize=8, ncol=2)
     top.set_title("air spring pressures")

@@ -69,6 +69,16 @@ class Response:
         With ``[[windows]]``: the window settling (read :attr:`windows`).
     sensor_set : tuple of Sensor
         The scenario's ``[[sensors]]`` (read their signals with :meth:`sensor`, :attr:`sensor_signals`).
+    pneumatic_result : PneumaticResult or callable or None
+        Pressures, heights, leveling times of a pneumatic run, or their function (read :attr:`pneumatic`).
+    deadbands : dict of str to float
+        Each leveling group's valve dead zone [m] (pneumatic runs).
+    remeasure : callable or None
+        Measures the run again in another band (what :meth:`with_band` calls).
+    point_history : ndarray or None
+        (3 n_points, N): the ``[[points]]``' world displacement [m] (read with :meth:`point`).
+    sensor_history : ndarray or callable or None
+        (n_sensors, N): the sensors' readings [SI], or their function (read :attr:`sensor_signals`).
     """
 
     name: str

@@ -246,6 +246,8 @@ def run_sequence(
     Returns
     -------
     SequenceResult
+        Each step's start, stop, settled and end times [s], the total time [s] and the throughput [steps per
+        hour].
 
     Raises
     ------

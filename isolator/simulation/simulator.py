@@ -53,7 +53,7 @@ from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at,
 from isolator.simulation.window_random import with_random_margins
 from isolator.simulation.window_settling import run_points
 
-__all__ = ["FeedbackLaw", "Method", "Simulator", "get_model", "simulate"]
+__all__ = ["FeedbackLaw", "Method", "Simulator", "get_model"]
 
 
 class Simulator:
@@ -62,6 +62,7 @@ class Simulator:
     Parameters
     ----------
     scenario : Scenario
+        The scenario (or a bundled scenario's name, or a TOML file's path).
     model : {"exact", "paper"}
         The exact rigid-body model, or the paper's small-angle model.
 
@@ -389,10 +390,4 @@ class Simulator:
                          scale_label(stiffness, damping))
 
 
-def simulate(scenario: Scenario, model: str = "exact", changes: Mapping[str, float] | None = None) -> Response:
-    """Simulate a scenario's carriage transients from the initial static equilibrium (``model`` "exact" or
-    "paper"; ``changes``: parameter values by name, :attr:`ParameterLayout.names`)."""
-    return Simulator(scenario, model).run(changes)
-
-
-check_public(globals(), ("Simulator", "simulate"))
+check_public(globals(), ("Simulator",))

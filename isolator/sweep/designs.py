@@ -52,6 +52,11 @@ class Designs:
         """The swept names as given."""
         return tuple(c.name for c in self.columns)
 
+    @property
+    def scaled(self) -> tuple[str, ...]:
+        """The swept names whose values are factors on the scenario's."""
+        return tuple(c.name for c in self.columns if c.mode == "scale")
+
     def parameters(self, start: int, stop: int) -> np.ndarray:
         """Parameter vectors (stop - start, parameters) of designs ``start`` to ``stop - 1``."""
         values = self.values[start:stop]
@@ -74,6 +79,30 @@ def build_designs(
     seed: int = 0,
 ) -> Designs:
     """The designs of :func:`isolator.sweep.sweep`'s arguments (there documented), checked.
+
+    Parameters
+    ----------
+    layout : ParameterLayout
+        The scenario's structure.
+    base : ndarray
+        The scenario's parameter vector, which ``scale`` multiplies and the unswept entries keep.
+    set : mapping of str to values, optional
+        Absolute values by name, as :func:`isolator.sweep.sweep` takes them.
+    scale : mapping of str to values, optional
+        Factors on the scenario's values by name.
+    zip : bool
+        Lists zipped (one design per position) instead of crossed.
+    samples : int, optional
+        Designs drawn over ``(low, high)`` ranges instead of a grid.
+    method : {"sobol", "lhs"}
+        How ``samples`` are drawn.
+    seed : int
+        Seed of the samples.
+
+    Returns
+    -------
+    Designs
+        The swept columns, their values per design and the base vector.
 
     Raises
     ------

@@ -92,6 +92,8 @@ class SweepResult:
     tally : Tally
     wall_time : float
         Of the call [s].
+    scaled : tuple of str
+        The swept names whose values are factors on the scenario's (``scale``), not values (``set``).
 
     Examples
     --------
@@ -107,17 +109,18 @@ class SweepResult:
     tally: Tally
     wall_time: float
     _kept: dict[str, np.ndarray] | None = field(default=None, repr=False)
+    scaled: tuple[str, ...] = ()
 
     @classmethod
     def made(cls, columns: Sequence[str], names: Sequence[str], path: Path | None, rows: list[list[Any]] | None,
-             tally: Tally, wall_time: float) -> SweepResult:
-        """From the rows kept in memory (``path`` None) or the file."""
+             tally: Tally, wall_time: float, scaled: Sequence[str] = ()) -> SweepResult:
+        """From the rows kept in memory (``path`` None) or the file; ``scaled``: the names swept by factors."""
         kept = None
         if rows is not None:
             table = list(map(list, zip(*rows, strict=True))) if rows else [[] for _ in columns]
             kept = {c: (np.array(v, dtype=object) if c in TEXT_COLUMNS else np.array(v, dtype=float))
                     for c, v in zip(columns, table, strict=True)}
-        return cls(tuple(columns), tuple(names), path, tally, wall_time, kept)
+        return cls(tuple(columns), tuple(names), path, tally, wall_time, kept, tuple(scaled))
 
     def table(self) -> dict[str, np.ndarray]:
         """Every column by name: numbers as float arrays, ``status`` and ``reason`` as str (object) arrays."""

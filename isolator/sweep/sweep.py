@@ -40,7 +40,13 @@ WORKERS_PER_CORE = 4
 
 
 def default_workers() -> int:
-    """Worker processes of the default pool: the cores this process may use."""
+    """Worker processes of the default pool: the cores this process may use.
+
+    Returns
+    -------
+    int
+        The number of cores this process may use (its CPU affinity where the system has one), >= 1.
+    """
     return len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
 
 
@@ -57,7 +63,20 @@ def check_workers(value: object, name: str = "workers") -> int:
 
 def chunk_size_for(designs: int, workers: int) -> int:
     """Designs per chunk: about four chunks per worker (every worker gets work when there are at least as
-    many designs as workers), at most :data:`MAX_CHUNK`."""
+    many designs as workers), at most :data:`MAX_CHUNK`.
+
+    Parameters
+    ----------
+    designs : int
+        Number of designs.
+    workers : int
+        Number of workers.
+
+    Returns
+    -------
+    int
+        Designs per chunk, >= 1.
+    """
     return max(1, min(MAX_CHUNK, math.ceil(designs / (4 * max(1, workers)))))
 
 
@@ -242,7 +261,8 @@ def sweep(
         if path is not None and not staging_path(path).exists():  # a finished .parquet
             if not done.all():
                 raise ParameterError(f"out: '{path}' is a finished sweep of other designs; force=True starts again")
-            return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time)
+            return SweepResult.made(columns, designs.names, path, None, tally, time.perf_counter() - start_time,
+                                    designs.scaled)
     with contextlib.ExitStack() as cluster:
         if scheduler is not None:  # connected once the arguments are known good, before anything is written
             client = connect(scheduler, security)
@@ -288,7 +308,8 @@ def sweep(
             if sink is not None:
                 sink.close(complete)
             bar(-1)
-        return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time)
+        return SweepResult.made(columns, designs.names, path, rows, tally, time.perf_counter() - start_time,
+                                designs.scaled)
 
 
 def _rows(designs: Designs, result: ChunkResult) -> list[list[Any]]:
