@@ -29,6 +29,7 @@ def write_controller_fmu(controller: DiscreteController, out: str | Path, key: s
     Parameters
     ----------
     controller : DiscreteController
+        The exported controller (its ``controller.c`` is the FMU's).
     out : str or Path
         The ``.fmu`` file.
     key : str
@@ -37,6 +38,7 @@ def write_controller_fmu(controller: DiscreteController, out: str | Path, key: s
     Returns
     -------
     Path
+        The ``.fmu`` file written.
 
     Raises
     ------

@@ -257,6 +257,8 @@ class Scenario:
         Step-and-settle steps (``[sequence]``).
     sensors : tuple of Sensor
         Table or floor sensors (``[[sensors]]``).
+    disturbances : tuple of Disturbance
+        Random forces on the table (``[[disturbances]]``), sources of the error budget.
     """
 
     name: str

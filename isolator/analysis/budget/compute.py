@@ -97,6 +97,7 @@ def error_budget(
     Returns
     -------
     ErrorBudget
+        Per point, axis and source: the PSD on the refined grid, the RMS and the cumulative RMS.
 
     Raises
     ------
