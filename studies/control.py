@@ -3,25 +3,23 @@
 Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
 
 * ``time.png``: the six table signals in the four runs;
-* ``transmissibility.png``: same-axis floor-to-table transmissibility,
-  passive and with each feedback design (feedforward does not change it);
-* ``settling.png``: 5 % settling time per signal and run (one band: 5 % of
-  the passive run's peaks, kind ``baseline``);
+* ``transmissibility.png``: same-axis floor-to-table transmissibility, passive and with each feedback design
+  (feedforward does not change it);
+* ``settling.png``: 5 % settling time per signal and run (one band: 5 % of the passive run's peaks, kind
+  ``baseline``);
 * ``forces.png``: the actuators' forces in the three active runs;
-* ``results.json``: per run its settling times and the ``band`` they are
-  measured in (six half-widths, m and rad), and ``feedforward.csv``, the
-  feedforward forces, so that ``isolator simulate SCENARIO --forces
+* ``results.json``: per run its settling times and the ``band`` they are measured in (six half-widths, m and
+  rad), and ``feedforward.csv``, the feedforward forces, so that ``isolator simulate SCENARIO --forces
   feedforward.csv --band ...`` reproduces the feedforward run's numbers;
 * ``report.md``: the numbers, the band, the controller and its loop's stability;
 * with ``[[sensors]]``, the output-feedback designs the machine can run (:mod:`studies.control_sensors`):
   ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png``, ``sensors-budget.png`` (the error
   budget at the tool, passive and closed loop: :mod:`studies.control_budget`) and their section of the report.
 
-With feedback alone the controller regulates to the initial equilibrium
-(the state-feedback designs lqr and hinf, which would fight the carriages'
-quasi-static tilt with saturating forces, to the planned move's quasi-static
-path: :attr:`~controllers.feedback.Controller.follows_path`); with both, to
-the feedforward's quasi-static path, so the two do not fight over the tilt.
+With feedback alone the controller regulates to the initial equilibrium (the state-feedback designs lqr and
+hinf, which would fight the carriages' quasi-static tilt with saturating forces, to the planned move's
+quasi-static path: :attr:`~controllers.feedback.Controller.follows_path`); with both, to the feedforward's
+quasi-static path, so the two do not fight over the tilt.
 """
 
 from __future__ import annotations
@@ -182,14 +180,8 @@ class ControlStudy:
         return out
 
 
-def run_control_study(
-    out: str | Path,
-    scenario: Scenario,
-    controller: str = "skyhook",
-    feedforward: str = "allocation",
-    progress: bool = False,
-    sample_rate: float = 2000.0,
-) -> ControlStudy:
+def run_control_study(out: str | Path, scenario: Scenario, controller: str = "skyhook", feedforward: str = "allocation",
+                      progress: bool = False, sample_rate: float = 2000.0) -> ControlStudy:
     """Run the study and write its figures and report into ``out``.
 
     Parameters
@@ -201,8 +193,16 @@ def run_control_study(
     controller : {"skyhook", "lead", "lqr", "hinf"}
         The feedback design for the time runs (all are shown in the transmissibility).
     feedforward : {"allocation", "optimal"}
+        The feedforward from the planned motion (see :mod:`controllers.feedforward`).
+    progress : bool
+        Print what it does on stderr (off by default; ``isolator study`` turns it on).
     sample_rate : float
         The sensor-based designs' rate [Hz] (with ``[[sensors]]``: :mod:`studies.control_sensors`).
+
+    Returns
+    -------
+    ControlStudy
+        The runs (passive, feedforward, feedback, both), their settling and the sensor-based designs.
     """
     if not scenario.actuators:
         raise ScenarioError("actuators: the control study needs a scenario with [[actuators]]")
@@ -217,10 +217,8 @@ def run_control_study(
     say("passive run")
     runs = {"passive": sim.run()}
     say(f"feedforward ({feedforward})")
-    if feedforward == "optimal":
-        ff = feedforward_optimal(scenario, progress=progress)
-    else:
-        ff = feedforward_allocation(scenario)
+    ff = feedforward_optimal(scenario, progress=progress) if feedforward == "optimal" else \
+        feedforward_allocation(scenario)
     runs["feedforward"] = sim.run(forces=ff.forces)
     say(f"feedback ({ctrl.description}) at {ctrl.sample_rate:g} Hz")
     runs["feedback"] = sim.run(feedback=fb.feedback_law(scenario, ctrl))

@@ -4,18 +4,17 @@ Each design takes the :class:`~controllers.feedback.sensor_plant.SensorPlant` at
 and returns the discrete ``(A, B, C, D)`` of a controller ``u_k = C x_k + D y_k``, ``x_{k+1} = A x_k +
 B y_k`` (``y`` the sensors' readings minus their readings at rest, ``u`` the actuators' commands [N]):
 
-* :func:`skyhook_design`: decentralised velocity feedback, each actuator pushing against the absolute
-  velocity its collocated geophone (or band-limited integrated accelerometer) reads, through the
-  second-order high-pass a real geophone loop needs (the sensor's drift, offset and tilt never reach
-  the actuator). The gain is the one that gives the table's modes the most damping (root locus of the
-  sampled loop, with the actuators' lag and the delay) unless given.
-* :func:`lqg_design`: a Kalman filter (current estimator) from the sensors' noise and a process-noise
-  model of the stage's reaction forces, with an LQR on the table's absolute velocities (not its
-  positions: the carriages' weight tilts the table quasi-statically, and a position weight would push
-  against every new equilibrium). Both on the sampled plant (``scipy.linalg.solve_discrete_are``).
+* :func:`skyhook_design`: decentralised velocity feedback, each actuator pushing against the absolute velocity
+  its collocated geophone (or band-limited integrated accelerometer) reads, through the second-order high-pass
+  a real geophone loop needs (the sensor's drift, offset and tilt never reach the actuator). The gain is the
+  one that gives the table's modes the most damping (root locus of the sampled loop, with the actuators' lag
+  and the delay) unless given.
+* :func:`lqg_design`: a Kalman filter (current estimator) from the sensors' noise and a process-noise model of
+  the stage's reaction forces, with an LQR on the table's absolute velocities (not its positions: the
+  carriages' weight tilts the table quasi-statically, and a position weight would push against every new
+  equilibrium). Both on the sampled plant (``scipy.linalg.solve_discrete_are``).
 
-Both design in the plant's physical coordinates, so the matrices of neighbouring design points
-interpolate (gain scheduling); the H-infinity design is in :mod:`.hinf_output`.
+Both in the plant's physical coordinates: neighbouring designs interpolate; H-infinity: :mod:`.hinf_output`.
 """
 
 from __future__ import annotations
@@ -277,8 +276,7 @@ def noise_model(plant: SensorPlant, sampled: control.StateSpace, noise_floor: fl
     so that the filter forgets a position estimate at ``washout_hz`` [Hz] or faster (geophones do not see a
     static position: without it the estimate integrates their noise with a pole at ``z = 1``). The walk is
     found by scaling: the slowest filter pole's rate grows in proportion to it. Measurement noise: each
-    sensor's noise per sample at the design's rate (``noise``, or ``noise_psd`` integrated up to half the
-    rate), at least ``noise_floor``.
+    sensor's noise per sample at the design's rate (``Sensor.noise_rms``), at least ``noise_floor``.
 
     Parameters
     ----------
@@ -296,8 +294,7 @@ def noise_model(plant: SensorPlant, sampled: control.StateSpace, noise_floor: fl
     wrench = disturbance_scale(plant)
     sw = np.zeros(len(DISTURBANCES))
     sw[6:] = wrench  # the force and torque inputs; the floor is left to the measurement update
-    rate_hz = 1.0 / float(sampled.dt)
-    noise = np.array([max(s.noise_rms(rate_hz), noise_floor) for s in plant.lin.scenario.sensors])
+    noise = np.array([max(s.noise_rms(1.0 / float(sampled.dt)), noise_floor) for s in plant.lin.scenario.sensors])
     rn = np.diag(noise**2)
     qn = bw @ np.diag(sw**2) @ bw.T
     qn += 1e-12 * np.trace(qn) / n * np.eye(n)  # every state slightly excited: a well-posed filter

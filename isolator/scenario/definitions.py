@@ -10,11 +10,12 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from isolator.scenario.actuators import Actuator, Point, Vector3
 from isolator.scenario.arguments import check_public
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
-from isolator.scenario.random_sources import Disturbance, SpectralDensity
+from isolator.scenario.random_sources import Disturbance
 from isolator.scenario.sensors import Sensor
 from isolator.scenario.sequence import StepSequence
 from isolator.scenario.windows import Window
@@ -33,8 +34,6 @@ __all__ = [
     "SimulationSettings",
     "Table",
 ]
-
-Vector3 = tuple[float, float, float]
 
 
 @dataclass(frozen=True)
@@ -124,53 +123,6 @@ class Carriage:
     origin: Vector3
     profile: Profile
     limits: MotionLimits = MotionLimits()
-
-
-@dataclass(frozen=True)
-class Actuator:
-    """A force actuator between ground and table.
-
-    Attributes
-    ----------
-    name : str
-    position : tuple of float
-        Point of action in the table frame [m].
-    direction : tuple of float
-        Unit line of action in the world frame.
-    max_force : float
-        Symmetric limit [N].
-    bandwidth : float or None
-        First-order lag corner [Hz], if any.
-    max_rate : float or None
-        Largest rate of change of the command [N/s], if any (respected by
-        optimised feedforward; commands from files are not rate limited).
-    noise_psd : SpectralDensity or None
-        One-sided PSD [N^2/Hz] of a random force added to the force the actuator applies (after clipping
-        and lag), a source of the error budget.
-    """
-
-    name: str
-    position: Vector3
-    direction: Vector3
-    max_force: float
-    bandwidth: float | None = None
-    max_rate: float | None = None
-    noise_psd: SpectralDensity | None = None
-
-
-@dataclass(frozen=True)
-class Point:
-    """A point of interest on the table, whose motion linear analyses report.
-
-    Attributes
-    ----------
-    name : str
-    position : tuple of float
-        In the table frame [m].
-    """
-
-    name: str
-    position: Vector3
 
 
 @dataclass(frozen=True)

@@ -240,3 +240,36 @@ def check_sidecar(path: Path, identity: Mapping[str, Any]) -> None:
         shown = ", ".join("the scenario" if k == "scenario_key" else k for k in differ)
         raise ParameterError(f"out: '{path}' was written by another sweep (it differs in: {shown}; see "
                              f"'{sidecar.name}'); force=True starts again")
+
+
+def prepared(path: Path | None, resume: bool, force: bool, identity: Mapping[str, Any], columns: list[str],
+             names: Sequence[str], values: np.ndarray, best_by: str, count: int
+             ) -> tuple[np.ndarray, dict[str, np.ndarray] | None]:
+    """The designs an ``out`` file already holds (``resume``) and its ``best_by``, ``status`` and ``design``
+    columns, after the checks of ``out``, ``resume`` and ``force`` (nothing written).
+
+    Returns
+    -------
+    done : ndarray of bool (count,)
+        The designs whose rows ``path`` holds (all False without ``resume``).
+    on_disk : dict or None
+        Those columns read back, when resumed.
+
+    Raises
+    ------
+    ParameterError
+        ``resume`` and ``force`` both; an existing ``out`` without either; a resume of another sweep.
+    """
+    done = np.zeros(count, dtype=bool)
+    if path is None:
+        return done, None
+    check_format(path)
+    if resume and force:
+        raise ParameterError("resume, force: choose one (resume continues the file, force starts again)")
+    exists = path.exists() or staging_path(path).exists()
+    if exists and not (resume or force):
+        raise ParameterError(f"out: '{path}' exists; resume=True continues it, force=True overwrites it")
+    if not (exists and resume):
+        return done, None
+    check_sidecar(path, identity)
+    return done_designs(path, columns, names, values), read_columns(path, [best_by, "status", "design"])

@@ -24,12 +24,19 @@ from isolator.sweep.cluster import connect
 from isolator.sweep.designs import Designs, Values, build_designs
 from isolator.sweep.metrics import metric_columns
 from isolator.sweep.names import joint_entries
-from isolator.sweep.output import RowSink, check_format, column_names, done_designs, read_columns, staging_path
+from isolator.sweep.output import RowSink, column_names, staging_path
 from isolator.sweep.pool import SweepPool
 from isolator.sweep.progress import progress_bar, worker_notice
 from isolator.sweep.result import SweepResult, Tally
 from isolator.sweep.runner import run_chunks
-from isolator.sweep.worker import TRANSMISSIBILITY_AXES, Chunk, ChunkResult, scenario_key, simulator_for
+from isolator.sweep.worker import (
+    TRANSMISSIBILITY_AXES,
+    Chunk,
+    ChunkResult,
+    checked_frequencies,
+    scenario_key,
+    simulator_for,
+)
 
 __all__ = ["MAX_CHUNK", "WORKERS_PER_CORE", "check_workers", "chunk_size_for", "default_workers", "sweep"]
 
@@ -53,8 +60,7 @@ def default_workers() -> int:
 def check_workers(value: object, name: str = "workers") -> int:
     """A count of local worker processes: a whole number from 1 to :data:`WORKERS_PER_CORE` times the cores
     (:func:`default_workers`); else a :class:`ParameterError` naming ``name``."""
-    workers = _positive(value, name)
-    most = WORKERS_PER_CORE * default_workers()
+    workers, most = _positive(value, name), WORKERS_PER_CORE * default_workers()
     if workers > most:
         raise ParameterError(f"{name}: {workers} worker processes on {default_workers()} core(s); at most {most} "
                              f"({WORKERS_PER_CORE} per core: more would only share the cores and the memory)")
@@ -182,9 +188,8 @@ def sweep(
         many steps or too much memory, "invalid": the design breaks a rule of its parameters, "unsettled": no
         settling time within the run, the signals named in ``reason``, or a step of the ``[sequence]`` that did not
         settle, "failed": its chunk failed twice),
-        ``reason``, ``design``, ``band:<signal>`` (the six half-widths [m or rad] of the band the design's
-        settling time is measured in, as ``isolator simulate --band`` takes them), then the columns of the
-        scenario's kind, then the transmissibility, mode and budget columns.
+        ``reason``, ``design``, ``band:<signal>`` (the half-widths [m or rad] the settling time is measured in,
+        as ``--band`` takes them), the scenario's kind's columns, the transmissibility, mode and budget columns.
 
         A pneumatic scenario, one with ``[[windows]]`` or with a ``[sequence]`` runs each design on its own
         (``Simulator.run_method`` from its equilibria, or ``run_sequence(..., parameters=p)``), and adds:
@@ -227,36 +232,22 @@ def sweep(
     scene = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     layout = ParameterLayout.of(scene)
     designs = build_designs(layout, layout.pack(scene), set, scale, zip, samples, method, seed)
-    freqs = _frequencies(frequencies)
-    n_modes = 6 if modes else 0
+    freqs, n_modes = checked_frequencies(frequencies), 6 if modes else 0
     requests = budget_requests(scene, budget)
     metrics = metric_columns(scene)
     best_by = "total_time" if "total_time" in metrics else "settling_time_max"  # a sequence: finished first
     columns = column_names(designs.names, freqs, TRANSMISSIBILITY_AXES, n_modes, metrics, budget_columns(requests))
-    path = None if out is None else Path(out)
-    done = np.zeros(designs.count, dtype=bool)
-    key = scenario_key(scene, model)
+    path, key = None if out is None else Path(out), scenario_key(scene, model)
     identity: dict[str, Any] = {"scenario_key": key, "model": model, "band": None if band is None else band.to_dict(),
                                 "samples": samples, "method": None if samples is None else method,
                                 "seed": None if samples is None else seed, "zip": zip, "frequencies": freqs,
                                 "modes": n_modes}
-    if requests:  # only then: the descriptions of sweeps without budget columns stay as they were
-        identity["budget"] = budget_columns(requests)
-    if path is not None:
-        check_format(path)
-        if resume and force:
-            raise ParameterError("resume, force: choose one (resume continues the file, force starts again)")
-        exists = path.exists() or staging_path(path).exists()
-        if exists and not (resume or force):
-            raise ParameterError(f"out: '{path}' exists; resume=True continues it, force=True "
-                                 "overwrites it")
-        if exists and resume:
-            output.check_sidecar(path, identity)
-            done = done_designs(path, columns, designs.names, designs.values)
-            on_disk = read_columns(path, [best_by, "status", "design"])
-    tally = Tally(designs.count, int(np.sum(done)), column=best_by,
-                  metric=metrics.index(best_by) if best_by in metrics else None)
-    if tally.resumed:
+    identity |= {"budget": budget_columns(requests)} if requests else {}  # else as sweeps without budget were
+    done, on_disk = output.prepared(path, resume, force, identity, columns, designs.names, designs.values,
+                                    best_by, designs.count)
+    tally = Tally(designs.count, int(np.sum(done)), column=best_by, metric=metrics.index(best_by) if best_by in metrics
+                  else None)
+    if tally.resumed and on_disk is not None:  # the rows a resume found
         tally.count(on_disk["design"].astype(int), on_disk[tally.column], on_disk["status"])
         if path is not None and not staging_path(path).exists():  # a finished .parquet
             if not done.all():
@@ -407,13 +398,3 @@ def _positive(value: object, name: str = "chunk_size") -> int:
         raise ParameterError(f"{name}: must be a whole number >= 1, got {value!r}")
     return int(value)
 
-
-def _frequencies(values: Sequence[float]) -> tuple[float, ...]:
-    try:
-        out = tuple(float(f) for f in np.atleast_1d(np.asarray(values, dtype=float)))
-    except (TypeError, ValueError):
-        raise ParameterError(f"frequencies: must be numbers [Hz], got {values!r}") from None
-    bad = [f for f in out if not (math.isfinite(f) and f >= 0)]
-    if bad:
-        raise ParameterError(f"frequencies: must be finite and >= 0 [Hz], got {bad[0]:g}")
-    return out

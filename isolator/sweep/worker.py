@@ -6,16 +6,18 @@ from __future__ import annotations
 
 import ctypes
 import hashlib
+import math
 import pickle
 import sys
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
 from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes
-from isolator.errors import IsolatorError
+from isolator.errors import IsolatorError, ParameterError
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.simulation.batch import run_batch
 from isolator.simulation.settling import Band, unavailable_reason
@@ -23,8 +25,8 @@ from isolator.simulation.simulator import Simulator
 from isolator.sweep.budget import budget_values
 from isolator.sweep.metrics import Runs, metric_columns, run_each, run_each_sequence, runs_alone
 
-__all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "run_chunk", "scenario_key", "simulator_for",
-           "unsettled_reason"]
+__all__ = ["TRANSMISSIBILITY_AXES", "Chunk", "ChunkResult", "checked_frequencies", "run_chunk", "scenario_key",
+           "simulator_for", "unsettled_reason"]
 
 #: the same-axis transmissibilities reported at each ``frequencies`` entry (floor motion to table motion)
 TRANSMISSIBILITY_AXES = ("x", "y", "z")
@@ -215,3 +217,15 @@ def _linear(scenario: Scenario, p: np.ndarray, frequencies: tuple[float, ...], c
         out += [*map(float, found), *[np.nan] * (count - found.size)]
     return np.array(out + budget_values(lin, budget))
 
+
+def checked_frequencies(values: Sequence[float]) -> tuple[float, ...]:
+    """The transmissibility columns' frequencies [Hz] of a sweep, each finite and >= 0 (else a
+    :class:`ParameterError` naming ``frequencies``)."""
+    try:
+        out = tuple(float(f) for f in np.atleast_1d(np.asarray(values, dtype=float)))
+    except (TypeError, ValueError):
+        raise ParameterError(f"frequencies: must be numbers [Hz], got {values!r}") from None
+    bad = [f for f in out if not (math.isfinite(f) and f >= 0)]
+    if bad:
+        raise ParameterError(f"frequencies: must be finite and >= 0 [Hz], got {bad[0]:g}")
+    return out
