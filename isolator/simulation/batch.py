@@ -45,7 +45,7 @@ from isolator.simulation.stepping import (
     rk4_stepper,
     staged_parameters,
 )
-from isolator.simulation.tail_check import run_tails
+from isolator.simulation.tail_check import RunTails
 from isolator.simulation.time_grid import TimeGrid, inputs_at
 
 __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_batch", "scale_label"]
@@ -249,8 +249,8 @@ def run_batch(
         """Step ``runs`` (one plan, at most LANES) side by side; their metrics. Runs with one time-only part
         share its staged inputs; others step the whole right-hand side on the inputs every run shares."""
         method = methods[runs[0]]
-        plan = method.plan
-        assert plan is not None
+        assert method.plan is not None
+        plan = method.plan.probes_only() if method.plan.probes else method.plan  # no output samples: not needed
         if len({params[i, uses].tobytes() for i in runs}) == 1:
             with _STAGING:
                 inputs, steps = sim.plan_inputs(method, params[runs[0]]), stepper
@@ -267,21 +267,27 @@ def run_batch(
         slots, step_peaks, deviations, polys = steps.run_slots(
             x0, plan, inputs, params[lanes], x0, with_states=True, final=finals[lanes]
         )
+
+        def samples(lane: int) -> np.ndarray:
+            """The run's signals at the output samples after the first (steps again: only for a message)."""
+            full = steps.run_slots(x0, method.plan, inputs, params[lanes], x0, final=finals[lanes])[0]
+            return full[method.plan.sample_slots, :, lane]  # type: ignore[union-attr]
         assert polys is not None
         dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals)
-        ends_at = np.array([plan.end])
-        last = np.array([DenseStepper.states_at(plan, polys[..., lane], ends_at)[0] for lane in range(len(runs))])
-        tails = run_tails(sim.scenario, sim.model, params[runs], [starts[i] for i in runs],  # type: ignore[misc]
-                          [ends[i] for i in runs], last, plan.end)
-        tails += tails[-1:] * (LANES - len(runs))
-        waits = np.array([0.0 if tail else holds[i] for (tail, _), i in zip(tails, lanes, strict=True)])
+        shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)
+        last = DenseStepper.states_at(plan, polys.reshape(*shape[:2], -1), np.array([plan.end]))[0]
+        last = np.ascontiguousarray(last.reshape(shape[2:]).T[: len(runs)])
+        tails = RunTails.of(sim.scenario, sim.model, params[runs], [starts[i] for i in runs],  # type: ignore[misc]
+                            [ends[i] for i in runs], last, plan.end)
+        waits = np.array([0.0 if tails.has[min(lane, len(runs) - 1)] else holds[i] for lane, i in enumerate(lanes)])
         tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time,
                                        lambda top: signal_bands(rule, top), waits)
+        inside = tails.inside(np.maximum(signal_bands(rule, tops[: len(runs)]), 1e-300))
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]
             try:
                 if not np.all(np.isfinite(peak[i])):
-                    sig = slots[plan.sample_slots, :, lane]
+                    sig = samples(lane)
                     bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
                 check_turn(peak[i])
@@ -289,8 +295,8 @@ def run_batch(
                 failed(i, exc, "tipped" if np.nanmax(peak[i][3:], initial=0.0) > MAX_TURN else "diverged")
                 continue
             settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
-            tail, note = tails[lane]
-            if tail is not None:
+            if tails.has[lane] and not (inside[lane].all() and np.all(np.isfinite(settling[i]))):
+                tail, note = tails.get(lane)  # else the verdict keeps every time as it is: not built
                 settling[i], reasons = judged_times(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
                 record(i, reasons, settling[i])
 
