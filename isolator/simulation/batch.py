@@ -43,6 +43,7 @@ from isolator.simulation.stepping import (
     dense_stepper,
     hold_time,
     rk4_stepper,
+    signal_width,
     staged_parameters,
 )
 from isolator.simulation.tail_check import RunTails
@@ -225,6 +226,7 @@ def run_batch(
             sim.grid_inputs(method.substeps)
             rk4_stepper(sim.model, method.substeps)
     stepper = dense_stepper(sim.model, LANES)
+    width = signal_width(sim.model)
     uses = staged_parameters(sim.model)
     if len({params[i, uses].tobytes() for i in methods}) > 1:  # packs of differing time-only parts: compiled now
         dense_stepper(sim.model, LANES, staged=False)
@@ -273,7 +275,7 @@ def run_batch(
             full = steps.run_slots(x0, method.plan, inputs, params[lanes], x0, final=finals[lanes])[0]
             return full[method.plan.sample_slots, :, lane]  # type: ignore[union-attr]
         assert polys is not None
-        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals)
+        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width)
         shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)
         last = DenseStepper.states_at(plan, polys.reshape(*shape[:2], -1), np.array([plan.end]))[0]
         last = np.ascontiguousarray(last.reshape(shape[2:]).T[: len(runs)])

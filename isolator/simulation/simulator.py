@@ -46,6 +46,7 @@ from isolator.simulation.stepping import (
     hold_time,
     plan_stage_inputs,
     rk4_stepper,
+    signal_width,
     with_start,
 )
 from isolator.simulation.tail_check import run_tail
@@ -128,6 +129,15 @@ class Simulator:
 
     def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
         first, last = self._positions
+        if last is not None and self.layout.pneumatic is None:  # both rests in one solve (the same numbers)
+            n = params.shape[0]
+            try:
+                both = static_equilibria(self.model, np.vstack([params, params]),
+                                         np.vstack([np.tile(first, (n, 1)), np.tile(last, (n, 1))]))
+            except UnstableTableError:
+                pass  # solved apart below, for the message naming the rest and the run
+            else:
+                return both[:n], list(both[n:])
         start = static_equilibria(self.model, params, first, "with the carriages at their start")
         if last is None:
             return start, [None] * len(start)
@@ -276,7 +286,8 @@ class Simulator:
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
             signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
-                              polynomials[..., None], start.state[None, :], self.model.variant.signals)
+                              polynomials[..., None], start.state[None, :], self.model.variant.signals,
+                              signal_width(self.model))
             x0, dense = start.state, polynomials
             free = run_tail(self.scenario, self.model, p, start, end,
                             DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)
