@@ -26,11 +26,11 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
 from isolator.model.signals import signal_jacobian
 from isolator.model.variants import Model
+from isolator.numerics.native import PLAIN_FLAGS, MappedFunction
 from isolator.scenario.definitions import SIGNALS
 
 __all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeMotions", "FreeTail", "TailVerdict", "free_tail", "free_tails", "micro"]
@@ -204,10 +204,12 @@ class FreeTail:
 
 
 @lru_cache(maxsize=16)
-def _jacobians(model: Model, count: int) -> tuple[ca.Function, ca.Function]:
-    """The model's state Jacobian and the signals' Jacobian, each mapped over ``count`` runs at once."""
+def _jacobians(model: Model) -> tuple[MappedFunction, MappedFunction]:
+    """The model's state Jacobian and the signals' Jacobian for many runs at once, compiled to compute as
+    casadi's evaluator does (:data:`~isolator.numerics.native.PLAIN_FLAGS`: the same numbers, bit for bit)."""
     signals = signal_jacobian(model.variant, model.n_states)
-    return model.state_jacobian.map(count), signals.map(count)
+    return (MappedFunction(model.state_jacobian, f"isolator_tail_a_{model.tag}", block=16, flags=PLAIN_FLAGS),
+            MappedFunction(signals, f"isolator_tail_c_{model.tag}", block=16, flags=PLAIN_FLAGS))
 
 
 def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
@@ -273,12 +275,10 @@ class FreeMotions:
     def of(cls, model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray, reference: np.ndarray,
            last: np.ndarray, end: float) -> FreeMotions:
         """The decompositions (arguments as :func:`free_tails` takes them)."""
-        count, n = final_state.shape
-        state_map, signal_map = _jacobians(model, count)
+        state_jacobian, signal_jacobian = _jacobians(model)
         inputs = np.array([model.layout.rest_inputs(q) for q in positions])
-        a = np.asarray(state_map(final_state.T, inputs.T, np.asarray(p, dtype=float).T), dtype=float)
-        c = np.asarray(signal_map(final_state.T, np.asarray(reference, dtype=float).T), dtype=float)
-        a, c = a.reshape(n, count, n).transpose(1, 0, 2), c.reshape(6, count, n).transpose(1, 0, 2)
+        a = state_jacobian(final_state, inputs, np.asarray(p, dtype=float))[0]
+        c = signal_jacobian(final_state, np.asarray(reference, dtype=float))[0]
         rates, vectors = np.linalg.eig(a)
         return cls(float(end), rates, vectors, c, np.asarray(last, dtype=float) - final_state, final_state)
 
