@@ -116,8 +116,9 @@ def main() -> None:
     print(f"\n| figure | old {args.old} | new {args.new} | new / old (medians) |\n|---|---|---|---|")
     for key, label in names.items():
         o, n = ([row[key] for row in figures[tag]] for tag in ("old", "new"))
+        ratio = statistics.median(n) / statistics.median(o)
         print(f"| {label} | {statistics.median(o):.4g} ({min(o):.4g}-{max(o):.4g}) | "
-              f"{statistics.median(n):.4g} ({min(n):.4g}-{max(n):.4g}) | {statistics.median(n) / statistics.median(o):.3f} |")
+              f"{statistics.median(n):.4g} ({min(n):.4g}-{max(n):.4g}) | {ratio:.3f} |")
     print(f"\nbatch settling times and peaks identical: {same_batch}")
     differ = [k for k, same in same_sweep.items() if not same]
     print(f"sweep columns identical: {not differ}" + (f" (differ: {', '.join(differ)})" if differ else ""))

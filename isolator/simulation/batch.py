@@ -251,8 +251,9 @@ def run_batch(
         """Step ``runs`` (one plan, at most LANES) side by side; their metrics. Runs with one time-only part
         share its staged inputs; others step the whole right-hand side on the inputs every run shares."""
         method = methods[runs[0]]
-        assert method.plan is not None
-        plan = method.plan.probes_only() if method.plan.probes else method.plan  # no output samples: not needed
+        full = method.plan
+        assert full is not None
+        plan = full.probes_only() if full.probes else full  # no output samples: not needed
         if len({params[i, uses].tobytes() for i in runs}) == 1:
             with _STAGING:
                 inputs, steps = sim.plan_inputs(method, params[runs[0]]), stepper
@@ -272,8 +273,8 @@ def run_batch(
 
         def samples(lane: int) -> np.ndarray:
             """The run's signals at the output samples after the first (steps again: only for a message)."""
-            full = steps.run_slots(x0, method.plan, inputs, params[lanes], x0, final=finals[lanes])[0]
-            return full[method.plan.sample_slots, :, lane]  # type: ignore[union-attr]
+            return steps.run_slots(x0, full, inputs, params[lanes], x0, final=finals[lanes])[0][full.sample_slots, :,
+                                                                                                 lane]
         assert polys is not None
         dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width)
         shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)
