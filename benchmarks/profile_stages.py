@@ -50,6 +50,7 @@ def _timed(stage: str, fn: Callable) -> Callable:
 
 def _instrument() -> None:
     for name, stage in (("_equilibria", "equilibria (static rests, both ends)"),
+                        ("solve_rests", "equilibria (static rests, both ends)"),
                         ("dense_metrics", "metrics on the dense output"),
                         ("run_tails", "free-motion judgement: Jacobians, modes, bound"),
                         ("judged_times", "free-motion judgement: verdict and reasons")):
