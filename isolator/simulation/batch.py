@@ -55,6 +55,8 @@ LANES = 4
 #: would need far too many steps or more memory than the machine has), the run's work failed (a sweep's
 #: chunk that failed twice)
 STATUSES = ("ok", "tipped", "diverged", "refused", "failed")
+#: a run may use at most this fraction of the memory available (1 / MEMORY_SHARE)
+MEMORY_SHARE = 4
 
 #: a simulator's cache of staged inputs is not shared between threads (batches may run side by side)
 _STAGING = threading.Lock()
@@ -187,7 +189,7 @@ def run_batch(
             failed(i, exc, "refused")
     for method in {m.plan_key: m for m in methods.values()}.values():  # compiled before the threads start
         try:
-            check_memory_of(sim, method, LANES)
+            check_memory_of(sim, method, LANES, MEMORY_SHARE)
         except ParameterError as exc:
             for i in [i for i, m in methods.items() if m.plan_key == method.plan_key]:
                 failed(i, exc, "refused")

@@ -9,7 +9,7 @@ from typing import Protocol
 import numpy as np
 
 from isolator.errors import UnstableTableError
-from isolator.model.equilibrium import Equilibrium
+from isolator.model.equilibrium import Equilibrium, static_equilibria
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
@@ -19,11 +19,7 @@ from isolator.simulation.settling import Band
 from isolator.simulation.stepping import Method
 from isolator.simulation.time_grid import TimeGrid
 
-__all__ = ["MEMORY_SHARE", "BatchSimulator", "check_memory_of", "solve_rests"]
-
-#: a run may use at most this fraction of the memory available (1 / MEMORY_SHARE)
-MEMORY_SHARE = 4
-
+__all__ = ["BatchSimulator", "both_rests", "check_memory_of", "solve_rests"]
 
 class BatchSimulator(Protocol):
     """What a batch needs of its simulator (:class:`isolator.simulation.simulator.Simulator`)."""
@@ -48,10 +44,10 @@ class BatchSimulator(Protocol):
                    band: Band | None = None) -> Response: ...
 
 
-def check_memory_of(sim: BatchSimulator, method: Method, lanes: int) -> None:
+def check_memory_of(sim: BatchSimulator, method: Method, lanes: int, share: float) -> None:
     """Refuse runs of ``method`` whose arrays (RK4: the inputs at every stage of the grid, with the profiles'
     temporaries; DOP853: a pack's dense output and slots, and the staged inputs at every step) would need more
-    than a :data:`MEMORY_SHARE` of the memory available (:class:`ParameterError`): workers run side by side."""
+    than ``1 / share`` of the memory available (:class:`ParameterError`): workers run side by side."""
     if method.plan is None:
         intervals = sim.grid.nodes.size - 1
         need = 4.0 * intervals * (2 * method.substeps + 1) * sim.layout.input_size * 8
@@ -61,7 +57,7 @@ def check_memory_of(sim: BatchSimulator, method: Method, lanes: int) -> None:
         per_step = lanes * (8 * sim.model.n_states + 6 * plan.per_step) + 16 * max(sim.layout.input_size, 48)
         need = 8.0 * plan.steps * per_step
         what = f"DOP853 with {plan.steps:.3g} steps"
-    check_memory(MEMORY_SHARE * need, f"{what} (the design's fastest mode), with {MEMORY_SHARE} runs side by side,",
+    check_memory(share * need, f"{what} (the design's fastest mode), with {share} runs side by side,",
                  "such a design is far stiffer than a real isolator (or its run far too long)")
 
 
@@ -89,3 +85,18 @@ def solve_rests(
 
     solve(np.arange(n))
     return starts, ends
+
+
+def both_rests(model: Model, params: np.ndarray, first: np.ndarray, last: np.ndarray
+               ) -> tuple[list[Equilibrium], list[Equilibrium | None]] | None:
+    """Every run's rests with the carriages at ``first`` and at ``last`` [m] in one Newton solve (the same
+    numbers as two: each row's iterations are its own); None when a run has none (the caller solves them
+    apart then, for the message naming the rest and the run). Spring-damper tables (a pneumatic table's
+    final rest keeps the air of its start)."""
+    n = params.shape[0]
+    try:
+        both = static_equilibria(model, np.vstack([params, params]), np.vstack([np.tile(first, (n, 1)),
+                                                                               np.tile(last, (n, 1))]))
+    except UnstableTableError:
+        return None
+    return both[:n], list(both[n:])
