@@ -246,8 +246,8 @@ def run_batch(
 
         def samples(lane: int) -> np.ndarray:
             """The run's signals at the output samples after the first (steps again: only for a message)."""
-            return steps.run_slots(x0, full, inputs, params[lanes], x0, final=finals[lanes])[0][full.sample_slots, :,
-                                                                                                 lane]
+            every = steps.run_slots(x0, full, inputs, params[lanes], x0, final=finals[lanes])[0]
+            return every[full.sample_slots, :, lane]
         assert polys is not None
         dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width)
         shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)

@@ -94,3 +94,25 @@ def test_the_end_states_of_a_pack_are_each_lanes_own():
     for lane in range(4):
         np.testing.assert_array_equal(together[lane],
                                       DenseStepper.states_at(plan, polys[..., lane], np.array([plan.end]))[0])
+
+
+def test_a_batch_run_that_diverges_is_named_at_its_first_non_finite_output_sample(monkeypatch):
+    """The batch's loop reads the probes only; a run whose probes go non-finite is stepped again with the output
+    samples, for the message naming the first non-finite one, as before."""
+    sim = Simulator(load_scenario("paper-table-3-2"))
+    original = DenseStepper.run_slots
+
+    def poisoned(self, x0, plan, *args, **kwargs):  # type: ignore[no-untyped-def]
+        signals, peaks, deviations, polys = original(self, x0, plan, *args, **kwargs)
+        if plan.sample_slots.size:  # the full plan: the samples from the 2001st on are NaN
+            signals = signals.copy()
+            signals[plan.sample_slots[2000:], :, 0] = np.nan
+        else:
+            peaks = peaks.copy()
+            peaks[300:, :, 0] = np.nan
+        return signals, peaks, deviations, polys
+
+    monkeypatch.setattr(DenseStepper, "run_slots", poisoned)
+    result = sim.run_batch([1.0], [1.0], workers=1, diverged="record")
+    assert result.status.tolist() == ["diverged"]
+    assert f"the run diverged: non-finite state at t = {sim.grid.samples[2001]:.4g} s" in result.failures[0]
