@@ -13,8 +13,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benchmark sc
 class Budget:
     """``error_budget(scenario, controller)`` from the scenario (linearisation included)."""
 
-    params = ["passive", "closed loop"]
-    param_names = ["case"]
+    params = ("passive", "closed loop")
+    param_names = ("case",)
     repeat = (3, 10, 20.0)
     number = 1
     warmup_time = 0.0
