@@ -29,7 +29,7 @@ import numpy as np
 
 from isolator.numerics.native_cache import cache_dir, private_cache, record_hash, verified
 
-__all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library", "find_compiler"]
+__all__ = ["FLAGS", "PLAIN_FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library", "find_compiler"]
 
 #: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
 #: infinity still propagate, so a diverging run is still detected); -march=native is safe because
@@ -37,6 +37,9 @@ __all__ = ["FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_l
 #: how libraries are linked (part of the cache key): compiled with FLAGS, linked without -ffast-math
 LINK = "link: -shared -fPIC -lm, no fast-math start-up"
 FLAGS = ("-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC", "-shared")
+#: flags that compute as casadi's own evaluator does, operation by operation (no fast-math, no fused
+#: multiply-adds, no CPU-specific code): the same numbers as the uncompiled function, bit for bit
+PLAIN_FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 
 
 def _cpu_identity() -> str:
@@ -161,6 +164,8 @@ class NativeFunction:
     optimisation : str
         The compiler's optimisation flag (big derivative code compiles much
         faster at ``-O1``).
+    flags : sequence of str, optional
+        All the compiler's flags instead (:data:`PLAIN_FLAGS`: the evaluator's numbers exactly).
     """
 
     def __init__(
@@ -169,10 +174,11 @@ class NativeFunction:
         compile: bool = True,
         companions: tuple[ca.Function, ...] = (),
         optimisation: str = "-O3",
+        flags: Sequence[str] | None = None,
     ) -> None:
         self.function = function
         self.companions = companions
-        self.flags = [optimisation, *FLAGS[1:]]
+        self.flags = [optimisation, *FLAGS[1:]] if flags is None else list(flags)
         self.name = function.name()
         self.in_shapes = [function.size_in(i) for i in range(function.n_in())]
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
@@ -311,13 +317,17 @@ class MappedFunction:
         Argument sets per compiled call of the block form (its last call is padded).
     optimisation : str
         Compiler optimisation flag.
+    flags : sequence of str, optional
+        All the compiler's flags instead (as :class:`NativeFunction` takes them).
     """
 
-    def __init__(self, function: ca.Function, name: str, block: int = 32, optimisation: str = "-O3") -> None:
+    def __init__(self, function: ca.Function, name: str, block: int = 32, optimisation: str = "-O3",
+                 flags: Sequence[str] | None = None) -> None:
         self.function = function
         self.name = name
         self.block = block
         self.optimisation = optimisation
+        self.flags = flags
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
         self._native: dict[int, NativeFunction] = {}
         self._lock = threading.Lock()
@@ -329,7 +339,7 @@ class MappedFunction:
                 args = mapped.mx_in()
                 self._native[block] = NativeFunction(
                     ca.Function(f"{self.name}_b{block}", args, [ca.densify(o) for o in mapped.call(args)]),
-                    optimisation=self.optimisation,
+                    optimisation=self.optimisation, flags=self.flags,
                 )
             return self._native[block]
 

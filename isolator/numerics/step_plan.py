@@ -57,6 +57,14 @@ class StepPlan:
         """When the last step ends [s]."""
         return float(self.start[self.steps - 1] + self.length[self.steps - 1]) if self.steps else 0.0
 
+    def probes_only(self) -> StepPlan:
+        """The same steps reading the probes alone (no output samples): for runs whose metrics come from
+        the probes and the dense output only (a batch's), the loop then evaluates the signals at
+        ``probes`` slots per step instead of ``per_step``."""
+        width = max(self.probes, 1)
+        return StepPlan(self.start, self.length, self.first, np.ascontiguousarray(self.fraction[:, :width]),
+                        np.zeros(0, dtype=int), self.steps, self.probes)
+
     def probe_times(self) -> np.ndarray:
         """The probes' times [s], (steps, probes)."""
         j = np.arange(1, self.probes + 1) / max(self.probes, 1)

@@ -21,20 +21,16 @@ import weakref
 from collections.abc import Callable, Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from typing import Literal, Protocol
+from typing import Literal
 
 import numpy as np
 
-from isolator.errors import ParameterError, ScenarioError, SimulationError, UnstableTableError
-from isolator.model.equilibrium import Equilibrium
-from isolator.model.parameters import ParameterLayout
-from isolator.model.variants import Model
+from isolator.errors import ParameterError, ScenarioError, SimulationError
 from isolator.numerics.dop853 import DenseStepper
 from isolator.scenario.arguments import check_public
-from isolator.scenario.definitions import Scenario
+from isolator.simulation.batch_setup import BatchSimulator, check_memory_of, solve_rests
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
-from isolator.simulation.resources import check_memory
-from isolator.simulation.response import Response
+from isolator.simulation.free_tail import FreeTail
 from isolator.simulation.settling import Band, judged_times, signal_bands, still_signals
 from isolator.simulation.stepping import (
     MAX_TURN,
@@ -43,10 +39,11 @@ from isolator.simulation.stepping import (
     dense_stepper,
     hold_time,
     rk4_stepper,
+    signal_width,
     staged_parameters,
 )
-from isolator.simulation.tail_check import run_tails
-from isolator.simulation.time_grid import TimeGrid, inputs_at
+from isolator.simulation.tail_check import RunTails
+from isolator.simulation.time_grid import inputs_at
 
 __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_batch", "scale_label"]
 
@@ -109,29 +106,6 @@ class BatchResult:
     def reason(self, i: int) -> str:
         """Why run ``i`` has no metrics, or no settling time ('' for a run that settled)."""
         return self.failures.get(i, self.unsettled.get(i, ""))
-
-
-class BatchSimulator(Protocol):
-    """What a batch needs of its simulator (:class:`isolator.simulation.simulator.Simulator`)."""
-
-    scenario: Scenario
-    layout: ParameterLayout
-    model: Model
-    grid: TimeGrid
-    stop_time: float
-
-    def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]: ...
-
-    def method_for(self, omega_max: float) -> Method: ...
-
-    def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray: ...
-
-    def grid_inputs(self, substeps: int) -> np.ndarray: ...
-
-    def signals(self, states: np.ndarray, start: Equilibrium | np.ndarray) -> np.ndarray: ...
-
-    def run_method(self, p: np.ndarray, start: Equilibrium, end: Equilibrium | None, method: Method, *,
-                   band: Band | None = None) -> Response: ...
 
 
 def run_batch(
@@ -203,7 +177,7 @@ def run_batch(
 
     if n == 0:
         return BatchResult(settling, np.zeros(0), peak, {}, rule, np.zeros((0, 6)), status)
-    starts, ends = _equilibria(sim, params, lambda i, exc: failed(i, exc, "tipped"))
+    starts, ends = solve_rests(sim, params, lambda i, exc: failed(i, exc, "tipped"))
     good = [i for i in range(n) if starts[i] is not None]
     methods: dict[int, Method] = {}
     for i in good:
@@ -215,7 +189,7 @@ def run_batch(
             failed(i, exc, "refused")
     for method in {m.plan_key: m for m in methods.values()}.values():  # compiled before the threads start
         try:
-            _check_memory(sim, method)
+            check_memory_of(sim, method, LANES, MEMORY_SHARE)
         except ParameterError as exc:
             for i in [i for i, m in methods.items() if m.plan_key == method.plan_key]:
                 failed(i, exc, "refused")
@@ -225,6 +199,7 @@ def run_batch(
             sim.grid_inputs(method.substeps)
             rk4_stepper(sim.model, method.substeps)
     stepper = dense_stepper(sim.model, LANES)
+    width = signal_width(sim.model)
     uses = staged_parameters(sim.model)
     if len({params[i, uses].tobytes() for i in methods}) > 1:  # packs of differing time-only parts: compiled now
         dense_stepper(sim.model, LANES, staged=False)
@@ -245,12 +220,13 @@ def run_batch(
     lock = threading.Lock()
     done = [0]
 
-    def pack(runs: list[int]) -> None:
+    def pack(runs: list[int]) -> list[tuple[int, np.ndarray]]:
         """Step ``runs`` (one plan, at most LANES) side by side; their metrics. Runs with one time-only part
         share its staged inputs; others step the whole right-hand side on the inputs every run shares."""
         method = methods[runs[0]]
-        plan = method.plan
-        assert plan is not None
+        full = method.plan
+        assert full is not None
+        plan = full.probes_only() if full.probes else full  # no output samples: not needed
         if len({params[i, uses].tobytes() for i in runs}) == 1:
             with _STAGING:
                 inputs, steps = sim.plan_inputs(method, params[runs[0]]), stepper
@@ -267,21 +243,31 @@ def run_batch(
         slots, step_peaks, deviations, polys = steps.run_slots(
             x0, plan, inputs, params[lanes], x0, with_states=True, final=finals[lanes]
         )
+
+        def samples(lane: int) -> np.ndarray:
+            """The run's signals at the output samples after the first (steps again: only for a message)."""
+            every = steps.run_slots(x0, full, inputs, params[lanes], x0, final=finals[lanes])[0]
+            return every[full.sample_slots, :, lane]
         assert polys is not None
-        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals)
-        ends_at = np.array([plan.end])
-        last = np.array([DenseStepper.states_at(plan, polys[..., lane], ends_at)[0] for lane in range(len(runs))])
-        tails = run_tails(sim.scenario, sim.model, params[runs], [starts[i] for i in runs],  # type: ignore[misc]
-                          [ends[i] for i in runs], last, plan.end)
-        tails += tails[-1:] * (LANES - len(runs))
-        waits = np.array([0.0 if tail else holds[i] for (tail, _), i in zip(tails, lanes, strict=True)])
+        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width)
+        shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)
+        last = DenseStepper.states_at(plan, polys.reshape(*shape[:2], -1), np.array([plan.end]))[0]
+        last = np.ascontiguousarray(last.reshape(shape[2:]).T[: len(runs)])
+        tails = None  # pneumatic tables: their valves need each run's tail now; else judged per task
+        if sim.scenario.is_pneumatic:
+            tails = RunTails.of(sim.scenario, sim.model, params[runs], [starts[i] for i in runs],  # type: ignore[misc]
+                                [ends[i] for i in runs], last, plan.end)
+        has = tails.has if tails is not None else np.array(
+            [ends[i] is not None and bool(np.all(np.isfinite(x))) for i, x in zip(runs, last, strict=True)])
+        waits = np.array([0.0 if has[min(lane, len(runs) - 1)] else holds[i] for lane, i in enumerate(lanes)])
         tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time,
                                        lambda top: signal_bands(rule, top), waits)
+        pending = []
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]
             try:
                 if not np.all(np.isfinite(peak[i])):
-                    sig = slots[plan.sample_slots, :, lane]
+                    sig = samples(lane)
                     bad = np.argmax(~np.all(np.isfinite(sig), axis=1)) + 1
                     raise SimulationError(f"the run diverged: non-finite state at t = {t[bad]:.4g} s")
                 check_turn(peak[i])
@@ -289,10 +275,30 @@ def run_batch(
                 failed(i, exc, "tipped" if np.nanmax(peak[i][3:], initial=0.0) > MAX_TURN else "diverged")
                 continue
             settling[i] = np.where(still_signals(rule, peak[i]), 0.0, times[lane]) if stops else times[lane]
-            tail, note = tails[lane]
-            if tail is not None:
-                settling[i], reasons = judged_times(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
-                record(i, reasons, settling[i])
+            if tails is not None and has[lane]:
+                judge(i, *tails.get(lane))
+            elif has[lane]:
+                pending.append((i, last[lane]))
+        return pending
+
+    def judge(i: int, tail: FreeTail | None, note: str) -> None:
+        """Run ``i``'s settling times by the verdict on its free motion after the end."""
+        settling[i], reasons = judged_times(settling[i], np.zeros(6), peak[i], stops, rule, "", tail, note)
+        record(i, reasons, settling[i])
+
+    def judge_all(pending: list[tuple[int, np.ndarray]], end: float) -> None:
+        """The runs of a task's packs (``(run, state at the end)``) by their free motions, decomposed side by
+        side; a run's tail built only when the bound cannot show every signal inside (or a time is missing):
+        else the verdict keeps every time as it is."""
+        if not pending:
+            return
+        rows = [i for i, _ in pending]
+        tails = RunTails.of(sim.scenario, sim.model, params[rows], [starts[i] for i in rows],  # type: ignore[misc]
+                            [ends[i] for i in rows], np.array([x for _, x in pending]), end)
+        inside = tails.inside(np.maximum(signal_bands(rule, peak[rows]), 1e-300))
+        for k, i in enumerate(rows):
+            if not (inside[k].all() and np.all(np.isfinite(settling[i]))):
+                judge(i, *tails.get(k))
 
     def task(runs: list[int]) -> None:
         """A thread's share, runs of one method: RK4 runs one by one, DOP853 runs in packs."""
@@ -309,8 +315,8 @@ def run_batch(
                 peak[i] = [r.peak for r in metrics.values()]
                 record(i, [r.reason for r in metrics.values()], settling[i])
         else:
-            for lo in range(0, len(runs), LANES):
-                pack(runs[lo : lo + LANES])
+            pending = [item for lo in range(0, len(runs), LANES) for item in pack(runs[lo : lo + LANES])]
+            judge_all(pending, method.plan.end)
         with lock:
             done[0] += len(runs)
             if progress and n >= 10 and (done[0] * 10) // n != ((done[0] - len(runs)) * 10) // n:
@@ -342,49 +348,6 @@ def _tasks(sim: BatchSimulator, params: np.ndarray, methods: Mapping[int, Method
         order = whole + [i for members in same.values() for i in members[len(members) - len(members) % LANES :]]
         tasks += [order[lo : lo + BLOCK] for lo in range(0, len(order), BLOCK)]
     return tasks
-
-
-def _check_memory(sim: BatchSimulator, method: Method) -> None:
-    """Refuse runs of ``method`` whose arrays (RK4: the inputs at every stage of the grid, with the profiles'
-    temporaries; DOP853: a pack's dense output and slots, and the staged inputs at every step) would need more
-    than a :data:`MEMORY_SHARE` of the memory available (:class:`ParameterError`): workers run side by side."""
-    if method.plan is None:
-        intervals = sim.grid.nodes.size - 1
-        need = 4.0 * intervals * (2 * method.substeps + 1) * sim.layout.input_size * 8
-        what = f"RK4 with {method.substeps} steps per interval of the grid"
-    else:
-        plan = method.plan
-        per_step = LANES * (8 * sim.model.n_states + 6 * plan.per_step) + 16 * max(sim.layout.input_size, 48)
-        need = 8.0 * plan.steps * per_step
-        what = f"DOP853 with {plan.steps:.3g} steps"
-    check_memory(MEMORY_SHARE * need, f"{what} (the design's fastest mode), with {MEMORY_SHARE} runs side by side,",
-                 "such a design is far stiffer than a real isolator (or its run far too long)")
-
-
-def _equilibria(
-    sim: BatchSimulator, params: np.ndarray, failed: Callable[[int, Exception], None]
-) -> tuple[list[Equilibrium | None], list[Equilibrium | None]]:
-    """Start and end equilibria of every run, solved side by side; the runs without a stable rest are
-    found by halving the block that has one (None, and ``failed(i, error)`` for each)."""
-    n = params.shape[0]
-    starts: list[Equilibrium | None] = [None] * n
-    ends: list[Equilibrium | None] = [None] * n
-
-    def solve(rows: np.ndarray) -> None:
-        try:
-            first, last = sim.equilibria_of(params[rows])
-        except UnstableTableError as exc:
-            if rows.size == 1:
-                failed(int(rows[0]), UnstableTableError(str(exc)))
-                return
-            solve(rows[: rows.size // 2])
-            solve(rows[rows.size // 2 :])
-            return
-        for j, i in enumerate(rows):
-            starts[i], ends[i] = first[j], last[j]
-
-    solve(np.arange(n))
-    return starts, ends
 
 
 def scale_label(stiffness: Sequence[float] | float, damping: Sequence[float] | float) -> Callable[[int], str]:

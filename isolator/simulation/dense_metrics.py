@@ -60,6 +60,9 @@ class DenseRuns:
         The state each run's signals are measured from.
     signals : callable
         ``(states (N, n_states), references (N, n_states)) -> (6, N)``.
+    width : int
+        How many leading states ``signals`` reads (:func:`~isolator.simulation.stepping.signal_width`; 0: all):
+        :meth:`at` evaluates the dense output of those only.
     """
 
     plan: StepPlan
@@ -69,12 +72,15 @@ class DenseRuns:
     polynomials: np.ndarray
     reference: np.ndarray
     signals: Callable[[np.ndarray, np.ndarray], np.ndarray]
+    width: int = 0
 
     def at(self, t: np.ndarray, lane: np.ndarray) -> np.ndarray:
         """The six signals (6, K) of runs ``lane`` (K,) at times ``t`` (K,) [s], from the dense output."""
         step, s = self.plan.locate(t)
+        width = self.width or self.polynomials.shape[2]
         one = self.polynomials.shape[-1] == 1  # one run: a contiguous gather
-        c = self.polynomials[..., 0][step] if one else self.polynomials[step, :, :, lane]  # (K, degree + 1, states)
+        c = (self.polynomials[:, :, :width, 0][step] if one else
+             self.polynomials[step, :, :width, lane])  # (K, degree + 1, states the signals read)
         x = c[:, -1]
         for j in range(c.shape[1] - 2, -1, -1):
             x = c[:, j] + s[:, None] * x

@@ -26,14 +26,14 @@ import math
 from dataclasses import dataclass
 from functools import lru_cache
 
-import casadi as ca
 import numpy as np
 
 from isolator.model.signals import signal_jacobian
 from isolator.model.variants import Model
+from isolator.numerics.native import PLAIN_FLAGS, MappedFunction
 from isolator.scenario.definitions import SIGNALS
 
-__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeTail", "TailVerdict", "free_tail", "free_tails", "micro"]
+__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeMotions", "FreeTail", "TailVerdict", "free_tail", "free_tails", "micro"]
 
 #: points per radian of the fastest mode that matters: the deviation is read every 0.2 rad of it
 STEP_ANGLE = 0.2
@@ -45,6 +45,9 @@ MAX_POINTS = 200_000
 REFINE = 41
 #: eigenvalues below this fraction of the largest are conserved quantities (lambda = 0)
 ZERO = 1e-9
+#: margin of :meth:`FreeMotions.inside` for the rounding of its sums (their order differs from
+#: :meth:`FreeTail.judge`'s), relative to the sum of every mode's weight
+MARGIN = 1e-9
 
 
 def micro(name: str, value: float) -> str:
@@ -201,10 +204,12 @@ class FreeTail:
 
 
 @lru_cache(maxsize=16)
-def _jacobians(model: Model, count: int) -> tuple[ca.Function, ca.Function]:
-    """The model's state Jacobian and the signals' Jacobian, each mapped over ``count`` runs at once."""
+def _jacobians(model: Model) -> tuple[MappedFunction, MappedFunction]:
+    """The model's state Jacobian and the signals' Jacobian for many runs at once, compiled to compute as
+    casadi's evaluator does (:data:`~isolator.numerics.native.PLAIN_FLAGS`: the same numbers, bit for bit)."""
     signals = signal_jacobian(model.variant, model.n_states)
-    return model.state_jacobian.map(count), signals.map(count)
+    return (MappedFunction(model.state_jacobian, f"isolator_tail_a_{model.tag}", block=16, flags=PLAIN_FLAGS),
+            MappedFunction(signals, f"isolator_tail_c_{model.tag}", block=16, flags=PLAIN_FLAGS))
 
 
 def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
@@ -235,23 +240,80 @@ def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: n
 def free_tails(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
                reference: np.ndarray, last: np.ndarray, end: float) -> list[FreeTail]:
     """:func:`free_tail` of several runs at once, each argument but ``end`` stacked (runs, ...)."""
-    count, n = final_state.shape
-    state_map, signal_map = _jacobians(model, count)
-    inputs = np.array([model.layout.rest_inputs(q) for q in positions])
-    a = np.asarray(state_map(final_state.T, inputs.T, np.asarray(p, dtype=float).T), dtype=float)
-    c = np.asarray(signal_map(final_state.T, np.asarray(reference, dtype=float).T), dtype=float)
-    a, c = a.reshape(n, count, n).transpose(1, 0, 2), c.reshape(6, count, n).transpose(1, 0, 2)
-    rates, vectors = np.linalg.eig(a)
-    deviation = np.asarray(last, dtype=float) - final_state
-    out = []
-    for k in range(count):
+    motions = FreeMotions.of(model, p, final_state, positions, reference, last, end)
+    return [motions.tail(k) for k in range(motions.count)]
+
+
+@dataclass(frozen=True)
+class FreeMotions:
+    """The free motions of several runs after their end, decomposed side by side (one mapped Jacobian call,
+    one stacked eigen-decomposition), each run's :class:`FreeTail` built only when asked for: a batch asks for
+    those of runs whose signals :meth:`inside` cannot keep in their bands.
+
+    Attributes
+    ----------
+    end : float
+        The runs' end [s].
+    rates, vectors : ndarray (runs, n_states) and (runs, n_states, n_states) complex
+        Eigenvalues [1/s] and eigenvectors of the state Jacobians at the final rests.
+    signals : ndarray (runs, 6, n_states)
+        The signals' Jacobians there.
+    deviation : ndarray (runs, n_states)
+        The runs' end states from their final rests.
+    final_state : ndarray (runs, n_states)
+        The final rests ``x*``.
+    """
+
+    end: float
+    rates: np.ndarray
+    vectors: np.ndarray
+    signals: np.ndarray
+    deviation: np.ndarray
+    final_state: np.ndarray
+
+    @classmethod
+    def of(cls, model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray, reference: np.ndarray,
+           last: np.ndarray, end: float) -> FreeMotions:
+        """The decompositions (arguments as :func:`free_tails` takes them)."""
+        state_jacobian, signal_jacobian = _jacobians(model)
+        inputs = np.array([model.layout.rest_inputs(q) for q in positions])
+        a = state_jacobian(final_state, inputs, np.asarray(p, dtype=float))[0]
+        c = signal_jacobian(final_state, np.asarray(reference, dtype=float))[0]
+        rates, vectors = np.linalg.eig(a)
+        return cls(float(end), rates, vectors, c, np.asarray(last, dtype=float) - final_state, final_state)
+
+    @property
+    def count(self) -> int:
+        """Runs."""
+        return int(self.rates.shape[0])
+
+    def tail(self, k: int) -> FreeTail:
+        """Run ``k``'s free motion."""
+        vectors, deviation, rates = self.vectors[k], self.deviation[k], self.rates[k]
         try:
-            amplitude = np.linalg.solve(vectors[k], deviation[k])
+            amplitude = np.linalg.solve(vectors, deviation)
         except np.linalg.LinAlgError:
-            amplitude = np.linalg.lstsq(vectors[k], deviation[k], rcond=None)[0]
-        zero = np.abs(rates[k]) <= ZERO * max(float(np.max(np.abs(rates[k]), initial=0.0)), 1.0)
-        modes = vectors[k] * amplitude[None, :]
-        weights, shift = c[k] @ modes, modes[:, zero].sum(axis=1).real
-        out.append(FreeTail(float(end), rates[k][~zero], weights[:, ~zero], weights[:, zero].sum(axis=1).real,
-                            final_state[k] + shift, modes[:, ~zero], shift))
-    return out
+            amplitude = np.linalg.lstsq(vectors, deviation, rcond=None)[0]
+        zero = np.abs(rates) <= ZERO * max(float(np.max(np.abs(rates), initial=0.0)), 1.0)
+        modes = vectors * amplitude[None, :]
+        weights, shift = self.signals[k] @ modes, modes[:, zero].sum(axis=1).real
+        return FreeTail(self.end, rates[~zero], weights[:, ~zero], weights[:, zero].sum(axis=1).real,
+                        self.final_state[k] + shift, modes[:, ~zero], shift)
+
+    def inside(self, band: np.ndarray) -> np.ndarray:
+        """Which signals (runs, 6) provably stay inside their bands ``band`` (runs, 6) [m or rad] after the
+        end: where ``|o_i| + sum_k |w_ik|`` (:meth:`FreeTail.judge`'s first test) is inside with a margin
+        of :data:`MARGIN` for rounding (the runs' :meth:`tail` then need not be built: they would be judged
+        inside; the margin is relative to every mode's weight, so a conserved part that cancels is covered).
+        False where that is not shown, or a run's eigenvectors are singular."""
+        try:
+            amplitude = np.linalg.solve(self.vectors, self.deviation[..., None].astype(complex))[..., 0]
+        except np.linalg.LinAlgError:
+            return np.zeros((self.count, 6), dtype=bool)
+        scale = np.max(np.abs(self.rates), axis=1, initial=0.0)
+        zero = np.abs(self.rates) <= ZERO * np.maximum(scale, 1.0)[:, None]  # (runs, modes)
+        weights = self.signals @ (self.vectors * amplitude[:, None, :])  # (runs, 6, modes)
+        offset = np.abs(np.sum(np.where(zero[:, None, :], weights, 0.0), axis=2).real)
+        size = np.abs(weights)
+        bound = offset + np.sum(np.where(zero[:, None, :], 0.0, size), axis=2)
+        return bound + MARGIN * np.sum(size, axis=2) <= np.asarray(band, dtype=float)

@@ -73,6 +73,8 @@ class PointSet:
     def of(cls, scenario: Scenario, kind: str, start: np.ndarray, end: np.ndarray | None) -> PointSet:
         """The scenario's points for a run of model ``kind`` from the state ``start`` (final rest ``end``)."""
         arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
+        if not arms.size:  # no [[points]]: nothing to place (a run's hot path)
+            return cls((), arms, kind, np.zeros((0, 3)), None if end is None else np.zeros((0, 3)))
         first = point_positions(start, arms, kind)[:, :, 0]
         settled = None if end is None else point_positions(end, arms, kind)[:, :, 0] - first
         return cls(tuple(pt.name for pt in scenario.points), arms, kind, first, settled)

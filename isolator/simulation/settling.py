@@ -54,6 +54,10 @@ class SettlingResult:
     reason: str = ""
 
 
+#: the dataclass's own ``__init__``, before ``check_public`` wraps it with the public arguments' checks
+_RESULT_INIT = SettlingResult.__init__
+
+
 def settling_time(
     t: np.ndarray,
     s: np.ndarray,
@@ -346,8 +350,15 @@ def settling_results(
     """
     bands = signal_bands(settling, peaks)
     kept, reasons = judged_times(times, short, peaks, stops, settling, why, tail, rest_note)
-    return {name: SettlingResult(None if math.isnan(kept[i]) else float(kept[i]), float(peaks[i]), float(bands[i]),
-                                 reasons[i]) for i, name in enumerate(SIGNALS)}
+    return {name: _result(None if math.isnan(kept[i]) else float(kept[i]), float(peaks[i]), float(bands[i]), reasons[i])
+            for i, name in enumerate(SIGNALS)}
+
+
+def _result(time: float | None, peak: float, band: float, reason: str) -> SettlingResult:
+    """A :class:`SettlingResult` of numbers this module made (its arguments' checks, six per run, skipped)."""
+    result = SettlingResult.__new__(SettlingResult)
+    _RESULT_INIT(result, time, peak, band, reason)
+    return result
 
 
 def judged_times(

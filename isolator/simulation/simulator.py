@@ -26,6 +26,7 @@ from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
 from isolator.simulation.actuation import ForceHistory, with_forces
 from isolator.simulation.batch import BatchResult, run_batch, scale_label
+from isolator.simulation.batch_setup import both_rests
 from isolator.simulation.closed_loop import FeedbackLaw, LoopGrids, closed_loop_run
 from isolator.simulation.dense_metrics import DenseRuns, run_metrics
 from isolator.simulation.discrete_controller import DiscreteController
@@ -46,6 +47,7 @@ from isolator.simulation.stepping import (
     hold_time,
     plan_stage_inputs,
     rk4_stepper,
+    signal_width,
     with_start,
 )
 from isolator.simulation.tail_check import run_tail
@@ -130,6 +132,9 @@ class Simulator:
 
     def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
         first, last = self._positions
+        both = None if last is None or self.layout.pneumatic else both_rests(self.model, params, first, last)
+        if both is not None:  # both rests in one solve
+            return both
         start = static_equilibria(self.model, params, first, "with the carriages at their start")
         if last is None:
             return start, [None] * len(start)
@@ -270,7 +275,7 @@ class Simulator:
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
         if forces is None and feedback is None and controller is None and method.plan is not None:
-            plan = method.plan
+            plan, width = method.plan, signal_width(self.model)
             raw, step_peaks, deviations, polynomials = dense_stepper(self.model).run_slots(
                 start.state, plan, self.plan_inputs(method, p), p, start.state, with_states=True, final=final
             )
@@ -280,7 +285,7 @@ class Simulator:
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
             signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
-                              polynomials[..., None], start.state[None, :], self.model.variant.signals)
+                              polynomials[..., None], start.state[None, :], self.model.variant.signals, width)
             x0, dense = start.state, polynomials
             free = run_tail(self.scenario, self.model, p, start, end,
                             DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)

@@ -16,6 +16,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.model.signals import signal_function
 from isolator.model.variants import Model
 from isolator.numerics.dop853 import DenseStepper, StepPlan
+from isolator.numerics.dop853_driver import signal_rows
 from isolator.numerics.native import MappedFunction
 from isolator.numerics.rk4 import Stepper
 from isolator.numerics.systems import Unstaged
@@ -39,6 +40,7 @@ __all__ = [
     "hold_time",
     "plan_stage_inputs",
     "rk4_stepper",
+    "signal_width",
     "staged_map",
     "staged_parameters",
     "with_start",
@@ -83,6 +85,12 @@ def dense_stepper(model: Model, lanes: int = 1, staged: bool = True) -> DenseSte
         system = model if staged or model.staged_rhs is None else Unstaged.of(model)
         _DENSE[key] = DenseStepper(system, signal_function(model.variant, model.n_states), lanes)
     return _DENSE[key]
+
+
+@lru_cache(maxsize=16)
+def signal_width(model: Model) -> int:
+    """How many leading states the table signals read (their dense output is all the metrics need)."""
+    return max(signal_rows(signal_function(model.variant, model.n_states), model.n_states)) + 1
 
 
 @lru_cache(maxsize=16)

@@ -1,0 +1,1 @@
+"""The airspeed velocity suite (``asv.conf.json``): what ``asv continuous BASE HEAD`` compares."""
