@@ -73,3 +73,31 @@ def test_the_command_refuses_a_filled_window_in_one_line(tmp_path):
     run = subprocess.run([sys.executable, "-m", "isolator.cli", "budget", str(path), "--json"],
                          capture_output=True, text=True, check=True)
     assert json.loads(run.stdout)["points"]["probe"]["z"]["rms"] > 0
+
+
+def test_a_sequence_waits_for_the_narrowed_window():
+    """``run_sequence`` (and so sweeps and sequence design) settles each step into the window less K sigma: the
+    same steps as a sequence whose window is that much narrower, and ``window_random`` in its JSON."""
+    from isolator import run_sequence
+
+    data = base_dict(points=[{"name": "probe", "position": [0.3, 0.0, 0.45]}])
+    carriage = data["carriages"][0]
+    del carriage["profile"]
+    carriage["limits"] = {"velocity": 0.2, "acceleration": 0.5, "jerk": 5.0}
+    data["sequence"] = {"measure": 0.2, "start": 0.3, "initial": {"x-stage": -0.2},
+                        "steps": [{"x-stage": 0.1}, {"x-stage": 0.0}]}
+    data["simulation"] = {"duration": 30.0, "sample_rate": 1000.0}
+    data["disturbances"] = [{"name": "air", "position": [0.0, 0.0, 0.15], "direction": [0.0, 0.0, 1.0],
+                             "psd": 1e-4}]  # sigma ~ 22 nm at the probe
+    data["windows"] = [{"point": "probe", "translation": 2e-7, "axes": ["z"], "random": 3.0}]
+    scenario = make(copy.deepcopy(data))
+    sigma = error_budget(scenario, points=["probe"]).value("probe", "z")
+    assert 0.05 < 3 * sigma / 2e-7 < 0.8  # a margin that matters, not one that fills the window
+    result = run_sequence(scenario)
+    assert result.to_dict()["window_random"] == [{"z": pytest.approx(3 * sigma, rel=1e-12)}]
+    data["windows"] = [{"point": "probe", "translation": 2e-7 - 3 * sigma, "axes": ["z"]}]
+    narrowed = run_sequence(make(data))
+    assert [s.settled for s in result.steps] == [s.settled for s in narrowed.steps]
+    data["windows"][0]["translation"] = 2e-7
+    wide = run_sequence(make(data))
+    assert result.steps[0].settled > wide.steps[0].settled
