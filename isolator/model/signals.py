@@ -80,8 +80,9 @@ def table_signals(states: np.ndarray, reference: np.ndarray) -> np.ndarray:
     if states.ndim != 2 or states.shape[1] < 7:
         raise ParameterError(f"states: must be (N, >= 7) (position, then the quaternion w, x, y, z), got shape "
                              f"{states.shape}")
-    if reference.shape not in ((states.shape[1],), states.shape):
-        raise ParameterError(f"reference: must be one state ({states.shape[1]},) or one per row {states.shape}, got "
+    rows_ok = reference.ndim == 1 or (reference.ndim == 2 and reference.shape[0] == states.shape[0])
+    if not rows_ok or reference.shape[-1] < 7:
+        raise ParameterError(f"reference: must be one state (>= 7,) or one per row ({states.shape[0]}, >= 7), got "
                              f"shape {reference.shape}")
     angles = relative_rotation_vector(states[:, 3:7], reference[..., 3:7])
     return np.ascontiguousarray(np.vstack([(states[:, 0:3] - reference[..., 0:3]).T, angles.T]))
