@@ -56,7 +56,8 @@ def plot_budget(study: TradeoffStudy) -> None:
               (axes[1], study.peak, study.peak_pareto(), "resonance peak of the transmissibility, worst of x, y, "
                "z [m/m]"))
     for ax, values, front, label in panels:
-        scatter_designs(study, ax, study.settling_time, front, values, label)
+        # the size scale lower right: the front and the best designs are lower left
+        scatter_designs(study, ax, study.settling_time, front, values, label, scale_at="lower right")
         ax.set_xlabel(time)
         ax.legend(loc="best", fontsize=8)
     low, high = DEFAULT_BAND

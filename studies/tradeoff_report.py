@@ -20,7 +20,7 @@ from .tradeoff_pneumatic import pneumatic_note
 from .tradeoff_results import TradeoffStudy
 
 #: where a legend goes in an axes
-Corner = Literal["lower left", "upper left"]
+Corner = Literal["lower left", "upper left", "lower right"]
 
 __all__ = ["plot_maps", "plot_throughput", "plot_tradeoff", "scatter_designs", "write_tradeoff_report"]
 
