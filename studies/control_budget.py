@@ -171,7 +171,8 @@ def budget_figure(budgets: dict[str, DesignBudget], path: Path) -> None:
     bars.set_yscale("log")  # the sensors' noise is often orders of magnitude below the total
     bars.set_ylabel("displacement RMS [nm]")
     bars.set_title(f"random motion at {point}, total per axis")
-    bars.legend(fontsize=7)
+    bars.set_ylim(top=float(max(np.max(p.rms) for _, _, p, _ in shown)) * NM * 30)  # room for the legend above
+    bars.legend(fontsize=7, ncol=2, loc="upper center")
     bars.grid(True, axis="y", alpha=0.3)
     for j, ax in enumerate((axes[0, 1], axes[1, 0], axes[1, 1])):
         ax.loglog(passive.frequency, np.sqrt(passive.total_psd[0, j]) * NM, color="0.2", lw=1.8, label="passive")
