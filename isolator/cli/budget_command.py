@@ -92,7 +92,7 @@ def _budget(args: argparse.Namespace) -> int:
             for w in scenario.windows:
                 for axis in w.axes:
                     if w.point in budget.points:
-                        spec[(w.point, axis)] = w.translation / (getattr(w, "random", None) or 1.0)
+                        spec[(w.point, axis)] = w.translation / (w.random or 1.0)
         save_figure(budget.plot(spec, title=f"Error budget of {scenario.name}"), plot)
     text = "\n".join(budget.summary_lines())
     return report(args.json, budget.to_dict(), text, [("budget table", out), ("figure", plot)])

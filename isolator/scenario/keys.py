@@ -18,7 +18,7 @@ from isolator.errors import ScenarioError
 from isolator.scenario.files import read_input
 from isolator.scenario.names import escaped
 
-__all__ = ["TOP_LEVEL_KEYS", "KeyReader", "load_toml", "number", "number_list", "table_of_tables"]
+__all__ = ["TOP_LEVEL_KEYS", "KeyReader", "check_placement", "load_toml", "number", "number_list", "table_of_tables"]
 
 
 _UNIT_TOL = 1e-6
@@ -198,3 +198,16 @@ def number_list(r: KeyReader, name: str) -> list[float]:
     if not isinstance(value, list) or not value:
         raise ScenarioError(f"{r.key(name)}: must be a non-empty list of numbers")
     return [number(v, f"{r.key(name)}[{i}]") for i, v in enumerate(value)]
+
+
+def check_placement(position: Any, direction: Any, key: str) -> None:
+    """A built object's ``position`` and ``direction``: three finite numbers each, the direction a unit vector
+    (to 1e-6); else one :class:`ScenarioError` naming ``key.position`` or ``key.direction``."""
+    for field, vec in (("position", position), ("direction", direction)):
+        if not isinstance(vec, tuple) or len(vec) != 3:
+            raise ScenarioError(f"{key}.{field}: must be three numbers")
+        for i, v in enumerate(vec):
+            number(v, f"{key}.{field}[{i}]")
+    norm = sum(v * v for v in direction) ** 0.5
+    if abs(norm - 1.0) > _UNIT_TOL:
+        raise ScenarioError(f"{key}.direction: must be a unit vector, got length {norm:.6g}")

@@ -14,7 +14,7 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.ground import FloorSpectrum
-from isolator.scenario.keys import KeyReader, number, table_of_tables
+from isolator.scenario.keys import KeyReader, check_placement, number, table_of_tables
 from isolator.scenario.names import check_name
 
 __all__ = ["VC_CLASSES", "Disturbance", "SpectralDensity", "read_density", "read_disturbances", "vc_spectrum"]
@@ -173,20 +173,14 @@ class Disturbance:
 def check_disturbance(disturbance: Disturbance, key: str) -> None:
     """Refuse a disturbance built with wrong values (one :class:`ScenarioError` naming ``key`` and the field)."""
     check_name(disturbance.name, f"{key}.name")
-    for field, vec in (("position", disturbance.position), ("direction", disturbance.direction)):
-        if not isinstance(vec, tuple) or len(vec) != 3:
-            raise ScenarioError(f"{key}.{field}: must be three numbers")
-        for i, v in enumerate(vec):
-            number(v, f"{key}.{field}[{i}]")
-    norm = math.sqrt(sum(v * v for v in disturbance.direction))
-    if abs(norm - 1.0) > 1e-6:
-        raise ScenarioError(f"{key}.direction: must be a unit vector (world frame), got length {norm:.6g}")
+    check_placement(disturbance.position, disturbance.direction, key)
     if not isinstance(disturbance.psd, SpectralDensity):
         raise ScenarioError(f"{key}.psd: must be a SpectralDensity [N^2/Hz], got {type(disturbance.psd).__name__}")
 
 
 def read_disturbances(top: KeyReader, data: Mapping[str, Any]) -> tuple[Disturbance, ...]:
-    """The ``[[disturbances]]`` blocks, their names unique."""
+    """The ``[[disturbances]]`` blocks (their names checked unique with every section's, by
+    :func:`isolator.scenario.names.check_scenario_names`)."""
     top.used.add("disturbances")
     out: list[Disturbance] = []
     for i, item in enumerate(table_of_tables(data, "disturbances")):
@@ -194,25 +188,14 @@ def read_disturbances(top: KeyReader, data: Mapping[str, Any]) -> tuple[Disturba
         r = KeyReader(item, key)
         name = r.string("name")
         position = r.vector("position")
-        direction = _unit(r, "direction")
+        direction = r.unit_vector("direction")
         psd = read_density(r.raw("psd"), r.key("psd"))
         r.finish()
         try:
             out.append(Disturbance(name, position, direction, psd))
         except ScenarioError as exc:
             raise ScenarioError(str(exc).replace("disturbance.", f"{key}.", 1)) from None
-        if name in {d.name for d in out[:-1]}:
-            raise ScenarioError(f"{key}.name: '{name}' is used twice")
     return tuple(out)
-
-
-def _unit(r: KeyReader, name: str) -> tuple[float, float, float]:
-    """A direction that must already be a unit vector (not normalised: a typo in it should show)."""
-    vec = r.vector(name)
-    norm = math.sqrt(sum(v * v for v in vec))
-    if abs(norm - 1.0) > 1e-6:
-        raise ScenarioError(f"{r.key(name)}: must be a unit vector (world frame), got length {norm:.6g}")
-    return vec
 
 
 def vc_spectrum(name: Any, key: str) -> FloorSpectrum:

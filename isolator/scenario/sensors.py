@@ -15,7 +15,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from isolator.errors import ScenarioError
-from isolator.scenario.keys import KeyReader, number, table_of_tables
+from isolator.scenario.keys import KeyReader, check_placement, number, table_of_tables
 from isolator.scenario.names import check_name
 from isolator.scenario.random_sources import SpectralDensity, read_density
 
@@ -102,14 +102,7 @@ def check_sensor(sensor: Sensor, key: str) -> None:
         raise ScenarioError(f"{key}.on: must be \"table\" or \"floor\", got {sensor.on!r}")
     if sensor.quantity not in QUANTITIES:
         raise ScenarioError(f"{key}.quantity: must be one of {', '.join(QUANTITIES)}, got {sensor.quantity!r}")
-    for field, vec in (("position", sensor.position), ("direction", sensor.direction)):
-        if not isinstance(vec, tuple) or len(vec) != 3:
-            raise ScenarioError(f"{key}.{field}: must be three numbers")
-        for i, v in enumerate(vec):
-            number(v, f"{key}.{field}[{i}]")
-    norm = sum(v * v for v in sensor.direction) ** 0.5
-    if abs(norm - 1.0) > 1e-6:
-        raise ScenarioError(f"{key}.direction: must be a unit vector, got length {norm:.6g}")
+    check_placement(sensor.position, sensor.direction, key)
     number(sensor.noise, f"{key}.noise", nonnegative=True)
     if sensor.noise_psd is not None:
         if not isinstance(sensor.noise_psd, SpectralDensity):
