@@ -12,6 +12,7 @@ same numbers).
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import hashlib
 import os
@@ -21,11 +22,16 @@ import sys
 import tempfile
 import threading
 import warnings
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
+
+try:  # POSIX: builds of one library by several processes wait for each other
+    import fcntl
+except ImportError:  # pragma: no cover - Windows: each process builds in its own folder
+    fcntl = None  # type: ignore[assignment]
 
 from isolator.numerics.native_cache import cache_dir, private_cache, record_hash, verified
 
@@ -106,34 +112,46 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     ).hexdigest()[:20]
     folder = private_cache()
     target = folder / f"{name}-{digest}.so"
-    with _LOCK:
+    with _LOCK, _build_lock(folder / f"{name}-{digest}.lock"):
         if not verified(target):  # missing, or not the library built here (planted, damaged): built again
             _announce(language)
-            suffix = ".c" if language == "c" else ".cpp"
-            src = folder / f"{name}-{digest}{suffix}"
-            src.write_text(source)
-            fd, tmp_so = tempfile.mkstemp(suffix=".so", dir=folder)
-            os.close(fd)
-            obj = folder / f"{name}-{digest}.o"
-            try:
-                # compile with the flags, link without them: -ffast-math at link time would add the start-up
-                # code that switches the whole process to flushing subnormal numbers to zero
-                compile_flags = [f for f in flags if f != "-shared"]
-                for step in ([compiler, *compile_flags, "-c", "-o", str(obj), str(src)],
-                             [compiler, "-shared", "-fPIC", "-o", tmp_so, str(obj), "-lm"]):
-                    done = subprocess.run(step, capture_output=True, text=True)
-                    if done.returncode != 0:
-                        lines = done.stderr.splitlines()
-                        errors = [ln for ln in lines if "error" in ln] or lines or [""]
-                        raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
-                record_hash(target, Path(tmp_so))
-                os.replace(tmp_so, target)
-            finally:
-                if os.path.exists(tmp_so):
-                    os.unlink(tmp_so)
-                src.unlink(missing_ok=True)
-                obj.unlink(missing_ok=True)
+            _build(compiler, name, source, flags, language, target)
     return target
+
+
+@contextlib.contextmanager
+def _build_lock(path: Path) -> Iterator[None]:
+    """Hold an exclusive lock on ``path`` (made if missing) across processes: two processes that need the same
+    library (a sweep's workers, on a fresh cache) build it one after the other, the second finding it built."""
+    with open(path, "a") as handle:
+        if fcntl is not None:
+            fcntl.flock(handle, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            if fcntl is not None:
+                fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+def _build(compiler: str, name: str, source: str, flags: Sequence[str], language: str, target: Path) -> None:
+    """Compile ``source`` into ``target`` in a folder of this build's own (no other build shares its source or
+    object file), its hash recorded, then moved into place at once."""
+    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
+        src = Path(tmp, name + (".c" if language == "c" else ".cpp"))
+        src.write_text(source)
+        obj, built = Path(tmp, name + ".o"), Path(tmp, name + ".so")
+        # compile with the flags, link without them: -ffast-math at link time would add the start-up
+        # code that switches the whole process to flushing subnormal numbers to zero
+        compile_flags = [f for f in flags if f != "-shared"]
+        for step in ([compiler, *compile_flags, "-c", "-o", str(obj), str(src)],
+                     [compiler, "-shared", "-fPIC", "-o", str(built), str(obj), "-lm"]):
+            done = subprocess.run(step, capture_output=True, text=True)
+            if done.returncode != 0:
+                lines = done.stderr.splitlines()
+                errors = [ln for ln in lines if "error" in ln] or lines or [""]
+                raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
+        record_hash(target, built)
+        os.replace(built, target)
 
 
 _ANNOUNCED: set[str] = set()
