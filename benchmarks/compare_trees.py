@@ -62,12 +62,12 @@ def _env(tree: Path, cache: Path) -> dict[str, str]:
     return dict(os.environ, PYTHONPATH=str(tree), ISOLATOR_CACHE=str(cache), MPLBACKEND="Agg")
 
 
-def _sweep(tree: Path, cache: Path, designs: int, out: Path) -> tuple[float, float]:
+def _sweep(tree: Path, cache: Path, designs: int, out: Path, workers: tuple[str, ...] = ()) -> tuple[float, float]:
     """Wall and CPU time [s] (this process's children: the command and its workers) of the sweep command."""
     before = resource.getrusage(resource.RUSAGE_CHILDREN)
     t0 = time.perf_counter()
     subprocess.run([sys.executable, "-m", "isolator.cli", "sweep", "paper-table-3-2", *SCALES, "--samples",
-                    str(designs), "--out", str(out), "--force"], env=_env(tree, cache), check=True,
+                    str(designs), "--out", str(out), "--force", *workers], env=_env(tree, cache), check=True,
                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, cwd=tree)  # -m puts the folder first
     wall = time.perf_counter() - t0
     after = resource.getrusage(resource.RUSAGE_CHILDREN)
@@ -94,8 +94,9 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
         caches = {tag: Path(os.environ.get(f"CACHE_{tag.upper()}", work / f"cache-{tag}")) for tag in trees}
-        for tag, tree in trees.items():  # warm the compiled-model caches (not timed)
-            _sweep(tree, caches[tag], 200, work / f"warm-{tag}.csv")
+        for tag, tree in trees.items():  # warm the compiled-model caches (not timed), in one process: before
+            # 3bc8a92, two processes building one library could leave it without its symbol
+            _sweep(tree, caches[tag], 200, work / f"warm-{tag}.csv", ("--workers", "1"))
         for r in range(args.rounds):
             for tag in (("old", "new") if r % 2 == 0 else ("new", "old")):
                 tree = trees[tag]

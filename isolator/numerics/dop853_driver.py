@@ -85,6 +85,7 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
     defines |= {f"RHS_{k}": v for k, v in _sized(functions[0]).items()}
     defines |= {f"SIG_{k}": v for k, v in _sized(functions[1]).items()}
     defines |= {"DOP853_NAME": name, "DOP853_RHS": f"{name}_rhs", "DOP853_SIGNALS": f"{name}_signals",
+                "DOP853_METRICS": f"{name}_metrics",
                 "DOP853_ROWS": ", ".join(map(str, rows)), "DOP853_OTHERS": ", ".join(map(str, others or [0]))}
     return render("isolator.numerics", "cpp/dop853_driver.cpp.j2", lanes=lanes, casadi=generator.dump(),
                   defines=defines, stages=[_nonzero(tab.a[i, :i]) for i in range(1, STAGES)], end=tab.end,
@@ -118,10 +119,16 @@ class Dop853Driver:
         self.n_parameters = rhs.size1_in(2)
         self.name = f"isolator_dop853_{model.tag}_l{lanes}"
         self.library = compiled_library(self.name, driver_source(self.name, model, signals, lanes), FLAGS, "c++")
-        fn = getattr(ctypes.CDLL(str(self.library)), self.name)
+        library = ctypes.CDLL(str(self.library))
+        fn = getattr(library, self.name)
         fn.restype = ctypes.c_int
         fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int] + [ctypes.c_void_p] * 12
         self._fn = fn
+        metrics = getattr(library, f"{self.name}_metrics")
+        metrics.restype = ctypes.c_int
+        metrics.argtypes = ([ctypes.c_int] * 3 + [ctypes.c_void_p] * 2 + [ctypes.c_double] + [ctypes.c_void_p] * 6
+                            + [ctypes.c_double] * 2 + [ctypes.c_void_p] * 5)
+        self._metrics = metrics
 
     def run(
         self,
@@ -185,3 +192,69 @@ class Dop853Driver:
             peaks.ctypes.data, deviations.ctypes.data, None if polys is None else polys.ctypes.data,
         )
         return signals, peaks, deviations, polys
+
+    def metrics(
+        self,
+        plan: StepPlan,
+        slots: np.ndarray,
+        peaks: np.ndarray,
+        deviations: np.ndarray,
+        polynomials: np.ndarray,
+        reference: np.ndarray,
+        target: np.ndarray,
+        stop_time: float,
+        band: tuple[float, np.ndarray],
+        hold: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Peaks and settling of the ``lanes`` runs :meth:`run` stepped, from their dense output
+        (``cpp/dense_metrics.cpp``, the rules of :func:`isolator.simulation.dense_metrics.dense_metrics`).
+
+        Parameters
+        ----------
+        plan : StepPlan
+            The plan the runs were stepped through (with probes).
+        slots, peaks, deviations, polynomials : ndarray
+            What :meth:`run` returned for them (``with_states``).
+        reference : ndarray (lanes, n_states)
+            The states the signals are measured from.
+        target : ndarray (lanes, 6)
+            What the deviations were measured from [m or rad].
+        stop_time : float
+            [s]; inf when a carriage never stops (no settling).
+        band : (float, ndarray (6,))
+            The band's fraction of each refined peak, or -1 and the fixed half-widths [m or rad].
+        hold : ndarray (lanes,)
+            [s], as in :func:`isolator.simulation.settling.settling_time`.
+
+        Returns
+        -------
+        peaks : ndarray (lanes, 6)
+            [m or rad].
+        time : ndarray (lanes, 6)
+            Settling time after the stop [s]; NaN where the run does not show it.
+        short : ndarray (lanes, 6)
+            How long before the run's end each signal was last outside its band [s].
+        """
+        steps, nx = plan.steps, self.model.n_states
+        degree = dop853_tableau().dense.shape[1]
+        arrays = [np.ascontiguousarray(a, dtype=float) for a in (slots, peaks, deviations, polynomials)]
+        lanes = [np.ascontiguousarray(np.asarray(a, dtype=float).T) for a in (reference, target)]
+        fraction, fixed = band
+        shared = [np.ascontiguousarray(a, dtype=float) for a in (plan.start, plan.length, fixed, hold)]
+        expected = [(steps * plan.per_step, 6, self.lanes), (steps, 6, self.lanes), (steps, 6, self.lanes),
+                    (steps, degree + 1, nx, self.lanes), (nx, self.lanes), (6, self.lanes)]
+        if [a.shape for a in (*arrays, *lanes)] != expected or shared[2].shape != (6,) or shared[3].shape != (
+            self.lanes,
+        ) or plan.probes < 1 or min(shared[0].size, shared[1].size) < steps:  # the compiled code trusts these sizes
+            raise ValueError(f"{self.name}: arrays of the wrong shape for the metrics of {self.lanes} lanes")
+        out = [np.empty((6, self.lanes)) for _ in range(3)]
+        sig, top, dev, poly = arrays
+        ref, fin = lanes
+        start, length, half, wait = shared
+        self._metrics(
+            steps, plan.per_step, plan.probes, start.ctypes.data, length.ctypes.data, float(plan.end),
+            sig.ctypes.data, top.ctypes.data, dev.ctypes.data, poly.ctypes.data, ref.ctypes.data, fin.ctypes.data,
+            float(stop_time), float(fraction), half.ctypes.data, wait.ctypes.data,
+            *(o.ctypes.data for o in out),
+        )
+        return out[0].T, out[1].T, out[2].T

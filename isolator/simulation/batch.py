@@ -249,7 +249,8 @@ def run_batch(
             every = steps.run_slots(x0, full, inputs, params[lanes], x0, final=finals[lanes])[0]
             return every[full.sample_slots, :, lane]
         assert polys is not None
-        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width)
+        dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width,
+                          steps.driver)
         shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)
         last = DenseStepper.states_at(plan, polys.reshape(*shape[:2], -1), np.array([plan.end]))[0]
         last = np.ascontiguousarray(last.reshape(shape[2:]).T[: len(runs)])
@@ -260,8 +261,7 @@ def run_batch(
         has = tails.has if tails is not None else np.array(
             [ends[i] is not None and bool(np.all(np.isfinite(x))) for i, x in zip(runs, last, strict=True)])
         waits = np.array([0.0 if has[min(lane, len(runs) - 1)] else holds[i] for lane, i in enumerate(lanes)])
-        tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time,
-                                       lambda top: signal_bands(rule, top), waits)
+        tops, times, _ = dense_metrics(dense, finals[lanes] if stops else None, sim.stop_time, rule, waits)
         pending = []
         for lane, i in enumerate(runs):
             peak[i] = tops[lane]

@@ -28,10 +28,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.numerics.dop853_driver import Dop853Driver
 from isolator.numerics.step_plan import StepPlan
 from isolator.scenario.definitions import Settling
+from isolator.simulation.band import Band, as_band
 from isolator.simulation.free_tail import FreeTail
-from isolator.simulation.settling import Band, SettlingResult, settling_results, signal_bands, unavailable_reason
+from isolator.simulation.settling import SettlingResult, settling_results, unavailable_reason
 from isolator.simulation.stepping import check_turn
 
 __all__ = ["CROSSING_POINTS", "PEAK_POINTS", "DenseRuns", "dense_metrics", "run_metrics"]
@@ -63,6 +65,9 @@ class DenseRuns:
     width : int
         How many leading states ``signals`` reads (:func:`~isolator.simulation.stepping.signal_width`; 0: all):
         :meth:`at` evaluates the dense output of those only.
+    compiled : Dop853Driver, optional
+        The compiled loop that stepped the runs: :func:`dense_metrics` then computes in it
+        (``cpp/dense_metrics.cpp``, the same rules); else in numpy, here.
     """
 
     plan: StepPlan
@@ -73,6 +78,7 @@ class DenseRuns:
     reference: np.ndarray
     signals: Callable[[np.ndarray, np.ndarray], np.ndarray]
     width: int = 0
+    compiled: Dop853Driver | None = None
 
     def at(self, t: np.ndarray, lane: np.ndarray) -> np.ndarray:
         """The six signals (6, K) of runs ``lane`` (K,) at times ``t`` (K,) [s], from the dense output."""
@@ -185,12 +191,13 @@ def dense_metrics(
     runs: DenseRuns,
     final: np.ndarray | None,
     stop_time: float,
-    bands_of: Callable[[np.ndarray], np.ndarray],
+    band: Band,
     hold: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Peaks and settling of ``R`` runs from their dense output.
 
-    The entry interval is first chosen with the bands of the probes' peaks, and the points of both
+    In the compiled loop that stepped the runs when there is one (``runs.compiled``); else in numpy: there
+    the entry interval is first chosen with the bands of the probes' peaks, and the points of both
     refinements are evaluated in one call; where the refined peaks' bands choose another interval
     (rarely: the band grows by the refinement), its points are evaluated again.
 
@@ -201,8 +208,8 @@ def dense_metrics(
         The targets the compiled loop measured the deviations from (None: zero, a carriage never stops).
     stop_time : float
         [s], within the run, or inf.
-    bands_of : callable
-        Band half-widths (R, 6) of runs with these peaks (R, 6).
+    band : Band
+        The settling band (its half-widths for each run's refined peaks, :meth:`Band.resolve`).
     hold : ndarray (R,)
         [s], as in :func:`isolator.simulation.settling.settling_time`.
 
@@ -215,6 +222,14 @@ def dense_metrics(
     short : ndarray (R, 6)
         How long before the run's end each signal was last outside its band [s].
     """
+    if runs.compiled is not None:
+        lanes = runs.peaks.shape[2]
+        target = np.zeros((lanes, 6)) if final is None else np.asarray(final, dtype=float)
+        fixed = (-1.0, np.asarray(band.half_widths, dtype=float)) if band.half_widths is not None else (
+            float(band.fraction), np.zeros(6))  # type: ignore[arg-type]  # an own-peak band has its fraction
+        return runs.compiled.metrics(runs.plan, runs.slots, runs.peaks, runs.deviations, runs.polynomials,
+                                     runs.reference, target, stop_time, fixed, np.asarray(hold, dtype=float))
+    bands_of = band.resolve
     top, tp = _peak_window(runs)
     lanes = top.shape[1]
     if not np.isfinite(stop_time) or not np.all(np.isfinite(top)):
@@ -227,15 +242,15 @@ def dense_metrics(
     both = np.concatenate([tp, tc], axis=-1)
     values = runs.own_rows(runs.at(both.ravel(), np.broadcast_to(r[..., None], both.shape).ravel()))
     peaks = _refined_peak(top, np.abs(values[..., :PEAK_POINTS]))
-    band = np.asarray(bands_of(peaks.T), dtype=float).T  # (6, R)
-    ta2, tb2, moves, at_end = _entry_interval(runs, target, band, stop_time)
+    bands = np.asarray(bands_of(peaks.T), dtype=float).T  # (6, R)
+    ta2, tb2, moves, at_end = _entry_interval(runs, target, bands, stop_time)
     at_points = values[..., PEAK_POINTS:]
     again = (ta2 != ta) | (tb2 != tb)
     if again.any():  # the refined band chose another interval: its points
         tc = ta2[..., None] + (tb2 - ta2)[..., None] * np.linspace(0.0, 1.0, CROSSING_POINTS)
         fresh = runs.own_rows(runs.at(tc.ravel(), np.broadcast_to(r[..., None], tc.shape).ravel()))
         at_points = np.where(again[..., None], fresh, at_points)
-    crossing = _crossing(tc, at_points, target, band)
+    crossing = _crossing(tc, at_points, target, bands)
     end = runs.plan.end
     short = np.where(moves, np.where(at_end, 0.0, end - crossing), 0.0)
     time = np.where(moves, crossing - stop_time, 0.0)
@@ -259,8 +274,7 @@ def run_metrics(
     ``tail``, ``rest_note`` as for :func:`~isolator.simulation.settling.settling_results` (``hold`` is then
     not waited)."""
     peaks, times, short = dense_metrics(
-        runs, None if final is None else final[None, :], stop_time, lambda top: signal_bands(rule, top),
-        np.array([0.0 if tail else hold]),
+        runs, None if final is None else final[None, :], stop_time, as_band(rule), np.array([0.0 if tail else hold]),
     )
     check_turn(peaks[0], samples, signals)
     why = unavailable_reason(runs.plan.end, stop_time)

@@ -285,7 +285,8 @@ class Simulator:
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
             signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
-                              polynomials[..., None], start.state[None, :], self.model.variant.signals, width)
+                              polynomials[..., None], start.state[None, :], self.model.variant.signals, width,
+                              dense_stepper(self.model).driver)
             x0, dense = start.state, polynomials
             free = run_tail(self.scenario, self.model, p, start, end,
                             DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)

@@ -9,6 +9,8 @@
 #if LANES == 1
 typedef double V;
 static inline V worst(V a, V b) { return (a > b || a != a) ? a : b; }
+static inline double lane_of(V a, int) { return a; }
+static inline void set_lane(V& a, int, double value) { a = value; }
 #else
 typedef double vraw __attribute__((vector_size(8 * LANES), aligned(8)));
 typedef long long vmask __attribute__((vector_size(8 * LANES)));
@@ -39,6 +41,8 @@ static inline V fmax(V a, V b) { return (a.v > b.v) | (b.v != b.v) ? a.v : b.v; 
 static inline V fmin(V a, V b) { return (a.v < b.v) | (b.v != b.v) ? a.v : b.v; }
 static inline V fabs(V a) { return a.v < 0 ? -a.v : a.v; }
 static inline V worst(V a, V b) { return (a.v > b.v) | (a.v != a.v) ? a.v : b.v; }
+static inline double lane_of(V a, int l) { return a.v[l]; }
+static inline void set_lane(V& a, int l, double value) { a.v[l] = value; }
 #define LANEWISE(f) static inline V f(V a) { V r; for (int i = 0; i < LANES; ++i) r.v[i] = f(a.v[i]); return r; }
 LANEWISE(sqrt) LANEWISE(sin) LANEWISE(cos) LANEWISE(tan) LANEWISE(asin) LANEWISE(acos) LANEWISE(atan)
 LANEWISE(exp) LANEWISE(log) LANEWISE(tanh) LANEWISE(sinh) LANEWISE(cosh) LANEWISE(floor) LANEWISE(ceil)
