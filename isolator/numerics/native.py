@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import functools
 import hashlib
 import os
 import shutil
@@ -35,7 +36,8 @@ except ImportError:  # pragma: no cover - Windows: each process builds in its ow
 
 from isolator.numerics.native_cache import cache_dir, private_cache, record_hash, verified
 
-__all__ = ["FLAGS", "PLAIN_FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library", "find_compiler"]
+__all__ = ["FLAGS", "PLAIN_FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library", "find_compiler",
+           "vector_lanes"]
 
 #: compiler flags of every compiled model: fast-math without the finite-math assumption (NaN and
 #: infinity still propagate, so a diverging run is still detected); -march=native is safe because
@@ -48,6 +50,7 @@ FLAGS = ("-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC"
 PLAIN_FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
 
 
+@functools.cache
 def _cpu_identity() -> str:
     try:
         with open("/proc/cpuinfo") as handle:
@@ -57,6 +60,12 @@ def _cpu_identity() -> str:
         import platform
 
         return platform.processor() + platform.machine()
+
+
+def vector_lanes() -> int:
+    """Doubles in one vector register of this CPU, as ``-march=native`` compiles for it: 8 with AVX-512, else 4
+    (AVX; other CPUs run four lanes as well, in two or four instructions)."""
+    return 8 if "avx512f" in _cpu_identity().split() else 4
 
 
 _LOCK = threading.Lock()

@@ -27,6 +27,7 @@ import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError, SimulationError
 from isolator.numerics.dop853 import DenseStepper
+from isolator.numerics.native import vector_lanes
 from isolator.scenario.arguments import check_public
 from isolator.simulation.batch_setup import BatchSimulator, check_memory_of, solve_rests
 from isolator.simulation.dense_metrics import DenseRuns, dense_metrics
@@ -49,8 +50,8 @@ __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_b
 
 #: runs per task of a worker thread (their metrics are computed together)
 BLOCK = 16
-#: runs stepped side by side in one compiled call (AVX holds four doubles)
-LANES = 4
+#: runs stepped side by side in one compiled call (AVX-512 holds eight doubles, AVX four)
+LANES = vector_lanes()
 #: a run's status: measured, no stable rest or turned past ``MAX_TURN``, non-finite states, not run (it
 #: would need far too many steps or more memory than the machine has), the run's work failed (a sweep's
 #: chunk that failed twice)
