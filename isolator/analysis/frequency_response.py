@@ -3,13 +3,16 @@
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 from scipy.linalg import matrix_balance
 
 from isolator.errors import ParameterError
 from isolator.scenario.files import check_memory
+
+if TYPE_CHECKING:  # python-control takes most of a second to import: imported where used
+    import control
 
 __all__ = ["state_space_response"]
 

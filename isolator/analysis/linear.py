@@ -23,9 +23,9 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import casadi as ca
-import control
 import numpy as np
 
 from isolator.analysis.frequency_response import state_space_response
@@ -40,6 +40,9 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.rules import check_value, closest
+
+if TYPE_CHECKING:  # python-control takes most of a second to import: imported where used
+    import control
 
 __all__ = [
     "FORCE_INPUTS",
@@ -345,6 +348,7 @@ def _state_space(
     force_input: np.ndarray,
     air: AirMatrices | None = None,
 ) -> control.StateSpace:
+    import control  # python-control takes most of a second to import: only when needed
     inv_m = np.linalg.inv(mass)
     zero, eye = np.zeros((6, 6)), np.eye(6)
     a = np.block([[zero, eye], [-inv_m @ stiffness, -inv_m @ damping]])

@@ -20,12 +20,15 @@ translation along ``n`` [m] (a feedthrough of the ``ground:x .. z`` inputs), wha
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import TYPE_CHECKING
 
-import control
 import numpy as np
 
 from isolator.analysis.frequency_response import state_space_response
 from isolator.scenario.sensors import Sensor
+
+if TYPE_CHECKING:  # python-control takes most of a second to import: imported where used
+    import control
 
 __all__ = ["displacement_rows", "sensor_response", "sensor_rows"]
 
@@ -80,6 +83,7 @@ def sensor_response(system: control.StateSpace, sensors: Sequence[Sensor], rot0:
                     frequency_hz: np.ndarray, inputs: Sequence[str] | None = None) -> np.ndarray:
     """Each sensor's exact frequency response (nf, sensors, inputs) in its quantity per input unit: its
     displacement response times ``(j 2 pi f)^k`` (k = 0, 1, 2 for displacement, velocity, acceleration)."""
+    import control  # python-control takes most of a second to import: only when needed
     a, b = np.asarray(system.A), np.asarray(system.B)
     c, d = displacement_rows(sensors, rot0, a.shape[0], b.shape[1])
     shifted = control.ss(a, b, c, c @ b1 + d, inputs=list(system.input_labels),

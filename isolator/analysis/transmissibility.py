@@ -4,9 +4,8 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
-import control
 import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
@@ -14,6 +13,9 @@ from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS
 from isolator.model.equilibrium import DOF_NAMES
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
+
+if TYPE_CHECKING:  # python-control takes most of a second to import: imported where used
+    import control
 
 __all__ = ["FrequencyResponse", "LinearSystem", "compliance", "default_frequencies", "transmissibility"]
 
@@ -120,6 +122,7 @@ class FrequencyResponse:
 
     def frd(self) -> control.FrequencyResponseData:
         """The 6x6 response as a python-control ``FrequencyResponseData`` (omega in rad/s)."""
+        import control  # python-control takes most of a second to import: only when needed
         data = np.moveaxis(self.response, 0, -1)
         return control.frd(
             data, 2 * np.pi * self.frequency_hz, inputs=list(self.inputs), outputs=list(DOF_NAMES),

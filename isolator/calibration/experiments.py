@@ -20,7 +20,6 @@ import warnings
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
 from isolator.analysis.linear import linearise, rest_positions
 from isolator.analysis.modes import modes
@@ -197,6 +196,8 @@ def _warn_input_noise(key: str, floor: tuple[Sensor, ...], x: np.ndarray, rate: 
     an input lowers any H1 by the noise's share of that input's spectrum (``Gnn / Gxx``), which the fit's
     intervals do not include."""
     nperseg = round(estimate.segment * rate)
+    from scipy import signal  # imported where used: scipy.signal takes a quarter of a second
+
     welch_f, pxx = signal.welch(x, fs=rate, window="hann", nperseg=nperseg, noverlap=nperseg // 2)
     relative = np.sqrt(estimate.variance[:, :, band]) / np.maximum(np.abs(estimate.H[:, :, band]), 1e-300)
     frequency = welch_f[band]

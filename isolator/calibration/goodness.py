@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import stats
 
 from isolator.calibration.experiments import ENBW_HANN, FloorExperiment, MoveExperiment
 from isolator.scenario.sensors import Sensor
@@ -124,6 +123,8 @@ def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: 
         variance = 2.0 / max(m - n_params, 1.0) + len(sensors) * share**2 * 4 * NOISE_ESTIMATE_SPREAD**2 / samples
         nu = 2.0 / variance
     ratio = float(r @ r) / max(m - n_params, 1.0) / expected
+    from scipy import stats  # imported where used: scipy.stats takes a quarter of a second
+
     limit = float(stats.chi2.ppf(1.0 - SIGNIFICANCE, nu) / nu)
     scales = {s.name: _scale(a, b) for s, a, b in zip(sensors, measured, model, strict=True)}
     worst = sensors[int(np.argmax(per_channel))].name

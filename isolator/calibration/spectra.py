@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import fft, signal
+from scipy import fft
 
 from isolator.errors import ParameterError
 
@@ -79,6 +79,8 @@ def effective_averages(segments: int, nperseg: int, step: int) -> float:
     nperseg, step : int
         Segment length and hop [samples].
     """
+    from scipy import signal  # imported where used: scipy.signal takes a quarter of a second
+
     w = signal.get_window("hann", nperseg)
     energy = float(np.dot(w, w))
     total = 0.0
@@ -214,6 +216,8 @@ def segment_spectra(z: np.ndarray, rate: float, nperseg: int, bins: np.ndarray |
     """Welch's segments' spectra (channels, bins, segments) of ``z`` (channels, N): Hann, 50 % overlap, each
     segment's mean removed, scaled as ``scipy.signal.spectrogram`` (complex, density); all bins, or ``bins``
     (indices) only. One definition for the records' H1 and the model's (:mod:`.estimator_view`)."""
+    from scipy import signal  # imported where used: scipy.signal takes a quarter of a second
+
     window = signal.get_window("hann", nperseg)
     step = nperseg - nperseg // 2
     segments = np.lib.stride_tricks.sliding_window_view(z, nperseg, axis=-1)[..., ::step, :]
