@@ -228,12 +228,9 @@ class Dop853Driver:
 
         Returns
         -------
-        peaks : ndarray (lanes, 6)
-            [m or rad].
-        time : ndarray (lanes, 6)
-            Settling time after the stop [s]; NaN where the run does not show it.
-        short : ndarray (lanes, 6)
-            How long before the run's end each signal was last outside its band [s].
+        tuple of three ndarray (lanes, 6)
+            The peaks, the settling times and how long before the end each signal was last outside its band,
+            as :func:`isolator.simulation.dense_metrics.dense_metrics` returns them.
         """
         steps, nx = plan.steps, self.model.n_states
         degree = dop853_tableau().dense.shape[1]
