@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -43,9 +44,9 @@ class Equilibrium:
     positions: np.ndarray
     eigenvalues: np.ndarray
 
-    @property
+    @functools.cached_property
     def max_frequency(self) -> float:
-        """Largest eigenvalue modulus [rad/s]."""
+        """Largest eigenvalue modulus [rad/s] (kept: a batch asks for it per run)."""
         return float(np.max(np.abs(self.eigenvalues), initial=0.0))
 
 
