@@ -299,7 +299,7 @@ class NativeFunction:
             return self.__call__
         ins = [np.empty(r * c) for (r, c) in self.in_shapes]
         outs = [np.empty((c, r)) for (r, c) in self.out_shapes]
-        pointers, keep = self._pointers(ins, outs)
+        pointers, keep = self._pointers(ins, outs, own=True)
         fn = self._fn
 
         def call(*inputs: np.ndarray) -> list[np.ndarray]:
@@ -312,15 +312,26 @@ class NativeFunction:
         call.__dict__["buffers"] = keep  # what the pointers point into: alive as long as the caller
         return call
 
-    def _pointers(self, ins: list[np.ndarray], outs: list[np.ndarray]) -> tuple[tuple, tuple]:
+    def _pointers(self, ins: list[np.ndarray], outs: list[np.ndarray], own: bool = False) -> tuple[tuple, tuple]:
         """The compiled function's five arguments for these buffers, and the objects they point into
-        (keep those alive while the pointers are used)."""
-        sz_arg, sz_res, _, _ = self._sz
-        arg = (ctypes.c_void_p * max(sz_arg, len(ins)))(*[x.ctypes.data for x in ins])
-        res = (ctypes.c_void_p * max(sz_res, len(outs)))(*[o.ctypes.data for o in outs])
-        iw, w = self._work()
-        pointers = (ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0)
-        return pointers, (arg, res, iw, w, ins, outs)
+        (keep those alive while the pointers are used): this thread's argument arrays filled anew, or with
+        ``own`` arrays of their own (for a caller that keeps them)."""
+        slots = None if own else getattr(self._local, "slots", None)
+        if slots is None:
+            sz_arg, sz_res, _, _ = self._sz
+            arg = (ctypes.c_void_p * max(sz_arg, len(self.in_shapes)))()
+            res = (ctypes.c_void_p * max(sz_res, len(self.out_shapes)))()
+            iw, w = self._work()
+            slots = (arg, res, (ctypes.addressof(arg), ctypes.addressof(res), iw.ctypes.data, w.ctypes.data, 0),
+                     (iw, w))
+            if not own:
+                self._local.slots = slots
+        arg, res, pointers, work = slots
+        for k in range(len(self.in_shapes)):  # an input not given is null (zeros), as casadi reads it
+            arg[k] = ins[k].ctypes.data if k < len(ins) else None
+        for k in range(len(self.out_shapes)):
+            res[k] = outs[k].ctypes.data if k < len(outs) else None
+        return pointers, (arg, res, work, ins, outs)
 
     @staticmethod
     def _as_dm(x: np.ndarray, shape: tuple[int, int]) -> ca.DM:
