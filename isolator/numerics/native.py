@@ -12,29 +12,22 @@ same numbers).
 
 from __future__ import annotations
 
-import contextlib
 import ctypes
-import functools
 import hashlib
 import os
 import shutil
-import subprocess
 import sys
 import tempfile
 import threading
 import warnings
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import casadi as ca
 import numpy as np
 
-try:  # POSIX: builds of one library by several processes wait for each other
-    import fcntl
-except ImportError:  # pragma: no cover - Windows: each process builds in its own folder
-    fcntl = None  # type: ignore[assignment]
-
-from isolator.numerics.native_cache import cache_dir, private_cache, record_hash, verified
+from isolator.numerics.native_build import build_library, build_lock, cpu_identity, vector_lanes
+from isolator.numerics.native_cache import cache_dir, private_cache, verified
 
 __all__ = ["FLAGS", "PLAIN_FLAGS", "MappedFunction", "NativeFunction", "cache_dir", "compiled_library", "find_compiler",
            "vector_lanes"]
@@ -48,24 +41,6 @@ FLAGS = ("-O3", "-march=native", "-ffast-math", "-fno-finite-math-only", "-fPIC"
 #: flags that compute as casadi's own evaluator does, operation by operation (no fast-math, no fused
 #: multiply-adds, no CPU-specific code): the same numbers as the uncompiled function, bit for bit
 PLAIN_FLAGS = ("-O2", "-ffp-contract=off", "-fPIC", "-shared")
-
-
-@functools.cache
-def _cpu_identity() -> str:
-    try:
-        with open("/proc/cpuinfo") as handle:
-            lines = [ln for ln in handle if ln.startswith(("model name", "flags"))]
-        return "".join(sorted(set(lines)))
-    except OSError:
-        import platform
-
-        return platform.processor() + platform.machine()
-
-
-def vector_lanes() -> int:
-    """Doubles in one vector register of this CPU, as ``-march=native`` compiles for it: 8 with AVX-512, else 4
-    (AVX; other CPUs run four lanes as well, in two or four instructions)."""
-    return 8 if "avx512f" in _cpu_identity().split() else 4
 
 
 _LOCK = threading.Lock()
@@ -117,50 +92,15 @@ def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, langu
     if compiler is None:
         raise RuntimeError(f"no {language.upper()} compiler found (set {'CC' if language == 'c' else 'CXX'})")
     digest = hashlib.sha256(
-        (source + " ".join(flags) + ca.CasadiMeta.version() + compiler + _cpu_identity() + LINK).encode()
+        (source + " ".join(flags) + ca.CasadiMeta.version() + compiler + cpu_identity() + LINK).encode()
     ).hexdigest()[:20]
     folder = private_cache()
     target = folder / f"{name}-{digest}.so"
-    with _LOCK, _build_lock(folder / f"{name}-{digest}.lock"):
+    with _LOCK, build_lock(folder / f"{name}-{digest}.lock"):
         if not verified(target):  # missing, or not the library built here (planted, damaged): built again
             _announce(language)
-            _build(compiler, name, source, flags, language, target)
+            build_library(compiler, name, source, flags, language, target)
     return target
-
-
-@contextlib.contextmanager
-def _build_lock(path: Path) -> Iterator[None]:
-    """Hold an exclusive lock on ``path`` (made if missing) across processes: two processes that need the same
-    library (a sweep's workers, on a fresh cache) build it one after the other, the second finding it built."""
-    with open(path, "a") as handle:
-        if fcntl is not None:
-            fcntl.flock(handle, fcntl.LOCK_EX)
-        try:
-            yield
-        finally:
-            if fcntl is not None:
-                fcntl.flock(handle, fcntl.LOCK_UN)
-
-
-def _build(compiler: str, name: str, source: str, flags: Sequence[str], language: str, target: Path) -> None:
-    """Compile ``source`` into ``target`` in a folder of this build's own (no other build shares its source or
-    object file), its hash recorded, then moved into place at once."""
-    with tempfile.TemporaryDirectory(dir=target.parent) as tmp:
-        src = Path(tmp, name + (".c" if language == "c" else ".cpp"))
-        src.write_text(source)
-        obj, built = Path(tmp, name + ".o"), Path(tmp, name + ".so")
-        # compile with the flags, link without them: -ffast-math at link time would add the start-up
-        # code that switches the whole process to flushing subnormal numbers to zero
-        compile_flags = [f for f in flags if f != "-shared"]
-        for step in ([compiler, *compile_flags, "-c", "-o", str(obj), str(src)],
-                     [compiler, "-shared", "-fPIC", "-o", str(built), str(obj), "-lm"]):
-            done = subprocess.run(step, capture_output=True, text=True)
-            if done.returncode != 0:
-                lines = done.stderr.splitlines()
-                errors = [ln for ln in lines if "error" in ln] or lines or [""]
-                raise RuntimeError(f"{compiler} failed on {name}: {errors[0].strip()}")
-        record_hash(target, built)
-        os.replace(built, target)
 
 
 _ANNOUNCED: set[str] = set()
