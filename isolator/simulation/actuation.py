@@ -158,15 +158,18 @@ def applied_forces(
         return out
     tau = np.array([1.0 / (2 * math.pi * scenario.actuators[k].bandwidth) for k in lagged])  # type: ignore[operator]
     times = np.asarray(times, dtype=float)
-    h = np.diff(times)
-    step = h > 0
-    safe = np.where(step, h, 1.0)
-    decay = np.exp(-safe[:, None] / tau[None, :])
-    slope = np.where(step[:, None], np.diff(u[:, lagged], axis=0) / safe[:, None], 0.0)
+    # exact for u linear over [t_i, t_i+1] (held where the time repeats): y_i+1 = d_i y_i + c_i with
+    # d = e^(-h/tau), c = u_i+1 (1 - a) - u_i (d - a), a = tau (1 - d) / h (a few step lengths h: their
+    # coefficients once); summed in windows of at most LAG_WINDOW time constants as
+    # z_n = y_n e^((t_n - r) / tau) = z_0 + sum c_k e^((t_k+1 - r) / tau)
+    lengths, which = np.unique(np.diff(times), return_inverse=True)
+    held = lengths[:, None] <= 0
+    safe = np.where(held, 1.0, lengths[:, None])
+    d = np.exp(-safe / tau[None, :])
+    a = tau[None, :] * (1 - d) / safe
+    ahead, behind = np.where(held, 0.0, 1 - a), np.where(held, 0.0, d - a)
     ul = u[:, lagged]
-    # exact for u linear over [t_i, t_i+1] (held where the time repeats): y_i+1 = decay_i y_i + c_i, summed in
-    # windows of at most WINDOW time constants as z_n = y_n e^((t_n - r) / tau) = z_0 + sum c_k e^((t_k+1 - r) / tau)
-    c = np.where(step[:, None], ul[1:] - slope * tau + (slope * tau - ul[:-1]) * decay, 0.0)
+    c = ul[1:] * ahead[which] - ul[:-1] * behind[which]
     y = np.zeros(len(lagged)) if initial is None else np.asarray(initial, dtype=float)[lagged]
     lags = np.empty((times.size, len(lagged)))
     lags[0] = y
