@@ -3,7 +3,8 @@ start together (plus any per-step delay) with seven-segment S-curves to their ta
 the last one arrives, and the next step starts once every window has held for ``measure`` seconds.
 
 Each step is simulated from the previous step's end state as its own short run (local time from 0, the
-step's moves as inputs), DOP853 steps between the profiles' breakpoints, extended in chunks until the
+step's moves as inputs), DOP853 steps between the profiles' breakpoints (and the leveling valves' switches,
+:mod:`isolator.simulation.valve_events`), extended in chunks until the
 window rule (:mod:`isolator.simulation.sequence_rule`) is decided on a 1 kHz grid read from the dense output;
 the part after the step's end is dropped and the runs are stitched with their time offsets.
 """
