@@ -7,9 +7,9 @@ leveling") has kinks where the sensor height ``|h|`` crosses the dead band ``b``
 smooth there: DOP853's order is lost, and on ``paper-table-3-2-pneumatic`` its steps (|lambda| h <= 0.9) strayed
 by 7e-4 of the peak of z from a converged run, at each of the nine times a valve opened or closed. So the run is
 stepped again with those times among the breakpoints, located on the dense output (bisection on the steps'
-polynomials), until the times its steps end on are the switches of its own solution (two or three passes: a
-pass costs a plain run's steps, a few milliseconds at 1 kHz over 10 s); each step then integrates a smooth
-right-hand side, and the run is within 1e-7 of its peaks of a converged one.
+polynomials), until the times its steps end on are the switches of its own solution (three or four runs on
+the bundled pneumatic tables, each a plain run's cost: 0.022 s became 0.047 s for a 20 s run); each step then
+integrates a smooth right-hand side, and every output is within 4e-8 of its peak of a converged run.
 """
 
 from __future__ import annotations
