@@ -142,7 +142,8 @@ def main() -> None:
           f"ratio {median2 / median_one:6.1f}x fewer")
     n_rk4 = max(20, args.batch // 10)
     original = simmod.Simulator.method_for
-    simmod.Simulator.method_for = lambda self, omega: simmod.Method(self.substeps_for(omega))
+    simmod.Simulator.method_for = lambda self, omega, actuated=False: simmod.Method(
+        self.substeps_for(omega, actuated=actuated))
     try:
         t0 = time.perf_counter()
         sim.run_batch(k[:n_rk4], c[:n_rk4], workers=2)

@@ -31,7 +31,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
 from isolator.simulation.simulator import Simulator
-from isolator.simulation.stepping import STEP_ANGLE
+from isolator.simulation.stepping import STEP_ANGLE, fastest_rate
 
 __all__ = ["write_fmu"]
 
@@ -193,11 +193,8 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     start, end = sim.equilibria(p)
     functions = plant_functions(scenario)
     model, layout = functions.model, functions.model.layout
-    drives = [c.profile for c in scenario.carriages]
-    drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
-    omega = max(start.max_frequency, end.max_frequency if end is not None else 0.0,
-                *(abs(d.omega) for d in drives if isinstance(d, SineProfile)),
-                *(2 * math.pi * a.bandwidth for a in scenario.actuators if a.bandwidth is not None), 1e-9)
+    omega = max(fastest_rate(scenario, max(start.max_frequency, end.max_frequency if end is not None else 0.0),
+                             actuated=True), 1e-9)  # the simulator's rule: a host may drive the actuators
     max_step = min(COMMUNICATION_STEP, STEP_ANGLE / omega / REFINE)
     inputs_mode = carriages == "inputs"
     floor = scenario.ground.motion if scenario.ground is not None else {}

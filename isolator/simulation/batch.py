@@ -8,7 +8,8 @@ worker threads: a pack whose runs share the staged inputs (the parameters the
 inputs' staged form depends on: masses, inertia, carriage axes and origins)
 steps the staged right-hand side on them; a pack whose runs differ there steps
 the whole right-hand side on the inputs every run shares (the carriages'
-motion), as fast. Each pack's metrics come from its dense output as a single
+motion), as fast; a pneumatic pack's steps end on every run's valve switches
+(:mod:`isolator.simulation.valve_events`). Each pack's metrics come from its dense output as a single
 run's do (:mod:`isolator.simulation.dense_metrics`), four runs at once, and
 whether a signal leaves its band after the run's end from the free motion
 (:mod:`isolator.simulation.free_tail`).
@@ -26,7 +27,7 @@ from typing import Literal
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError, SimulationError
-from isolator.numerics.dop853 import DenseStepper
+from isolator.numerics.dop853 import DenseStepper, StepPlan
 from isolator.numerics.native import vector_lanes
 from isolator.scenario.arguments import check_public
 from isolator.simulation.batch_setup import BatchSimulator, check_memory_of, solve_rests
@@ -41,10 +42,12 @@ from isolator.simulation.stepping import (
     hold_time,
     rk4_stepper,
     signal_width,
+    stage_inputs,
     staged_parameters,
 )
 from isolator.simulation.tail_check import RunTails
 from isolator.simulation.time_grid import inputs_at
+from isolator.simulation.valve_events import ValveSwitches, step_on_switches
 
 __all__ = ["BLOCK", "LANES", "STATUSES", "BatchResult", "BatchSimulator", "run_batch", "scale_label"]
 
@@ -241,15 +244,32 @@ def run_batch(
                 inputs, steps = raw[method.plan_key], dense_stepper(sim.model, LANES, staged=False)
         lanes = runs + runs[-1:] * (LANES - len(runs))  # a short pack repeats its last run
         x0 = np.array([starts[i].state for i in lanes])  # type: ignore[union-attr]
-        slots, step_peaks, deviations, polys = steps.run_slots(
-            x0, plan, inputs, params[lanes], x0, with_states=True, final=finals[lanes]
-        )
+        staged = steps is stepper
+
+        def step(steps_plan: StepPlan) -> tuple[np.ndarray, ...]:
+            at = inputs if steps_plan is plan else stage_inputs(sim.scenario, sim.model, steps_plan, params[runs[0]]) \
+                if staged else np.ascontiguousarray(inputs_at(sim.scenario, *steps_plan.stage_times()))
+            out, tops, deviations, polys = steps.run_slots(x0, steps_plan, at, params[lanes], x0, with_states=True,
+                                                          final=finals[lanes])
+            assert polys is not None  # with_states
+            return out, tops, deviations, polys, at
+
+        switches = [ValveSwitches.of(sim.scenario, sim.layout, params[i]) for i in runs]
+        if any(s is not None for s in switches):  # every run's valve switches among the pack's step ends
+            def replan(times: np.ndarray) -> StepPlan:
+                nonlocal full
+                full = sim.step_plan(method.plan_key, times)
+                return full.probes_only() if full.probes else full
+            plan, stepped = step_on_switches(switches, plan, step, lambda out: [out[3][..., lane] for lane in
+                                                                                 range(len(runs))], replan)
+        else:
+            stepped = step(plan)
+        slots, step_peaks, deviations, polys, inputs = stepped
 
         def samples(lane: int) -> np.ndarray:
             """The run's signals at the output samples after the first (steps again: only for a message)."""
             every = steps.run_slots(x0, full, inputs, params[lanes], x0, final=finals[lanes])[0]
             return every[full.sample_slots, :, lane]
-        assert polys is not None
         dense = DenseRuns(plan, slots, step_peaks, deviations, polys, x0, sim.model.variant.signals, width,
                           steps.driver)
         shape = polys.shape  # the states at the end, every lane at once (the same sums as one lane's)

@@ -12,6 +12,7 @@ from isolator.errors import UnstableTableError
 from isolator.model.equilibrium import Equilibrium, static_equilibria
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
+from isolator.numerics.step_plan import StepPlan
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.resources import check_memory
 from isolator.simulation.response import Response
@@ -35,6 +36,8 @@ class BatchSimulator(Protocol):
     def method_for(self, omega_max: float) -> Method: ...
 
     def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray: ...
+
+    def step_plan(self, key: int, switches: np.ndarray | None = None) -> StepPlan: ...
 
     def grid_inputs(self, substeps: int) -> np.ndarray: ...
 

@@ -28,13 +28,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.model.variants import Model
 from isolator.numerics.dop853_driver import Dop853Driver
 from isolator.numerics.step_plan import StepPlan
 from isolator.scenario.definitions import Settling
 from isolator.simulation.band import Band, as_band
 from isolator.simulation.free_tail import FreeTail
 from isolator.simulation.settling import SettlingResult, settling_results, unavailable_reason
-from isolator.simulation.stepping import check_turn
+from isolator.simulation.stepping import check_turn, dense_stepper, signal_width
 
 __all__ = ["CROSSING_POINTS", "PEAK_POINTS", "DenseRuns", "dense_metrics", "run_metrics"]
 
@@ -79,6 +80,15 @@ class DenseRuns:
     signals: Callable[[np.ndarray, np.ndarray], np.ndarray]
     width: int = 0
     compiled: Dop853Driver | None = None
+
+    @classmethod
+    def of_run(cls, plan: StepPlan, stepped: tuple[np.ndarray, ...], reference: np.ndarray, model: Model) -> DenseRuns:
+        """One run's (``R`` = 1): ``stepped`` the signals at the slots, the steps' peaks and deviations and their
+        dense output as ``DenseStepper.run_slots`` gives them for one run, ``reference`` its start state; computed
+        in the compiled loop of ``model`` when it has one."""
+        slots, peaks, deviations, polynomials = (a[..., None] for a in stepped)
+        return cls(plan, slots, peaks, deviations, polynomials, np.asarray(reference)[None, :], model.variant.signals,
+                   signal_width(model), dense_stepper(model).driver)
 
     def at(self, t: np.ndarray, lane: np.ndarray) -> np.ndarray:
         """The six signals (6, K) of runs ``lane`` (K,) at times ``t`` (K,) [s], from the dense output."""

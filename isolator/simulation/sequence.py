@@ -3,7 +3,8 @@ start together (plus any per-step delay) with seven-segment S-curves to their ta
 the last one arrives, and the next step starts once every window has held for ``measure`` seconds.
 
 Each step is simulated from the previous step's end state as its own short run (local time from 0, the
-step's moves as inputs), DOP853 steps between the profiles' breakpoints, extended in chunks until the
+step's moves as inputs), DOP853 steps between the profiles' breakpoints (and the leveling valves' switches,
+:mod:`isolator.simulation.valve_events`), extended in chunks until the
 window rule (:mod:`isolator.simulation.sequence_rule`) is decided on a 1 kHz grid read from the dense output;
 the part after the step's end is dropped and the runs are stitched with their time offsets.
 """
@@ -37,6 +38,7 @@ from isolator.simulation.stepping import (
     dense_stepper,
     staged_map,
 )
+from isolator.simulation.valve_events import ValveSwitches, step_on_switches, with_switches
 from isolator.simulation.window_random import with_random_margins
 
 __all__ = ["MoveDesign", "SequenceResult", "StepResult", "run_sequence"]
@@ -79,6 +81,7 @@ class _Runner:
         self.air = None if self.layout.pneumatic is None else air_in_groups(self.model, first.state[None, :],
                                                                                 self.p[None, :])
         self._equilibria: dict[bytes, Equilibrium] = {initial.tobytes(): first}
+        self.switches = ValveSwitches.of(scenario, self.layout, self.p)
         self._still: dict[int, np.ndarray] = {}  # the staged rest inputs of each step's profiles
         self.arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
         self.origin = point_positions(first.state, self.arms, self.model.kind)[:, :, 0]
@@ -130,23 +133,32 @@ class _Runner:
         if ground is not None:
             knots |= {float(k) - a - step_start for k in ground.breakpoints}
         inside = np.array(sorted(k for k in knots if 0.0 < k < length), dtype=float)
-        plan = step_plan(np.array([0.0, length]), inside, max_step, end=length)
-        times, mid = plan.stage_times()
         # after the last carriage stops (and with a still floor) every stage has the same inputs: those rows
         # are the rest inputs, staged once
         rest = max((float(prof.stop_time) for prof in profiles), default=0.0)
-        moving = np.ones(times.shape[0], bool) if self.scenario.has_ground_motion else plan.start + a < rest - 1e-12
         if id(profiles) not in self._still:  # once per step (the profiles stay alive in the run's timeline)
             at = np.full((1, 1), rest + 1.0)
             self._still[id(profiles)] = self._inputs(profiles, at, at, step_start)
         still = self._still[id(profiles)]
-        staged = np.empty((times.shape[0], times.shape[1], still.shape[2]))
-        if moving.any():
-            staged[moving] = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
-        staged[~moving] = still[0, 0]
-        u = staged
-        _, _, _, poly = dense_stepper(self.model).run_slots(x0, plan, np.ascontiguousarray(u), self.p,
-                                                            self.start.state, with_states=True)
+
+        def steps(plan: StepPlan) -> np.ndarray | None:
+            times, mid = plan.stage_times()
+            moving = np.ones(times.shape[0], bool) if self.scenario.has_ground_motion else \
+                plan.start + a < rest - 1e-12
+            staged = np.empty((times.shape[0], times.shape[1], still.shape[2]))
+            if moving.any():
+                staged[moving] = self._inputs(profiles, times[moving] + a, mid[moving] + a, step_start)
+            staged[~moving] = still[0, 0]
+            return dense_stepper(self.model).run_slots(x0, plan, np.ascontiguousarray(staged), self.p,
+                                                       self.start.state, with_states=True)[3]
+
+        plan = step_plan(np.array([0.0, length]), inside, max_step, end=length)
+        if self.switches is None:
+            poly = steps(plan)
+        else:  # the steps end on the valves' switches, as a fixed-time run's do
+            plan, poly = step_on_switches([self.switches], plan, steps, lambda out: [
+                np.zeros((0, 1, 1)) if out is None else out], lambda times: step_plan(
+                np.array([0.0, length]), with_switches(inside, times, length), max_step, end=length))
         if poly is None or not np.all(np.isfinite(poly)):
             raise SimulationError(f"the run diverged: non-finite state in step {step} after t = "
                                   f"{step_start + a:.4g} s")

@@ -22,7 +22,6 @@ from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
 from isolator.numerics.step_plan import PROBES
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
-from isolator.scenario.profiles import SineProfile
 from isolator.scenario.validation import check_motion
 from isolator.simulation.actuation import ForceHistory, with_forces
 from isolator.simulation.batch import BatchResult, run_batch, scale_label
@@ -43,15 +42,15 @@ from isolator.simulation.stepping import (
     Method,
     check_step_count,
     check_turn,
-    dense_stepper,
+    fastest_rate,
     hold_time,
     plan_stage_inputs,
     rk4_stepper,
-    signal_width,
     with_start,
 )
 from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
+from isolator.simulation.valve_events import dense_run, with_switches
 from isolator.simulation.window_random import with_random_margins
 from isolator.simulation.window_settling import run_points
 
@@ -95,9 +94,6 @@ class Simulator:
         self._staged: dict[tuple[int, bytes], np.ndarray] = {}
         self._sample_inputs: np.ndarray | None = None
         self._tipping: dict[bytes, str] = {}
-        drives = [c.profile for c in scenario.carriages]
-        drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
-        self._forcing = max((abs(d.omega) for d in drives if isinstance(d, SineProfile)), default=0.0)
 
     # -- parameters ------------------------------------------------------------
     def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
@@ -145,30 +141,38 @@ class Simulator:
         where = "with the carriages at their final positions"
         return start, list(static_equilibria(self.model, params, last, where, air=air))
 
-    def substeps_for(self, omega_max: float, grid: TimeGrid | None = None) -> int:
-        """RK4 steps per interval of ``grid`` (default the run's) for a fastest eigenvalue ``omega_max`` [rad/s]."""
-        omega = max(omega_max, self._forcing)
+    def substeps_for(self, omega_max: float, grid: TimeGrid | None = None, actuated: bool = False) -> int:
+        """RK4 steps per interval of ``grid`` (default the run's) for a fastest eigenvalue ``omega_max`` [rad/s],
+        the actuators' lags among the rates when they act (``actuated``: :func:`fastest_rate`)."""
+        omega = fastest_rate(self.scenario, omega_max, actuated)
         longest = self._longest_interval if grid is None else float(np.max(np.diff(grid.nodes), initial=0.0))
         return max(1, math.ceil(omega * longest / STEP_ANGLE))
 
-    def method_for(self, omega_max: float) -> Method:
+    def method_for(self, omega_max: float, actuated: bool = False) -> Method:
         """The cheaper integration for a fastest eigenvalue ``omega_max`` [rad/s].
 
         DOP853 steps with |lambda| h <= ``DENSE_STEP_ANGLE`` between the breakpoints,
         unless breakpoints are so dense (sampled profiles) that RK4 on the sample
-        grid costs fewer right-hand-side evaluations.
+        grid costs fewer right-hand-side evaluations; RK4 whenever the actuators act
+        (``actuated``: forces, a feedback law or a controller), their lags among the rates.
         """
-        substeps = self.substeps_for(omega_max)
-        omega = max(omega_max, self._forcing, 1e-12)
+        substeps = self.substeps_for(omega_max, actuated=actuated)
+        omega = max(fastest_rate(self.scenario, omega_max, actuated), 1e-12)
         check_step_count(omega, float(self.grid.nodes[-1]), DENSE_STEP_ANGLE, self.scenario)
+        if actuated:
+            return Method(substeps)
         key = max(0, math.ceil(8 * math.log2(MAX_DENSE_STEP * omega / DENSE_STEP_ANGLE)))
         if key not in self._plans:
-            self._plans[key] = step_plan(self.grid.samples, self._breakpoints, MAX_DENSE_STEP * 2.0 ** (-key / 8),
-                                         end=self.grid.nodes[-1], probes=PROBES)
+            self._plans[key] = self.step_plan(key)
         plan = self._plans[key]
         if plan.evaluations >= 4 * substeps * (self.grid.nodes.size - 1):
             return Method(substeps)
         return Method(substeps, plan, key)
+
+    def step_plan(self, key: int, switches: np.ndarray | None = None) -> StepPlan:
+        """DOP853 steps of at most ``MAX_DENSE_STEP 2^(-key/8)`` [s] between the breakpoints and ``switches``."""
+        return step_plan(self.grid.samples, with_switches(self._breakpoints, switches, float(self.grid.nodes[-1])),
+                         MAX_DENSE_STEP * 2.0 ** (-key / 8), end=self.grid.nodes[-1], probes=PROBES)
 
     def check_tipping(self, p: np.ndarray) -> None:
         """Refuse what ``isolator stability`` calls unstable, in its words (:mod:`isolator.model.tipping`)."""
@@ -194,8 +198,7 @@ class Simulator:
     def _at_samples(self) -> np.ndarray:
         """The model's inputs at the output samples (carriage positions, floor motion)."""
         if self._sample_inputs is None:
-            t = self.grid.samples
-            self._sample_inputs = inputs_at(self.scenario, t, t)
+            self._sample_inputs = inputs_at(self.scenario, self.grid.samples, self.grid.samples)
         return self._sample_inputs
 
     # -- runs --------------------------------------------------------------------
@@ -250,7 +253,8 @@ class Simulator:
         p = self.parameter_vector(changes) if p is None else self.layout.checked(p, "p")
         self.check_tipping(p)
         start, end = self.equilibria(p)
-        method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0))
+        actuated = forces is not None or feedback is not None or controller is not None
+        method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0), actuated)
         return self.run_method(p, start, end, method, forces, feedback, band, controller, noise, seed)
 
     def run_method(
@@ -275,18 +279,12 @@ class Simulator:
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
         if forces is None and feedback is None and controller is None and method.plan is not None:
-            plan, width = method.plan, signal_width(self.model)
-            raw, step_peaks, deviations, polynomials = dense_stepper(self.model).run_slots(
-                start.state, plan, self.plan_inputs(method, p), p, start.state, with_states=True, final=final
-            )
-            assert polynomials is not None
+            plan, (raw, step_peaks, deviations, polynomials) = dense_run(self, method, p, start, final)
             if not np.all(np.isfinite(polynomials)):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
             signals = with_start(raw[plan.sample_slots])
-            runs = DenseRuns(plan, raw[..., None], step_peaks[..., None], deviations[..., None],
-                              polynomials[..., None], start.state[None, :], self.model.variant.signals, width,
-                              dense_stepper(self.model).driver)
+            runs = DenseRuns.of_run(plan, (raw, step_peaks, deviations, polynomials), start.state, self.model)
             x0, dense = start.state, polynomials
             free = run_tail(self.scenario, self.model, p, start, end,
                             DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)

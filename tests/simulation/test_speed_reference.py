@@ -5,7 +5,10 @@ reasons and which signals settle exactly; the numbers within round-off (``ROUND_
 the peaks and settling instants are now computed in the compiled loop (``cpp/dense_metrics.cpp``, whose
 fused multiply-adds round differently from numpy: 2e-13 at most over the reference), where the code
 before them computed them in numpy; every other number was bit for bit before that step, and is within
-round-off now."""
+round-off now. The pneumatic numbers (``batch-pneumatic/``, ``single6/``, ``single7/``) were written again
+when the DOP853 steps began to end on the leveling valves' switches (:mod:`isolator.simulation.valve_events`):
+they moved by up to 2.4e-5 of a signal's peak, the error of the steps across the switches before; every
+other number is the first reference's."""
 
 from __future__ import annotations
 
