@@ -140,6 +140,7 @@ class DenseStepper:
         reference: np.ndarray,
         with_states: bool = False,
         final: np.ndarray | None = None,
+        samples: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """One run, or ``lanes`` runs sharing ``plan`` and ``inputs``, before the samples are picked out.
 
@@ -154,6 +155,10 @@ class DenseStepper:
             Also return each step's dense-output polynomial.
         final : ndarray (6,), optional
             The target the deviations are measured from (``(lanes, 6)`` for stacked runs; default 0).
+        samples : ndarray (6, samples), optional
+            (``(6, samples, lanes)`` for stacked runs, C order) filled from its second column on with the signals
+            at the output samples (``signals[plan.sample_slots]``, transposed: a response's rows without a
+            gather); its first column, the start, is left as it is.
 
         Returns
         -------
@@ -174,9 +179,12 @@ class DenseStepper:
         target = np.zeros((x0.shape[0], 6)) if final is None else np.atleast_2d(np.asarray(final, dtype=float))
         if x0.shape[0] != self.lanes:
             raise ValueError(f"{x0.shape[0]} runs given to a stepper of {self.lanes} lanes")
+        lanes_out = None if samples is None else (samples if stacked else samples.reshape(*samples.shape, 1))
+        if lanes_out is not None and not np.may_share_memory(lanes_out, samples):  # a copy would be lost
+            raise ValueError("samples: must be a C-ordered float array")
         if self.driver is not None:
             signals, peaks, deviations, polynomials = self.driver.run(
-                x0, plan, inputs, p, reference, with_states, target
+                x0, plan, inputs, p, reference, with_states, target, lanes_out
             )
         else:
             assert self.graph is not None
@@ -185,6 +193,8 @@ class DenseStepper:
             signals, peaks, deviations = (np.stack([r[j] for r in runs], axis=-1) for j in range(3))  # type: ignore[misc]
             polys = [r[3] for r in runs]
             polynomials = None if polys[0] is None else np.stack(polys, axis=-1)  # type: ignore[arg-type]
+            if lanes_out is not None:
+                lanes_out[:, 1:] = np.moveaxis(signals[plan.sample_slots], 0, 1)
         if stacked:
             return signals, peaks, deviations, polynomials
         return (signals[..., 0], peaks[..., 0], deviations[..., 0],

@@ -122,7 +122,8 @@ class Dop853Driver:
         library = ctypes.CDLL(str(self.library))
         fn = getattr(library, self.name)
         fn.restype = ctypes.c_int
-        fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int] + [ctypes.c_void_p] * 12
+        fn.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_int] + [ctypes.c_void_p] * 12 + [ctypes.c_int,
+                                                                                            ctypes.c_void_p]
         self._fn = fn
         metrics = getattr(library, f"{self.name}_metrics")
         metrics.restype = ctypes.c_int
@@ -139,6 +140,7 @@ class Dop853Driver:
         reference: np.ndarray,
         with_states: bool = False,
         final: np.ndarray | None = None,
+        samples: np.ndarray | None = None,
     ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray | None]:
         """Step ``lanes`` runs through ``plan``.
 
@@ -156,6 +158,9 @@ class Dop853Driver:
             Also return each step's dense-output polynomial.
         final : ndarray (lanes, 6), optional
             The target of the deviations (default zero).
+        samples : ndarray (6, samples, lanes), optional
+            Filled from its second column on with the signals at the plan's output samples (``plan.sample_slots``
+            in order; the first column, the start, is left as it is), C order.
 
         Returns
         -------
@@ -186,10 +191,15 @@ class Dop853Driver:
         polys = np.empty((steps, degree + 1, nx, self.lanes)) if with_states else None
         x, par, ref, fin = lanes
         u, h, first, frac = shared
+        count = plan.sample_slots.size
+        if samples is not None and (samples.shape != (6, count + 1, self.lanes) or samples.dtype != np.float64
+                                    or not samples.flags.c_contiguous):
+            raise ValueError(f"{self.name}: samples must be a C-ordered float array (6, {count + 1}, {self.lanes})")
         self._fn(
             steps, m, plan.probes, x.ctypes.data, u.ctypes.data, h.ctypes.data, first.ctypes.data,
             frac.ctypes.data, par.ctypes.data, ref.ctypes.data, fin.ctypes.data, signals.ctypes.data,
             peaks.ctypes.data, deviations.ctypes.data, None if polys is None else polys.ctypes.data,
+            count, None if samples is None else samples.ctypes.data,
         )
         return signals, peaks, deviations, polys
 

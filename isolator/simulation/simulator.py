@@ -46,7 +46,6 @@ from isolator.simulation.stepping import (
     hold_time,
     plan_stage_inputs,
     rk4_stepper,
-    with_start,
 )
 from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
@@ -279,11 +278,10 @@ class Simulator:
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
         if forces is None and feedback is None and controller is None and method.plan is not None:
-            plan, (raw, step_peaks, deviations, polynomials) = dense_run(self, method, p, start, final)
+            plan, (raw, step_peaks, deviations, polynomials, signals) = dense_run(self, method, p, start, final)
             if not np.all(np.isfinite(polynomials)):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
-            signals = with_start(raw[plan.sample_slots])
             runs = DenseRuns.of_run(plan, (raw, step_peaks, deviations, polynomials), start.state, self.model)
             x0, dense = start.state, polynomials
             free = run_tail(self.scenario, self.model, p, start, end,

@@ -45,7 +45,6 @@ __all__ = [
     "stage_inputs",
     "staged_map",
     "staged_parameters",
-    "with_start",
 ]
 
 #: most the table may turn [rad] before a run is reported as diverged
@@ -131,13 +130,6 @@ def check_turn(peaks: np.ndarray, t: np.ndarray | None = None, signals: np.ndarr
         too_far = np.max(np.abs(signals[3:]), axis=0) > MAX_TURN
         when = f" at t = {t[np.argmax(too_far)]:.4g} s" if too_far.any() else ""
     raise SimulationError(f"the run diverged: the table turned by more than {MAX_TURN:g} rad{when}")
-
-
-def with_start(signals: np.ndarray) -> np.ndarray:
-    """Signals (samples - 1, 6) after the start as (6, samples) rows, C order, zero at the start."""
-    out = np.zeros((6, signals.shape[0] + 1))
-    out[:, 1:] = signals.T
-    return out
 
 
 def hold_time(end: Equilibrium | None) -> float:

@@ -164,20 +164,22 @@ class DenseSimulator(Protocol):
 
 
 def dense_run(sim: DenseSimulator, method: Method, p: np.ndarray, start: Equilibrium, final: np.ndarray | None
-              ) -> tuple[StepPlan, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
+              ) -> tuple[StepPlan, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]]:
     """``method``'s DOP853 steps of one run from ``start`` (``final``: the signals' target), ending on the valves'
     switches (:func:`step_on_switches`): the plan stepped, and the signals at its slots, the steps' peaks and
-    deviations and their dense output (as ``DenseStepper.run_slots`` gives them)."""
+    deviations and their dense output (as ``DenseStepper.run_slots`` gives them), then the signals at the output
+    samples (6, samples), zero at the start."""
     plan, stepper, switches = method.plan, dense_stepper(sim.model), ValveSwitches.of(sim.scenario, sim.layout, p)
     if plan is None:
         raise ValueError("dense_run: the method steps RK4 on the sample grid, it has no step plan")
 
-    def step(steps: StepPlan) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    def step(steps: StepPlan) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         inputs = sim.plan_inputs(method, p) if steps is plan else stage_inputs(sim.scenario, sim.model, steps, p)
+        samples = np.zeros((6, steps.sample_slots.size + 1))
         raw, peaks, deviations, polynomials = stepper.run_slots(start.state, steps, inputs, p, start.state,
-                                                                with_states=True, final=final)
+                                                                with_states=True, final=final, samples=samples)
         assert polynomials is not None  # with_states
-        return raw, peaks, deviations, polynomials
+        return raw, peaks, deviations, polynomials, samples
     if switches is None:
         return plan, step(plan)
     return step_on_switches([switches], plan, step, lambda out: [out[3]],

@@ -110,6 +110,11 @@ def test_the_stepper_without_a_compiler_gives_the_same_run(monkeypatch):
     assert not evaluated.native
     a = compiled.run(start.state, method.plan, inputs, p, start.state)
     b = evaluated.run(start.state, method.plan, inputs, p, start.state)
+    # the signals at the output samples in a response's layout, filled by either form as its slots hold them
+    for stepper in (compiled, evaluated):
+        samples = np.zeros((6, method.plan.sample_slots.size + 1))
+        slots = stepper.run_slots(start.state, method.plan, inputs, p, start.state, samples=samples)[0]
+        np.testing.assert_array_equal(samples[:, 1:], slots[method.plan.sample_slots].T)
     # the same numbers up to rounding (the compiled code is built with -ffast-math)
     assert np.allclose(a[0], b[0], rtol=0, atol=1e-10 * np.abs(a[0]).max())
     assert np.allclose(a[1], b[1], rtol=0, atol=1e-10 * np.abs(a[1]).max())

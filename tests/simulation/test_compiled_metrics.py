@@ -103,3 +103,24 @@ def test_one_run_equals_numpy():
     compiled, numpy = _both(dense, final[None, :], sim.stop_time, Band(), np.zeros(1))
     _same(compiled, numpy)
     assert np.count_nonzero(np.isfinite(compiled[1])) >= 4
+
+
+@pytest.mark.parametrize("lanes", [1, 8])
+def test_the_loop_writes_the_output_samples_as_the_slots_hold_them(lanes):
+    """The signals at the output samples, written by the compiled loop in a response's layout (6, samples),
+    are the slots ``plan.sample_slots`` picks out, bit for bit, and the start's column is left alone."""
+    sim = Simulator(load_scenario("paper-table-3-2"))
+    p = sim.parameter_vector(None)
+    start, end = sim.equilibria(p)
+    method = sim.method_for(max(start.max_frequency, end.max_frequency))
+    stepper = dense_stepper(sim.model, lanes)
+    x0 = np.tile(start.state, (lanes, 1)) if lanes > 1 else start.state
+    pp = np.tile(p, (lanes, 1)) if lanes > 1 else p
+    shape = (6, method.plan.sample_slots.size + 1) + ((lanes,) if lanes > 1 else ())
+    samples = np.full(shape, 7.0)
+    raw = stepper.run_slots(x0, method.plan, sim.plan_inputs(method, p), pp, x0, samples=samples)[0]
+    picked = np.moveaxis(raw[method.plan.sample_slots], 0, 1)
+    np.testing.assert_array_equal(samples[:, 1:], picked)
+    assert np.all(samples[:, 0] == 7.0)
+    with pytest.raises(ValueError, match="samples"):
+        stepper.run_slots(x0, method.plan, sim.plan_inputs(method, p), pp, x0, samples=samples[:, :-1])

@@ -40,10 +40,13 @@ static inline void dense_row(const V K[ST][NX], double h, int j, V coef[DEG][NX]
    target the deviations are measured from.
    Out: sig (steps * per, 6, LANES) at the used slots; peak (steps, 6, LANES) max |signal| and dev
    (steps, 6, LANES) max |signal - fin| over each step's peak slots (NaN propagates); poly, unless null,
-   (steps, DEG + 1, NX, LANES): each step's start state and dense-output coefficients. */
+   (steps, DEG + 1, NX, LANES): each step's start state and dense-output coefficients; samp, unless null,
+   (6, nsamp + 1, LANES): the signals at the output samples (the used slots after the probes, in order) from
+   index 1 (index 0, the start, is the caller's). */
 extern "C" int DOP853_NAME(int steps, int per, int probes, const double* x0, const double* u, const double* hs,
                            const double* first, const double* frac, const double* p, const double* ref,
-                           const double* fin, double* sig, double* peak, double* dev, double* poly) {
+                           const double* fin, double* sig, double* peak, double* dev, double* poly, int nsamp,
+                           double* samp) {
   static const int rows[NROWS + 1] = {DOP853_ROWS};
   static const int others[NOTHERS + 1] = {DOP853_OTHERS};
   V x[NX], xi[NX], xn[NX], xs[NX], K[ST][NX], coef[DEG][NX];
@@ -51,6 +54,7 @@ extern "C" int DOP853_NAME(int steps, int per, int probes, const double* x0, con
   const V* R = (const V*)ref;
   const V* F = (const V*)fin;
   const int counted = probes > 0 ? probes : per;
+  long sample = 0;
   for (int j = 0; j < NX; ++j) { x[j] = ((const V*)x0)[j]; xs[j] = 0.0; }
 #if LANES > 1
   V ub[ST * NU + 1];
@@ -83,6 +87,10 @@ extern "C" int DOP853_NAME(int steps, int per, int probes, const double* x0, con
       signals(xs, R, out);
       if (m < counted) {
         for (int k = 0; k < 6; ++k) { top[k] = worst(top[k], fabs(out[k])); off[k] = worst(off[k], fabs(out[k] - F[k])); }
+      }
+      if (samp && m >= probes && sample < nsamp) {
+        ++sample;
+        for (int k = 0; k < 6; ++k) ((V*)samp)[(long)k * (nsamp + 1) + sample] = out[k];
       }
     }
     for (int k = 0; k < 6; ++k) { ((V*)peak)[(long)s * 6 + k] = top[k]; ((V*)dev)[(long)s * 6 + k] = off[k]; }
