@@ -172,8 +172,15 @@ def tune(scenario: Scenario, method: str, design: Callable[[dict[str, Any]], Dis
         return candidate.settling < now.settling - tolerance or (
             candidate.settling <= now.settling and candidate.total < now.total - tolerance)
 
+    seen: set[str] = set()
+
     def trial(settings: dict[str, Any]) -> bool:
-        """Design, simulate and judge one candidate (recorded); True when it became the best."""
+        """Design, simulate and judge one candidate (recorded); True when it became the best. A candidate tried
+        before is not tried again: it did not beat the best then, and the best has only improved."""
+        name = repr({k: [f"{x:.9g}" for x in np.ravel(v)] for k, v in sorted(settings.items())})
+        if name in seen:
+            return False
+        seen.add(name)
         try:
             ctrl = design(settings)
             run = sim.run(p=parameters, controller=ctrl)
