@@ -18,6 +18,7 @@ from controllers.feedback.output_tuning import (
     TOLERANCE,
     Trial,
     _search,
+    tune,
 )
 from isolator import Band, Simulator, load_scenario
 
@@ -131,3 +132,24 @@ def test_the_compass_search_keeps_stepping_while_it_pays():
 
     chosen, _ = _landscape(settling)
     assert math.prod(chosen.settings["max_velocity"]) == pytest.approx(1e-12, rel=0.8)
+
+
+def test_the_search_designs_each_candidate_once_and_reports_the_one_it_chose():
+    """Every design the search builds is a new one (a candidate met again is not simulated again), and what it
+    reports is the chosen candidate's own record."""
+    scenario = load_scenario(SCENARIO)
+    built = []
+
+    def design(weights):
+        built.append(repr(weights))
+        return design_controller(scenario, "lqg", RATE, options=weights, search=False)
+
+    outcome = tune(scenario, "lqg", design)
+    assert len(built) == len(set(built)) == len(outcome.trials)
+    assert outcome.best is not None
+    assert outcome.best in outcome.trials
+    assert outcome.settings == outcome.best.settings
+    assert outcome.to_dict()["settling"] == outcome.best.settling
+    assert outcome.best.settling <= 0.06 * outcome.passive
+    assert all(t.settling >= outcome.best.settling - TOLERANCE * outcome.passive for t in outcome.trials
+               if not t.reason)
