@@ -13,13 +13,14 @@ Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
   feedforward.csv --band ...`` reproduces the feedforward run's numbers;
 * ``report.md``: the numbers, the band, the controller and its loop's stability;
 * with ``[[sensors]]``, the output-feedback designs the machine can run (:mod:`studies.control_sensors`):
-  ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png``, ``sensors-budget.png`` (the error
-  budget at the tool, passive and closed loop: :mod:`studies.control_budget`) and their section of the report.
+  ``sensors-defaults.png`` (the defaults against the methods' own weights), ``sensors-loops.png``,
+  ``sensors-margins.png``, ``sensors-time.png``, ``sensors-budget.png`` (the error budget at the tool:
+  :mod:`studies.control_budget`) and their section of the report.
 
-With feedback alone the controller regulates to the initial equilibrium (the state-feedback designs lqr and
-hinf, which would fight the carriages' quasi-static tilt with saturating forces, to the planned move's
-quasi-static path: :attr:`~controllers.feedback.Controller.follows_path`); with both, to the feedforward's
-quasi-static path, so the two do not fight over the tilt.
+With feedback alone the controller regulates to the initial equilibrium (state-feedback lqr and hinf, which
+would fight the carriages' quasi-static tilt with saturating forces, to the planned move's quasi-static path:
+:attr:`~controllers.feedback.Controller.follows_path`); with both, to the feedforward's quasi-static path, so
+the two do not fight over the tilt.
 """
 
 from __future__ import annotations
@@ -388,8 +389,8 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
               *table_header(["design", *SIGNALS])]
     for name, resp in loops.items():
         lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
-    extra = (", `sensors-loops.png`, `sensors-margins.png`, `sensors-time.png`, `sensors-budget.png`"
-             if study.sensors else "")
+    extra = "".join(f", `{name}`" for name in sensor_study.FIGURES if (study.folder / name).exists()) \
+        if study.sensors else ""
     lines += ["", *sensor_study.sensor_report(study.sensors, study.sensors_left_out),
               f"Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`{extra}."]
     write_report(study.folder, lines)

@@ -12,8 +12,9 @@ the study's sample rate, as ``isolator controller`` exports them) the study repo
 * the error budget at the tool, passive and closed loop, with the part the sensors' noise adds
   (:mod:`studies.control_budget`; with a random source on the passive table).
 
-Figures ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png`` and ``sensors-budget.png``
-(:func:`write_figures`).
+Figures (:data:`FIGURES`, :func:`write_figures`): ``sensors-defaults.png`` (the default designs against the
+methods' own weights and the passive table: settling and peak command), ``sensors-loops.png``,
+``sensors-margins.png``, ``sensors-time.png`` and ``sensors-budget.png``.
 """
 
 from __future__ import annotations
@@ -39,10 +40,14 @@ from .figures import save_figure
 from .reporting import fmt, micro_unit, table_header, table_row
 from .sensor_loops import LoopResponse, NoiseMotion, loop_response, noise_motion
 
-__all__ = ["SENSOR_METHODS", "SensorDesign", "run_sensor_designs", "sensor_report", "write_figures"]
+__all__ = ["FIGURES", "SENSOR_METHODS", "SensorDesign", "defaults_figure", "run_sensor_designs", "sensor_report",
+           "write_figures"]
 
 #: the output-feedback designs the study compares
 SENSOR_METHODS = ("skyhook", "lqg", "hinf")
+#: the figures of the section (``sensors-budget.png`` only when the designs have budgets)
+FIGURES = ("sensors-defaults.png", "sensors-loops.png", "sensors-margins.png", "sensors-time.png",
+           "sensors-budget.png")
 
 
 @dataclass(frozen=True)
@@ -74,6 +79,8 @@ class SensorDesign:
         when it did not settle.
     force_share : float
         The largest of the actuators' peak commands over their ``max_force``.
+    unsearched_share : float
+        The same for the method's own default design (nan without a search).
     budget : DesignBudget or None
         The error budget at the tool, passive and with this controller (:func:`studies.control_budget.design_budget`).
     """
@@ -91,6 +98,7 @@ class SensorDesign:
     unsearched: float | None = None
     force_share: float = math.nan
     budget: DesignBudget | None = None
+    unsearched_share: float = math.nan
 
     @property
     def settling_time_max(self) -> float | None:
@@ -104,6 +112,7 @@ class SensorDesign:
                 "settling": self.settling, "settling_time_max": self.settling_time_max,
                 "peak_force": self.peak_force, "rms_force": self.rms_force, "force_share": self.force_share,
                 "unsearched_settling_time_max": self.unsearched,
+                "unsearched_force_share": None if math.isnan(self.unsearched_share) else self.unsearched_share,
                 "noise_table_rms": self.noise.table_rms, "noise_force_rms_max": float(np.max(self.noise.force_rms)),
                 "sensitivity_peak": float(np.max(self.loops.sensitivity)),
                 "complementary_peak": float(np.max(self.loops.complementary)),
@@ -155,16 +164,22 @@ def run_sensor_designs(scenario: Scenario, band: Band, settle: Callable[[Respons
         along = fb.check_robustness(scenario, ctrl, positions=[tuple(q) for q in _along_travel(scenario)])
         response = sim.run(controller=ctrl)
         forces = response.actuator_forces
-        unsearched = None
+        unsearched, unsearched_share = None, math.nan
         if "search" in ctrl.settings:  # the method's own default weights, for the comparison
-            own = settle(sim.run(controller=fb.design_controller(scenario, method, sample_rate, search=False)), band)
+            own_run = sim.run(controller=fb.design_controller(scenario, method, sample_rate, search=False))
+            own = settle(own_run, band)
             unsearched = None if any(v is None for v in own.values()) else max(v for v in own.values() if v is not None)
+            unsearched_share = _share(own_run, limits)
         out.append(SensorDesign(method, ctrl, response, settle(response, band), loop_response(plant, ctrl, f),
                                 noise_motion(plant, ctrl), robust.to_dict(), along.cases,
                                 float(np.max(np.abs(forces))), float(np.sqrt(np.mean(forces**2))), unsearched,
-                                float(np.max(np.max(np.abs(forces), axis=1) / limits)),
-                                design_budget(scenario, ctrl)))
+                                _share(response, limits), design_budget(scenario, ctrl), unsearched_share))
     return out, skipped
+
+
+def _share(response: Response, limits: np.ndarray) -> float:
+    """The largest of the actuators' peak commands in ``response`` over their ``max_force``."""
+    return float(np.max(np.max(np.abs(response.actuator_forces), axis=1) / limits))
 
 
 def _along_travel(scenario: Scenario, points: int = 9) -> np.ndarray:
@@ -184,10 +199,54 @@ def write_figures(designs: Sequence[SensorDesign], scenario: Scenario, passive: 
                   folder: Path) -> None:
     """The section's figures in ``folder``: ``sensors-loops.png``, ``sensors-margins.png``, ``sensors-time.png``
     and (with budgets) ``sensors-budget.png``."""
+    defaults_figure(designs, passive, band, folder / "sensors-defaults.png")
     loops_figure(designs, scenario, folder / "sensors-loops.png")
     margins_figure(designs, folder / "sensors-margins.png")
     time_figure(designs, passive, band, folder / "sensors-time.png")
     budget_figure({d.method: d.budget for d in designs if d.budget is not None}, folder / "sensors-budget.png")
+
+
+def defaults_figure(designs: Sequence[SensorDesign], passive: Response, band: Band, path: Path) -> None:
+    """The move's settling (slowest signal, in the study's band) over the passive table's and the peak command
+    over ``max_force``: each design as ``isolator controller`` makes it by default and, for the searched
+    methods, with the method's own weights (``search=False``)."""
+    if not designs:
+        return
+    values = list(passive.with_band(band).settling_time.values())
+    reference = None if any(v is None for v in values) else max(v for v in values if v is not None)
+    rows: list[tuple[str, float | None, float, str]] = [("passive", reference, 0.0, "0.3")]
+    for d in designs:
+        if "search" in d.controller.settings:
+            rows.append((f"{d.method}, own weights", d.unsearched, d.unsearched_share, "0.65"))
+        rows.append((f"{d.method}, default" + (" (searched)" if "search" in d.controller.settings else ""),
+                     d.settling_time_max, d.force_share, "C0"))
+    fig, axes = plt.subplots(1, 2, figsize=(13, 0.55 * len(rows) + 1.8), layout="constrained", sharey=True)
+    y = np.arange(len(rows))
+    for i, (_, value, share, color) in enumerate(rows):
+        ratio = math.nan if value is None or not reference else value / reference
+        axes[0].barh(i, ratio if math.isfinite(ratio) else 0.0, color=color)
+        axes[0].annotate("did not settle" if value is None else f"{ratio:.3f} ({value:.3g} s)",
+                         (ratio if math.isfinite(ratio) else 0.0, i), xytext=(4, 0), textcoords="offset points",
+                         va="center", fontsize=8)
+        axes[1].barh(i, share, color=color)
+        axes[1].annotate(f"{share:.2f}", (share, i), xytext=(4, 0), textcoords="offset points", va="center",
+                         fontsize=8)
+    axes[0].set_xlim(0.0, 1.3)
+    axes[0].set_yticks(y, [r[0] for r in rows])
+    axes[0].invert_yaxis()
+    axes[0].set_xlabel("settling of the move / the passive table's [-] (slowest signal)")
+    axes[0].set_title(f"settling: the passive table's {fmt(reference)} s is 1")
+    limit = max((d.controller.settings.get("search", {}).get("force_share", math.nan) for d in designs),
+                default=math.nan)
+    if math.isfinite(limit):
+        axes[1].axvline(limit, color="C3", ls="--", lw=1.0, label=f"the search's limit ({limit:.0%})")
+        axes[1].legend(fontsize=8, loc="lower right")
+    axes[1].set_xlabel("peak command / max_force [-] (largest over the actuators)")
+    axes[1].set_title("force used")
+    for ax in axes:
+        ax.grid(True, axis="x", alpha=0.3)
+    fig.suptitle("Default sensor-based designs (grey: the methods' own weights, unsearched)")
+    save_figure(fig, path)
 
 
 def margins_figure(designs: Sequence[SensorDesign], path: Path) -> None:
@@ -320,8 +379,8 @@ def _search_report(designs: Sequence[SensorDesign]) -> list[str]:
              f"{searched[0].controller.settings['search']['force_share']:.0%} of `max_force`, the margins over the "
              "travel kept:", "",
              *table_header(["design", "weights chosen (per world axis x, y, z)", "settling / passive",
-                            "method's own default / passive",
-                            "peak command / max_force", "candidates"])]
+                            "method's own default / passive", "peak command / max_force",
+                            "own default's peak command / max_force", "candidates"])]
     for d in searched:
         search = d.controller.settings["search"]
         chosen = ", ".join(f"{k} " + (", ".join(f"{x:.3g}" for x in v) if isinstance(v, list) else f"{v:.3g}")
@@ -329,8 +388,8 @@ def _search_report(designs: Sequence[SensorDesign]) -> list[str]:
         ratio = None if d.settling_time_max is None else d.settling_time_max / passive
         own = None if d.unsearched is None else d.unsearched / passive
         lines.append(table_row([d.method, chosen, fmt(ratio, ".3f"), fmt(own, ".3f"), fmt(d.force_share, ".2f"),
-                                search["candidates"]]))
-    return lines
+                                fmt(d.unsearched_share, ".2f"), search["candidates"]]))
+    return [*lines, "", "`sensors-defaults.png` draws the same against the passive table."]
 
 
 check_public(globals())
