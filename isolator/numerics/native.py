@@ -309,6 +309,7 @@ class MappedFunction:
         self.out_shapes = [function.size_out(i) for i in range(function.n_out())]
         self._native: dict[int, NativeFunction] = {}
         self._lock = threading.Lock()
+        self._local = threading.local()
 
     def _compiled(self, block: int) -> NativeFunction:
         with self._lock:
@@ -320,6 +321,13 @@ class MappedFunction:
                     optimisation=self.optimisation, flags=self.flags,
                 )
             return self._native[block]
+
+    def _one_by_one(self, native: NativeFunction) -> Callable[..., list[np.ndarray]]:
+        """This thread's caller of the one-set form (:meth:`NativeFunction.bound`), made once."""
+        call = getattr(self._local, "call", None)
+        if call is None:
+            call = self._local.call = native.bound()
+        return call
 
     def __call__(self, *inputs: np.ndarray) -> list[np.ndarray]:
         """Evaluate for ``N`` argument sets.
@@ -338,6 +346,14 @@ class MappedFunction:
         b = 1 if n <= 4 else self.block
         native = self._compiled(b)
         outs = [np.empty((n, r, c)) for r, c in self.out_shapes]
+        if b == 1 and native.native:  # a few sets: one call each through this thread's buffers
+            call = self._one_by_one(native)
+            rows = [np.asarray(x, dtype=float) for x in inputs]
+            for i in range(n):
+                values = call(*[x if x.ndim == 1 else x[i] for x in rows])
+                for out, value, (r, c) in zip(outs, values, self.out_shapes, strict=True):
+                    out[i] = value.reshape(c, r).T
+            return [o[:, :, 0] if c == 1 else o for o, (r, c) in zip(outs, self.out_shapes, strict=True)]
         for lo in range(0, n, b):
             hi = min(lo + b, n)
             args = []
