@@ -186,4 +186,5 @@ def dense_run(sim: DenseSimulator, method: Method, p: np.ndarray, start: Equilib
                             lambda times: sim.step_plan(method.plan_key, times))
 
 
-check_public(globals())
+# dense_run's arguments come from the simulator, checked there (a 12 s run is a couple of ms: no second check)
+check_public(globals(), ("ValveSwitches", "step_on_switches", "with_switches"))
