@@ -67,6 +67,12 @@ class DenseStepper:
         #: the casadi-graph form, when the C++ loop could not be built or ``compile`` is False
         self.graph = Dop853Graph(model, signals, compile) if self.driver is None else None
 
+    def signal_values(self, state: np.ndarray, reference: np.ndarray) -> np.ndarray:
+        """The six table signals (6,) [m, rad] of one state measured from ``reference`` (the compiled loop's own
+        evaluation when there is one, else the casadi function's)."""
+        values = None if self.driver is None else self.driver.signal_values(state, reference)
+        return np.asarray(self.signals(state, reference), dtype=float).reshape(6) if values is None else values
+
     @property
     def native(self) -> bool:
         """True when the compiled C++ loop runs the steps."""

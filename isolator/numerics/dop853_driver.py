@@ -85,7 +85,7 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
     defines |= {f"RHS_{k}": v for k, v in _sized(functions[0]).items()}
     defines |= {f"SIG_{k}": v for k, v in _sized(functions[1]).items()}
     defines |= {"DOP853_NAME": name, "DOP853_RHS": f"{name}_rhs", "DOP853_SIGNALS": f"{name}_signals",
-                "DOP853_METRICS": f"{name}_metrics",
+                "DOP853_METRICS": f"{name}_metrics", "DOP853_SIGNAL_VALUES": f"{name}_signal_values",
                 "DOP853_ROWS": ", ".join(map(str, rows)), "DOP853_OTHERS": ", ".join(map(str, others or [0]))}
     return render("isolator.numerics", "cpp/dop853_driver.cpp.j2", lanes=lanes, casadi=generator.dump(),
                   defines=defines, stages=[_nonzero(tab.a[i, :i]) for i in range(1, STAGES)], end=tab.end,
@@ -130,6 +130,23 @@ class Dop853Driver:
         metrics.argtypes = ([ctypes.c_int] * 3 + [ctypes.c_void_p] * 2 + [ctypes.c_double] + [ctypes.c_void_p] * 6
                             + [ctypes.c_double] * 2 + [ctypes.c_void_p] * 5)
         self._metrics = metrics
+        self._signal_values = None
+        if lanes == 1:
+            values = getattr(library, f"{self.name}_signal_values")
+            values.restype, values.argtypes = ctypes.c_int, [ctypes.c_void_p] * 3
+            self._signal_values = values
+
+    def signal_values(self, state: np.ndarray, reference: np.ndarray) -> np.ndarray | None:
+        """The six table signals (6,) [m, rad] of one state measured from ``reference`` (n_states each), computed
+        as the loop computes its samples; None for a driver of several lanes."""
+        if self._signal_values is None:
+            return None
+        x, ref = (np.ascontiguousarray(a, dtype=float).reshape(-1) for a in (state, reference))
+        if x.size != self.model.n_states or ref.size != self.model.n_states:
+            raise ValueError(f"{self.name}: a state and a reference of {self.model.n_states} values each")
+        out = np.empty(6)
+        self._signal_values(x.ctypes.data, ref.ctypes.data, out.ctypes.data)
+        return out
 
     def run(
         self,

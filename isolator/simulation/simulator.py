@@ -42,6 +42,7 @@ from isolator.simulation.stepping import (
     Method,
     check_step_count,
     check_turn,
+    dense_stepper,
     fastest_rate,
     hold_time,
     plan_stage_inputs,
@@ -273,7 +274,7 @@ class Simulator:
         ``method`` (as :meth:`method_for` gives it); the rest as :meth:`run`."""
         grid = self.grid
         windowed = with_random_margins(self.scenario, p, controller)  # before the run: a filled window is refused
-        final = None if end is None else self.signals(end.state[None, :], start)[:, 0]
+        final = None if end is None else dense_stepper(self.model).signal_values(end.state, start.state)
         if final is not None and feedback is not None:
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
