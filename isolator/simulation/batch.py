@@ -10,7 +10,7 @@ steps the staged right-hand side on them; a pack whose runs differ there steps
 the whole right-hand side on the inputs every run shares (the carriages'
 motion), as fast; a pneumatic pack's steps end on every run's valve switches
 (:mod:`isolator.simulation.valve_events`). Each pack's metrics come from its dense output as a single
-run's do (:mod:`isolator.simulation.dense_metrics`), four runs at once, and
+run's do (:mod:`isolator.simulation.dense_metrics`), a pack's runs at once (in the compiled loop), and
 whether a signal leaves its band after the run's end from the free motion
 (:mod:`isolator.simulation.free_tail`).
 """
