@@ -269,7 +269,7 @@ class Dop853Driver:
                     (steps, degree + 1, nx, self.lanes), (nx, self.lanes), (6, self.lanes)]
         if [a.shape for a in (*arrays, *lanes)] != expected or shared[2].shape != (6,) or shared[3].shape != (
             self.lanes,
-        ) or plan.probes < 1 or min(shared[0].size, shared[1].size) < steps:  # the compiled code trusts these sizes
+        ) or plan.probes < 1 or steps < 1 or min(shared[0].size, shared[1].size) < steps:  # the C trusts these sizes
             raise ValueError(f"{self.name}: arrays of the wrong shape for the metrics of {self.lanes} lanes")
         out = [np.empty((6, self.lanes)) for _ in range(3)]
         sig, top, dev, poly = arrays
