@@ -6,7 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -123,11 +123,9 @@ class Response:
         """Every point's world displacement from its position at the initial equilibrium (points, 3, N) [m]
         (exact rotation of the lever arm); computed from the states on first use."""
         if self.point_history is None:
-            moved = np.zeros((0, 3, self.t.size)) if self.point_set is None or not self.point_set.names \
-                else self.point_set.displacements(self.states)
-            object.__setattr__(self, "point_history", moved)
-        assert self.point_history is not None
-        return self.point_history
+            object.__setattr__(self, "point_history", np.zeros((0, 3, self.t.size)) if self.point_set is None
+                               or not self.point_set.names else self.point_set.displacements(self.states))
+        return cast(np.ndarray, self.point_history)
 
     @property
     def sensor_names(self) -> tuple[str, ...]:
@@ -143,11 +141,14 @@ class Response:
         """The sensor ``name``'s signal (N,) [m, m/s or m/s^2] (a KeyError names the known ones)."""
         return self.sensor_signals[_index_of(name, self.sensor_names, "sensor")]
 
-    def point(self, name: str) -> np.ndarray:
-        """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]."""
+    def point(self, name: str, elastic: bool = False) -> np.ndarray:
+        """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]; with
+        ``elastic``, its elastic translation ``ex, ey, ez`` from the initial equilibrium (table axes; zero on a
+        rigid top)."""
         if self.point_set is None:
             raise KeyError(f"point: unknown '{name}' (this run has no points)")
-        return self.point_signals[self.point_set.index(name)]
+        i = self.point_set.index(name)
+        return self.point_set.elastic(self.states)[i] if elastic else self.point_signals[i]
 
     @property
     def windows(self) -> WindowResult | None:
