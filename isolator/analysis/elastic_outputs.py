@@ -12,9 +12,10 @@ from typing import Any
 import numpy as np
 
 from isolator.model.flexible.structure import ElasticStructure, point_shape
+from isolator.model.rotations import pose_rotation
 from isolator.scenario.definitions import Scenario, Table
 
-__all__ = ["point_rows", "sensor_shapes"]
+__all__ = ["point_force_weights", "point_rows", "sensor_shapes"]
 
 
 def _skew(r: np.ndarray) -> np.ndarray:
@@ -43,3 +44,41 @@ def sensor_shapes(scenario: Scenario, flexible: ElasticStructure | None) -> list
         return [None] * len(scenario.sensors)
     return [None if s.on == "floor" else point_shape(scenario.table, s.position, None, f"sensors ({s.name})")
             for s in scenario.sensors]
+
+
+def point_force_weights(lin: Any, position: Any, direction: Any, feet: Any = None, what: str = "point"
+                        ) -> np.ndarray:
+    """A force along the world ``direction`` at a table point as weights on the linear model's inputs: the
+    force and its moment about the mass centre (``force:x .. torque:z``) and, on a bending top, its
+    generalised forces on the modes (``modal:eta1 ..``) through the point's elastic translation.
+
+    Parameters
+    ----------
+    lin : LinearModel
+    position : array-like (3,)
+        The point in the table frame [m].
+    direction : array-like (3,)
+        The force's direction, world axes (its length is the force per unit input).
+    feet : tuple of (x, y), optional
+        The point's feet on the top (their mean translation).
+    what : str
+        The point, for errors.
+
+    Returns
+    -------
+    ndarray (inputs,)
+    """
+    names = list(lin.input_names)
+    rot0 = pose_rotation(lin.equilibrium.pose[3:6])
+    direction = np.asarray(direction, dtype=float)
+    arm = rot0 @ np.asarray(position, dtype=float)
+    weights = np.zeros(len(names))
+    first = names.index("force:x")
+    weights[first:first + 3] = direction
+    weights[first + 3:first + 6] = np.cross(arm, direction)
+    shape = point_shape(lin.scenario.table, position, feet, what)
+    if shape is not None:
+        modal = shape.T @ (rot0.T @ direction)
+        first_modal = names.index("modal:eta1")
+        weights[first_modal:first_modal + modal.size] = modal
+    return weights

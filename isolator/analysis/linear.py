@@ -141,19 +141,25 @@ class LinearModel:
         Carriage coordinates of the rest configuration [m].
     equilibrium : Equilibrium
         The static equilibrium it is linearised about.
-    mass, damping, stiffness : ndarray (6, 6)
-        ``M, C, K`` for the coordinates ``d`` (m, rad) and the equations' force and
-        moment rows (N, N m), world axes about the mass centre.
+    mass, damping, stiffness : ndarray (ndof, ndof)
+        ``M, C, K`` for the coordinates ``d`` (m, rad; then the top's modal
+        coordinates on a bending top) and the equations' force and moment rows
+        (N, N m), world axes about the mass centre (then the modes' rows).
     ground_stiffness, ground_damping : ndarray (6, 6)
         ``G0, G1``: the floor's displacement and velocity terms.
-    force_input : ndarray (6, 6 + n_a)
-        ``[Bw, Ba]``: a wrench at the mass centre and the actuator forces.
+    force_input : ndarray (ndof, 6 + n_a + modes)
+        ``[Bw, Ba, Bm]``: a wrench at the mass centre, the actuator forces, and on a
+        bending top the generalised forces on its modes.
     system : control.StateSpace
         States ``x, y, z, rx, ry, rz, vx, vy, vz, wx, wy, wz``; inputs
         ``ground:x .. ground:rz`` [m, rad], ``force:x .. torque:z`` [N, N m] and
         ``actuator:<name>`` [N]; outputs the six table signals ``x .. rz`` [m, rad]
         and ``<point>:x, :y, :z`` [m] per point of interest, then ``s:<sensor>`` per ``[[sensors]]`` entry
-        (:mod:`isolator.analysis.sensor_outputs`). With a moving floor
+        (:mod:`isolator.analysis.sensor_outputs`). On a top that bends (``[table.flexible]``) the states
+        add the modal coordinates ``eta1 ..`` after ``rz`` and their rates ``deta1 ..`` after ``wz``, the
+        inputs the generalised modal forces ``modal:eta1 ..`` [N per modal unit] (a force at a point:
+        :func:`isolator.analysis.elastic_outputs.point_force_weights`), and each point's outputs its elastic
+        translation ``<point>:ex, :ey, :ez`` (table axes) [m]. With a moving floor
         the velocity states are the table's velocity minus ``-M^-1 G1 g``, the
         part that the floor's velocity adds at once through the isolators' dampers.
     parameters : ndarray
@@ -334,7 +340,8 @@ def linearise(
     mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]
     mass, damping, stiffness, g0, g1, bw, ba = mats[:7]
     air = None if layout.pneumatic is None else AirMatrices(_air_names(scenario), *mats[7:])
-    force_input = np.hstack([bw, ba.reshape(mass.shape[0], -1)])
+    ndof = mass.shape[0]
+    force_input = np.hstack([bw, ba.reshape(ndof, -1), -np.eye(ndof, ndof - 6, -6)])  # then generalised modal forces
     system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air, layout.flexible)
     return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p, air)
 
@@ -374,8 +381,9 @@ def _state_space(
         if flexible is not None:
             out_names += [f"{point.name}:e{a}" for a in "xyz"]
     c = np.hstack([np.vstack(rows), np.zeros((sum(r.shape[0] for r in rows), n_air))])
-    inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators)]
     modes = [f"eta{i + 1}" for i in range(ndof - 6)]
+    inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators),
+              *(f"modal:{m}" for m in modes)]
     states = [*DOF_NAMES, *modes, *STATE_NAMES[6:], *(f"d{m}" for m in modes), *(air.names if air is not None else ())]
     c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1,
                                        sensor_shapes(scenario, flexible))
