@@ -24,9 +24,10 @@ def plot_mode_shapes(nodes: Any, translations: Any, frequencies: Any, *, isolato
     """The elastic mode shapes of a top: its vertical translation in filled contours over the top's outline.
 
     One panel per elastic mode (the lowest :data:`MAX_PANELS`; rigid modes, below 1 Hz, are skipped), each
-    shape scaled to its largest vertical translation (so one colour scale, -1 to 1, serves all), the
-    frequency in its title. A file with two faces is drawn on its top face (nodes within 1 mm of the
-    highest).
+    shape scaled by its largest translation in any direction (so one colour scale, -1 to 1, serves all, and
+    a mode mostly in the plane stays pale: "(in-plane)" in its title and arrows of its in-plane
+    translation when its vertical translation is less than half its largest), the frequency in its title. Modal data with two faces is drawn on its top face
+    (nodes within 1 mm of the highest).
 
     Parameters
     ----------
@@ -81,13 +82,16 @@ def plot_mode_shapes(nodes: Any, translations: Any, frequencies: Any, *, isolato
     levels = np.linspace(-1.0, 1.0, 21)
     filled = None
     for k, (ax, i) in enumerate(zip(axes.flat, shown, strict=False), start=1):
-        w = u[i, face, 2]
-        largest = np.abs(w).max()
-        filled = ax.tricontourf(triangles, w / largest if largest > 0 else w, levels=levels, cmap="RdBu_r")
+        largest = np.abs(u[i, face]).max()  # of any component: an in-plane mode stays pale
+        w = u[i, face, 2] / largest if largest > 0 else u[i, face, 2]
+        filled = ax.tricontourf(triangles, w, levels=levels, cmap="RdBu_r", extend="neither")
+        in_plane = " (in-plane)" if np.abs(w).max() < 0.5 else ""
+        if in_plane:  # its motion as arrows
+            ax.quiver(xy[:, 0], xy[:, 1], u[i, face, 0], u[i, face, 1], color="0.25", width=0.004)
         ax.add_patch(Rectangle(lo, *(hi - lo), fill=False, edgecolor="k", linewidth=1.0))
         _mark(ax, isolators, "isolators", dict(marker="^", color="k", mfc="gold", markersize=9))
         _mark(ax, feet, "feet", dict(marker="X", color="k", mfc="limegreen", markersize=8))
-        ax.set_title(f"elastic mode {k}: {f[i]:.4g} Hz", fontsize=10)
+        ax.set_title(f"elastic mode {k}: {f[i]:.4g} Hz{in_plane}", fontsize=10)
         ax.set_aspect("equal")
     for ax in axes.flat[len(shown):]:
         ax.set_visible(False)
@@ -98,7 +102,7 @@ def plot_mode_shapes(nodes: Any, translations: Any, frequencies: Any, *, isolato
     handles, labels = axes.flat[0].get_legend_handles_labels()
     if handles:
         fig.legend(handles, labels, loc="outside lower center", ncols=len(handles), frameon=False)
-    fig.colorbar(filled, ax=axes, shrink=0.8, label="vertical translation / its largest", ticks=[-1, -0.5, 0, 0.5, 1])
+    fig.colorbar(filled, ax=axes, shrink=0.8, label="vertical translation / largest translation", ticks=[-1, -0.5, 0, 0.5, 1])
     fig.suptitle(title or "Elastic modes of the top")
     return fig
 

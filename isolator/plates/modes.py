@@ -17,21 +17,25 @@ import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.plates.kirchhoff import bending_modes
+from isolator.plates.solid import solid_modes
 
-__all__ = ["CSV_HEADER", "RIGID_LIMIT_HZ", "PlateModes", "check_plate_arguments", "plate_modes", "rigid_modes"]
+__all__ = ["CSV_HEADER", "MODELS", "RIGID_LIMIT_HZ", "PlateModes", "check_plate_arguments", "plate_modes", "rigid_modes"]
 
-#: the contract's CSV header
+#: the contract's CSV header (without ``,rx,ry,rz`` for a file of two faces)
 CSV_HEADER = "mode,frequency_hz,damping,x,y,z,ux,uy,uz,rx,ry,rz"
+#: the models :func:`plate_modes` takes
+MODELS = ("plate", "solid")
 #: modes below this frequency are rigid motions by the contract, Hz
 RIGID_LIMIT_HZ = 1.0
-#: default node spacing of the written grid: the longer side over this
-GRID_DIVISIONS = 24
+#: default node spacing of the written grid, per model: the longer side over this (about 300 nodes on a
+#: 2:1 top, one layer or two faces)
+GRID_DIVISIONS = {"plate": 24, "solid": 16}
 #: default element divisions along the longer side
 ELEMENTS = 12
 
 #: how the messages name the arguments (the command line passes its options' names)
 _NAMES = {k: k for k in ("size", "mass", "young", "poisson", "count", "max_frequency", "elements", "honeycomb",
-                         "grid")}
+                         "grid", "model")}
 
 
 @dataclass(frozen=True)
@@ -41,14 +45,16 @@ class PlateModes:
     Attributes
     ----------
     nodes : numpy.ndarray
-        Node positions (N, 3), m: a grid on the mid-surface (``z = 0``), centre at the origin.
+        Node positions (N, 3), m: a grid on the mid-surface (``z = 0``), or on the bottom then the top face
+        (``z = -+t/2``); the top's centre at the origin.
     frequency_hz : numpy.ndarray
         Natural frequencies (n,), Hz; the first six (rigid) are 0.
     translations : numpy.ndarray
         Mode shapes' translations (n, N, 3) at the nodes, m/sqrt(kg).
-    rotations : numpy.ndarray
-        Mode shapes' rotations (n, N, 3) at the nodes, rad/sqrt(kg); a point at height ``z`` above the
-        mid-surface moves by ``translation + rotation x (0, 0, z)``.
+    rotations : numpy.ndarray or None
+        Mode shapes' rotations (n, N, 3) at the nodes, rad/sqrt(kg), of a single layer of nodes (a point
+        at height ``z`` above the mid-surface moves by ``translation + rotation x (0, 0, z)``); None for the
+        two faces of a solid model.
     mass : float
         The top's mass, kg.
     size : tuple of float
@@ -58,7 +64,7 @@ class PlateModes:
     nodes: np.ndarray
     frequency_hz: np.ndarray
     translations: np.ndarray
-    rotations: np.ndarray
+    rotations: np.ndarray | None
     mass: float
     size: tuple[float, float, float]
 
@@ -68,8 +74,8 @@ class PlateModes:
         return slice(6, None)
 
     def to_csv(self, path: str | os.PathLike[str]) -> Path:
-        """Write the contract's CSV (``mode,frequency_hz,damping,x,y,z,ux,uy,uz,rx,ry,rz``, damping empty)
-        atomically: a temporary file beside ``path``, renamed when complete.
+        """Write the contract's CSV (``mode,frequency_hz,damping,x,y,z,ux,uy,uz,rx,ry,rz``, damping empty;
+        without the rotations for two faces) atomically: a temporary file beside ``path``, renamed when complete.
 
         Parameters
         ----------
@@ -83,11 +89,11 @@ class PlateModes:
         """
         path = Path(path)
         xyz = [_text(c) for c in self.nodes.T]
-        lines = [CSV_HEADER]
+        lines = [CSV_HEADER if self.rotations is not None else CSV_HEADER.removesuffix(",rx,ry,rz")]
         for i, f in enumerate(self.frequency_hz):
             frequency = "0.0" if f < RIGID_LIMIT_HZ else _text(np.array([f]), 10)[0]
             u = [_text(c) for c in self.translations[i].T]
-            r = [_text(c) for c in self.rotations[i].T]
+            r = [] if self.rotations is None else [_text(c) for c in self.rotations[i].T]
             lines.extend(f"{i + 1},{frequency},," + ",".join(row) for row in zip(*xyz, *u, *r, strict=True))
         temporary = path.with_name(f".{path.name}.{os.getpid()}.tmp")
         try:
@@ -125,18 +131,20 @@ def _text(values: np.ndarray, digits: int = 7) -> list[str]:
 
 
 def check_plate_arguments(size: Any, mass: Any, young: Any, poisson: Any, count: Any = 20, max_frequency: Any = None,
-                          elements: Any = None, honeycomb: Any = None, grid: Any = None,
+                          elements: Any = None, honeycomb: Any = None, grid: Any = None, model: Any = "plate",
                           names: Mapping[str, str] | None = None) -> None:
     """Refuse a bad argument of :func:`plate_modes` with one :class:`~isolator.errors.ParameterError`.
 
     Parameters
     ----------
-    size, mass, young, poisson, count, max_frequency, elements, honeycomb, grid
+    size, mass, young, poisson, count, max_frequency, elements, honeycomb, grid, model
         As :func:`plate_modes` takes them.
     names : mapping of str to str, optional
         How the message names each argument (the command line gives its options' names).
     """
     key = {**_NAMES, **(names or {})}
+    if model not in MODELS:
+        raise ParameterError(f"{key['model']}: must be one of {', '.join(MODELS)}, got {model!r}")
     sizes = _numbers(size, 3, key["size"], "LX,LY,T")
     if any(s <= 0 for s in sizes):
         raise ParameterError(f"{key['size']}: every entry must be positive, m; got {_listed(sizes)}")
@@ -152,6 +160,9 @@ def check_plate_arguments(size: Any, mass: Any, young: Any, poisson: Any, count:
         _whole(elements, key["elements"], 2)
     if honeycomb is not None:
         face = _positive(honeycomb, key["honeycomb"], "m")
+        if model != "plate":
+            raise ParameterError(f"{key['honeycomb']}: a honeycomb top is an equivalent plate: only with the "
+                                 f"plate model, not {model!r}")
         if face >= sizes[2] / 2:
             raise ParameterError(f"{key['honeycomb']}: a face sheet must be thinner than half the thickness "
                                  f"{sizes[2]:g} m, got {face:g} m")
@@ -239,21 +250,27 @@ def rigid_modes(nodes: np.ndarray, mass: float, size: Sequence[float]) -> tuple[
 
 def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float, count: int = 20,
                 max_frequency: float | None = None, elements: int | None = None, honeycomb: float | None = None,
-                grid: Sequence[int] | None = None) -> PlateModes:
+                grid: Sequence[int] | None = None, model: str = "plate") -> PlateModes:
     """The free-free modes of a homogeneous rectangular top, as the scenario contract's modal file holds them.
 
-    A Kirchhoff plate (thin-plate bending) with the sections' rotatory inertia, by finite elements
-    (scikit-fem, quintic C1 Argyris triangles; :mod:`isolator.plates.kirchhoff`). The plate model, rather
-    than a 3-D solid, because a top is a plate: its elastic modes within a controller's reach are bending
-    and twisting ones, the file stays one layer of nodes with rotations (the contract's single-layer form,
-    whose faces are ``u + theta x (0, 0, +-t/2)``), and the computation takes about a second. Shear
-    deformation is left out: for a thick top (thickness over the shorter side ``t / ly`` of 0.3, a granite
-    block) the higher modes come out a few per cent stiff, more as the wavelength nears the thickness; the
-    in-plane modes (far above, at ``E / rho`` over the sides) are not computed.
+    Two models, by finite elements (scikit-fem):
+
+    - ``"plate"`` (default): a Kirchhoff plate (thin-plate bending) with the sections' rotatory inertia, on
+      quintic C1 Argyris triangles (:mod:`isolator.plates.kirchhoff`), written as one layer of nodes (the
+      mid-surface, ``z = 0``) with rotations, the contract's single-layer form (faces ``u + theta x (0, 0,
+      +-t/2)``). A top is a plate: its modes within a controller's reach are bending and twisting ones, and
+      this is exact for thin tops and a honeycomb's equivalent plate, and fast. Shear deformation is left
+      out, so a thick top comes out stiff: a granite block of thickness 0.3 of its width has its twisting
+      mode some 13 % high, its first bending mode 3 %, and misses its in-plane modes.
+    - ``"solid"``: 3-D linear elasticity on triquadratic hexahedra (:mod:`isolator.plates.solid`), written as
+      the top and bottom faces' nodes (translations only, the contract's two-face form). Every mode of a
+      thick block (shear through the thickness, in-plane modes) is there; use it when ``t`` exceeds about a
+      tenth of the shorter side. Slower (seconds), and not for thin plates (elements far flatter than long).
 
     The six rigid modes written are the exact ones of the homogeneous box (mass ``m``, inertia of a uniform
-    box of the three sides, centre at the origin): the rotatory inertia makes the plate's own rigid
-    rotations carry that inertia, so the elastic modes are mass-orthogonal to them (the table's mean axes).
+    box of the three sides, centre at the origin), which both models' mass matrices contain (the plate's
+    through its rotatory inertia), so the elastic modes are mass-orthogonal to them: the table's mean axes.
+    Each elastic mode's sign puts its largest vertical translation upward.
 
     Parameters
     ----------
@@ -270,18 +287,21 @@ def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float
     max_frequency : float, optional
         Keep only elastic modes up to this frequency, Hz.
     elements : int, optional
-        Element divisions along the longer side (default 12; the shorter side in proportion).
+        Element divisions along the longer side (default 12; the other sides in proportion).
     honeycomb : float, optional
-        A honeycomb (sandwich) top's face-sheet thickness, m: its equivalent plate has the two face sheets'
-        rigidity ``D = E / (1 - nu^2) (tf^3 / 6 + tf (t - tf)^2 / 2)`` (the core's bending stiffness and its
-        shear flexibility neglected) and ``mass`` (faces and core) spread evenly as for a solid top.
+        ``"plate"`` only: a honeycomb (sandwich) top's face-sheet thickness, m: its equivalent plate has the
+        two face sheets' rigidity ``D = E / (1 - nu^2) (tf^3 / 6 + tf (t - tf)^2 / 2)`` (the core's bending
+        stiffness and its shear flexibility neglected) and ``mass`` (faces and core) spread evenly.
     grid : sequence of int, optional
-        Nodes written along x and y (default: spacing of the longer side over 24, so 25 along it).
+        Nodes written along x and y on each layer (default: the longer side in 24 intervals for the
+        plate, 16 for the solid's two faces, the shorter side at that spacing).
+    model : {"plate", "solid"}, optional
+        The model, above (default "plate").
 
     Returns
     -------
     PlateModes
-        Six rigid modes and the elastic ones at a grid of mid-surface nodes.
+        Six rigid modes and the elastic ones at a grid of nodes.
 
     Raises
     ------
@@ -292,44 +312,50 @@ def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float
     Examples
     --------
     >>> top = plate_modes((2.0, 1.0, 0.3), 4400.0, 50e9, 0.25, count=4)
-    >>> top.frequency_hz.round(1)  # doctest: +SKIP
-    array([  0. ,   0. ,   0. ,   0. ,   0. ,   0. , 101.5, 163.2, 246.7, 299.9])
+    >>> top.frequency_hz.round(1)
+    array([  0. ,   0. ,   0. ,   0. ,   0. ,   0. , 193.2, 242.5, 509.2, 517.3])
     >>> top.translations.shape
     (10, 325, 3)
     """
-    check_plate_arguments(size, mass, young, poisson, count, max_frequency, elements, honeycomb, grid)
+    check_plate_arguments(size, mass, young, poisson, count, max_frequency, elements, honeycomb, grid, model)
     lx, ly, t = (float(s) for s in size)
-    if honeycomb is None:
-        rigidity = young * t**3 / (12.0 * (1.0 - poisson**2))
+    nx, ny = (int(g) for g in grid) if grid is not None else _grid(lx, ly, GRID_DIVISIONS[model])
+    x, y = (a.ravel() for a in np.meshgrid(np.linspace(-lx / 2, lx / 2, nx), np.linspace(-ly / 2, ly / 2, ny)))
+    divisions = int(elements or ELEMENTS)
+    if model == "solid":
+        solid = solid_modes(lx, ly, t, mass, young, poisson, int(count), divisions)
+        frequency_hz = solid.frequency_hz
+        nodes = np.concatenate([np.column_stack([x, y, np.full(x.size, z)]) for z in (-t / 2, t / 2)])
+        elastic_u, elastic_r = solid.evaluate(nodes), None
     else:
-        rigidity = young / (1.0 - poisson**2) * (honeycomb**3 / 6.0 + honeycomb * (t - honeycomb) ** 2 / 2.0)
-    bending = bending_modes(lx, ly, t, mass, rigidity, poisson, int(count), int(elements or ELEMENTS))
-    kept = np.arange(int(count))
-    if bending.frequency_hz[0] < RIGID_LIMIT_HZ:
-        raise ParameterError(f"size: the first elastic mode is at {bending.frequency_hz[0]:.3g} Hz, below "
+        rigidity = young * t**3 / (12.0 * (1.0 - poisson**2)) if honeycomb is None else (
+            young / (1.0 - poisson**2) * (honeycomb**3 / 6.0 + honeycomb * (t - honeycomb) ** 2 / 2.0))
+        bending = bending_modes(lx, ly, t, mass, rigidity, poisson, int(count), divisions)
+        frequency_hz = bending.frequency_hz
+        nodes = np.column_stack([x, y, np.zeros(x.size)])
+        w, dwdx, dwdy = bending.evaluate(x, y)
+        elastic_u = np.stack([np.zeros_like(w), np.zeros_like(w), w], axis=-1)
+        # u = w e_z + theta x (0, 0, z) = (-z w_x, -z w_y, w) (Kirchhoff): theta = (w_y, -w_x, 0)
+        elastic_r = np.stack([dwdy, -dwdx, np.zeros_like(w)], axis=-1)
+    if frequency_hz[0] < RIGID_LIMIT_HZ:
+        raise ParameterError(f"size: the first elastic mode is at {frequency_hz[0]:.3g} Hz, below "
                              f"{RIGID_LIMIT_HZ:g} Hz where modal files hold rigid modes only: the top is too flexible")
+    kept = np.arange(int(count))
     if max_frequency is not None:
-        kept = kept[bending.frequency_hz[kept] <= max_frequency]
+        kept = kept[frequency_hz[kept] <= max_frequency]
         if not kept.size:
             raise ParameterError(f"max_frequency: no elastic mode up to {max_frequency:g} Hz (the first is at "
-                                 f"{bending.frequency_hz[0]:.4g} Hz)")
-    nx, ny = (int(g) for g in grid) if grid is not None else _grid(lx, ly)
-    x, y = np.meshgrid(np.linspace(-lx / 2, lx / 2, nx), np.linspace(-ly / 2, ly / 2, ny))
-    nodes = np.column_stack([x.ravel(), y.ravel(), np.zeros(x.size)])
-    w, dwdx, dwdy = (a[kept] for a in bending.evaluate(nodes[:, 0], nodes[:, 1]))
-    sign = np.sign(w[np.arange(len(w)), np.argmax(np.abs(w), axis=1)])[:, None]  # largest deflection upward
-    elastic_u = np.zeros((len(kept), len(nodes), 3))
-    elastic_r = np.zeros_like(elastic_u)
-    elastic_u[:, :, 2] = sign * w
-    elastic_r[:, :, 0] = sign * dwdy  # u = w e_z + theta x (0, 0, z) = (-z w_x, -z w_y, w): theta = (w_y, -w_x, 0)
-    elastic_r[:, :, 1] = -sign * dwdx
+                                 f"{frequency_hz[0]:.4g} Hz)")
+    vertical = elastic_u[kept, :, 2]
+    sign = np.sign(vertical[np.arange(len(kept)), np.argmax(np.abs(vertical), axis=1)])  # largest upward
+    sign = np.where(sign == 0, 1.0, sign)[:, None, None]
     rigid_u, rigid_r = rigid_modes(nodes, mass, (lx, ly, t))
-    return PlateModes(nodes, np.concatenate([np.zeros(6), bending.frequency_hz[kept]]),
-                      np.concatenate([rigid_u, elastic_u]), np.concatenate([rigid_r, elastic_r]), float(mass),
-                      (lx, ly, t))
+    rotations = None if elastic_r is None else np.concatenate([rigid_r, sign * elastic_r[kept]])
+    return PlateModes(nodes, np.concatenate([np.zeros(6), frequency_hz[kept]]),
+                      np.concatenate([rigid_u, sign * elastic_u[kept]]), rotations, float(mass), (lx, ly, t))
 
 
-def _grid(lx: float, ly: float) -> tuple[int, int]:
-    """Nodes along x and y: the longer side divided in :data:`GRID_DIVISIONS`, the shorter at that spacing."""
-    spacing = max(lx, ly) / GRID_DIVISIONS
+def _grid(lx: float, ly: float, divisions: int) -> tuple[int, int]:
+    """Nodes along x and y: the longer side in ``divisions``, the shorter at that spacing (at least 3 nodes)."""
+    spacing = max(lx, ly) / divisions
     return max(3, round(lx / spacing) + 1), max(3, round(ly / spacing) + 1)
