@@ -8,6 +8,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.arguments import check_public
 
 __all__ = ["MAX_PANELS", "plot_mode_shapes"]
 
@@ -19,7 +20,8 @@ _RIGID_HZ = 1.0
 _FACE = 1e-3
 
 
-def plot_mode_shapes(nodes: Any, translations: Any, frequencies: Any, *, isolators: Any = None, feet: Any = None,
+def plot_mode_shapes(nodes: np.ndarray, translations: np.ndarray, frequencies: np.ndarray, *,
+                     isolators: np.ndarray | None = None, feet: np.ndarray | None = None,
                      title: str | None = None) -> Any:
     """The elastic mode shapes of a top: its vertical translation in filled contours over the top's outline.
 
@@ -115,3 +117,6 @@ def _mark(ax: Any, where: Any, name: str, style: dict[str, Any]) -> None:
     if xy.shape[1] not in (2, 3):
         raise ParameterError(f"{name}: must be (x, y) or (x, y, z) positions, got shape {np.shape(where)}")
     ax.plot(xy[:, 0], xy[:, 1], label=name, linestyle="none", clip_on=False, zorder=5, **style)
+
+
+check_public(globals())

@@ -144,5 +144,5 @@ def _probes(basis: Any, points: np.ndarray) -> tuple[csr_matrix, csr_matrix, csr
     def matrix(values: list[np.ndarray]) -> csr_matrix:
         return csr_matrix((np.concatenate([v.ravel() for v in values]), (rows, cols)), shape=shape)
 
-    return (matrix([f.value for f in fields]), matrix([f.grad[0] for f in fields]),
+    return (matrix([np.asarray(f) for f in fields]), matrix([f.grad[0] for f in fields]),
             matrix([f.grad[1] for f in fields]))

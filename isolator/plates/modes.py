@@ -18,6 +18,7 @@ import numpy as np
 from isolator.errors import ParameterError
 from isolator.plates.kirchhoff import bending_modes
 from isolator.plates.solid import solid_modes
+from isolator.scenario.arguments import check_public
 
 __all__ = ["CSV_HEADER", "MODELS", "RIGID_LIMIT_HZ", "PlateModes", "check_plate_arguments", "plate_modes", "rigid_modes"]
 
@@ -270,7 +271,8 @@ def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float
     The six rigid modes written are the exact ones of the homogeneous box (mass ``m``, inertia of a uniform
     box of the three sides, centre at the origin), which both models' mass matrices contain (the plate's
     through its rotatory inertia), so the elastic modes are mass-orthogonal to them: the table's mean axes.
-    Each elastic mode's sign puts its largest vertical translation upward.
+    Each elastic mode's sign makes its first large translation (in the nodes' order, x, y, z at each, the
+    first over a tenth of the largest) positive, a rule that survives the rounding of symmetric tops.
 
     Parameters
     ----------
@@ -346,16 +348,23 @@ def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float
         if not kept.size:
             raise ParameterError(f"max_frequency: no elastic mode up to {max_frequency:g} Hz (the first is at "
                                  f"{frequency_hz[0]:.4g} Hz)")
-    vertical = elastic_u[kept, :, 2]
-    sign = np.sign(vertical[np.arange(len(kept)), np.argmax(np.abs(vertical), axis=1)])  # largest upward
-    sign = np.where(sign == 0, 1.0, sign)[:, None, None]
+    sign = np.array([_sign(elastic_u[i]) for i in kept])[:, None, None]
     rigid_u, rigid_r = rigid_modes(nodes, mass, (lx, ly, t))
     rotations = None if elastic_r is None else np.concatenate([rigid_r, sign * elastic_r[kept]])
     return PlateModes(nodes, np.concatenate([np.zeros(6), frequency_hz[kept]]),
                       np.concatenate([rigid_u, sign * elastic_u[kept]]), rotations, float(mass), (lx, ly, t))
 
 
+def _sign(translations: np.ndarray) -> float:
+    """+1 or -1: the sign that makes a mode's first translation over a tenth of its largest positive."""
+    flat = translations.ravel()
+    return float(np.sign(flat[np.argmax(np.abs(flat) > 0.1 * np.abs(flat).max())]) or 1.0)
+
+
 def _grid(lx: float, ly: float, divisions: int) -> tuple[int, int]:
     """Nodes along x and y: the longer side in ``divisions``, the shorter at that spacing (at least 3 nodes)."""
     spacing = max(lx, ly) / divisions
     return max(3, round(lx / spacing) + 1), max(3, round(ly / spacing) + 1)
+
+
+check_public(globals())
