@@ -10,7 +10,6 @@ from typing import Any
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.cli.budget_command import register as register_budget
 from isolator.cli.calibrate_command import register as register_calibrate
-from isolator.cli.plate_command import register as register_plate_modes
 from isolator.cli.helpers import (
     check_memory,
     count,
@@ -25,6 +24,7 @@ from isolator.cli.helpers import (
     seed,
     use_agg,
 )
+from isolator.cli.plate_command import register as register_plate_modes
 from isolator.cli.sequence_command import register as register_sequence
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS

@@ -28,8 +28,8 @@ def plot_mode_shapes(nodes: np.ndarray, translations: np.ndarray, frequencies: n
     One panel per elastic mode (the lowest :data:`MAX_PANELS`; rigid modes, below 1 Hz, are skipped), each
     shape scaled by its largest translation in any direction (so one colour scale, -1 to 1, serves all, and
     a mode mostly in the plane stays pale: "(in-plane)" in its title and arrows of its in-plane
-    translation when its vertical translation is less than half its largest), the frequency in its title. Modal data with two faces is drawn on its top face
-    (nodes within 1 mm of the highest).
+    translation when its vertical translation is less than half its largest), the frequency in its title.
+    Modal data with two faces is drawn on its top face (nodes within 1 mm of the highest).
 
     Parameters
     ----------
@@ -82,7 +82,7 @@ def plot_mode_shapes(nodes: np.ndarray, translations: np.ndarray, frequencies: n
     fig, axes = plt.subplots(rows, columns, figsize=(3.6 * columns + 1.2, (3.0 * aspect + 0.8) * rows + 1.0),
                              squeeze=False, sharex=True, sharey=True, layout="constrained")
     levels = np.linspace(-1.0, 1.0, 21)
-    filled = None
+    filled: Any = None
     for k, (ax, i) in enumerate(zip(axes.flat, shown, strict=False), start=1):
         largest = np.abs(u[i, face]).max()  # of any component: an in-plane mode stays pale
         w = u[i, face, 2] / largest if largest > 0 else u[i, face, 2]
@@ -91,8 +91,8 @@ def plot_mode_shapes(nodes: np.ndarray, translations: np.ndarray, frequencies: n
         if in_plane:  # its motion as arrows
             ax.quiver(xy[:, 0], xy[:, 1], u[i, face, 0], u[i, face, 1], color="0.25", width=0.004)
         ax.add_patch(Rectangle(lo, *(hi - lo), fill=False, edgecolor="k", linewidth=1.0))
-        _mark(ax, isolators, "isolators", dict(marker="^", color="k", mfc="gold", markersize=9))
-        _mark(ax, feet, "feet", dict(marker="X", color="k", mfc="limegreen", markersize=8))
+        _mark(ax, isolators, "isolators", {"marker": "^", "color": "k", "mfc": "gold", "markersize": 9})
+        _mark(ax, feet, "feet", {"marker": "X", "color": "k", "mfc": "limegreen", "markersize": 8})
         ax.set_title(f"elastic mode {k}: {f[i]:.4g} Hz{in_plane}", fontsize=10)
         ax.set_aspect("equal")
     for ax in axes.flat[len(shown):]:
@@ -104,7 +104,8 @@ def plot_mode_shapes(nodes: np.ndarray, translations: np.ndarray, frequencies: n
     handles, labels = axes.flat[0].get_legend_handles_labels()
     if handles:
         fig.legend(handles, labels, loc="outside lower center", ncols=len(handles), frameon=False)
-    fig.colorbar(filled, ax=axes, shrink=0.8, label="vertical translation / largest translation", ticks=[-1, -0.5, 0, 0.5, 1])
+    fig.colorbar(filled, ax=axes, shrink=0.8, label="vertical translation / largest translation",
+                 ticks=[-1, -0.5, 0, 0.5, 1])
     fig.suptitle(title or "Elastic modes of the top")
     return fig
 

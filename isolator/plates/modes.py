@@ -20,7 +20,8 @@ from isolator.plates.kirchhoff import bending_modes
 from isolator.plates.solid import solid_modes
 from isolator.scenario.arguments import check_public
 
-__all__ = ["CSV_HEADER", "MODELS", "RIGID_LIMIT_HZ", "PlateModes", "check_plate_arguments", "plate_modes", "rigid_modes"]
+__all__ = ["CSV_HEADER", "MODELS", "RIGID_LIMIT_HZ", "PlateModes", "check_plate_arguments", "plate_modes",
+           "rigid_modes"]
 
 #: the contract's CSV header (without ``,rx,ry,rz`` for a file of two faces)
 CSV_HEADER = "mode,frequency_hz,damping,x,y,z,ux,uy,uz,rx,ry,rz"

@@ -24,7 +24,8 @@ def test_the_command_writes_the_modal_file_and_the_figure(tmp_path, capsys):
     assert main(["plate-modes", str(out), *TOP, "--count", "4", "--plot", str(plot)]) == 0
     text = capsys.readouterr().out
     assert "4 elastic modes, 193.2 to 517.3 Hz, and 6 rigid ones at 325 nodes" in text
-    assert f"modes: {out}" in text and f"figure: {plot}" in text
+    assert f"modes: {out}" in text
+    assert f"figure: {plot}" in text
     api = plate_modes((2.0, 1.0, 0.3), 4400.0, 50e9, 0.25, count=4).to_csv(tmp_path / "api.csv")
     assert out.read_text() == api.read_text()
     assert plot.read_bytes()[:4] == b"\x89PNG"
@@ -86,7 +87,8 @@ def test_the_figure_shows_each_elastic_mode_with_its_frequency_and_the_marks():
     panels = [ax for ax in fig.axes if ax.get_visible() and ax.get_title()]
     assert len(panels) == 12  # rigid modes skipped, at most twelve
     assert panels[0].get_title() == "elastic mode 1: 193.2 Hz"
-    assert panels[0].get_xlabel() == "" and panels[-1].get_xlabel() == "x [m]"
+    assert panels[0].get_xlabel() == ""
+    assert panels[-1].get_xlabel() == "x [m]"
     marks = {line.get_label(): line.get_xydata() for line in panels[0].get_lines()}
     np.testing.assert_allclose(marks["isolators"], corners)
     np.testing.assert_allclose(marks["feet"], [[0.3, 0.1]])

@@ -95,7 +95,8 @@ def test_the_written_rigid_modes_recover_the_box(model, tmp_path):
     np.testing.assert_allclose(c, 0.0, atol=1e-9)
     np.testing.assert_allclose(inertia, np.diag([ly**2 + t**2, lx**2 + t**2, lx**2 + ly**2]) * mass / 12, rtol=1e-6,
                                atol=1e-6)
-    assert len(np.unique(data["mode"])) == 8 and np.all(np.isnan(data["damping"]))
+    assert len(np.unique(data["mode"])) == 8
+    assert np.all(np.isnan(data["damping"]))
 
 
 @pytest.fixture(scope="module")
@@ -152,7 +153,7 @@ def test_a_thin_solid_has_the_plates_modes_and_its_faces_move_as_the_rotations_s
     solid = plate_modes(size, mass, E, NU, count=3, grid=(9, 9), model="solid")
     np.testing.assert_allclose(solid.frequency_hz[6:], plate.frequency_hz[6:], rtol=1e-2)
     top = solid.nodes[:, 2] > 0
-    np.testing.assert_allclose(solid.nodes[top], plate.nodes + [0, 0, 0.01])
+    np.testing.assert_allclose(solid.nodes[top], plate.nodes + np.array([0.0, 0.0, 0.01]))
     for i in range(6, 9):
         face = plate.translations[i] + np.cross(plate.rotations[i], [0.0, 0.0, 0.01])
         np.testing.assert_allclose(solid.translations[i][top], face, atol=0.03 * np.abs(face).max())
@@ -199,25 +200,25 @@ def test_rigid_modes_move_a_point_as_a_turn_does():
 
 
 BAD = [
-    (dict(size=(2.0, 0.0, 0.3)), r"^size: every entry must be positive"),
-    (dict(size=(2.0, 1.0)), r"^size: must be 3 numbers"),
-    (dict(mass=0.0), r"^mass: must be positive"),
-    (dict(young=-5.0), r"^young: must be positive"),
-    (dict(poisson=0.5), r"^poisson: must lie between -1 and 0.5"),
-    (dict(count=0), r"^count: must be a whole number >= 1"),
-    (dict(count=2.5), r"^count: must be a whole number"),
-    (dict(elements=1), r"^elements: must be a whole number >= 2"),
-    (dict(max_frequency=float("inf")), r"^max_frequency: must be finite"),
-    (dict(honeycomb=0.2), r"^honeycomb: a face sheet must be thinner than half the thickness"),
-    (dict(honeycomb=0.01, model="solid"), r"^honeycomb: a honeycomb top is an equivalent plate"),
-    (dict(model="shell"), r"^model: must be one of plate, solid"),
-    (dict(grid=(1, 5)), r"^grid: two whole numbers of nodes >= 2"),
+    ({"size": (2.0, 0.0, 0.3)}, r"^size: every entry must be positive"),
+    ({"size": (2.0, 1.0)}, r"^size: must be 3 numbers"),
+    ({"mass": 0.0}, r"^mass: must be positive"),
+    ({"young": -5.0}, r"^young: must be positive"),
+    ({"poisson": 0.5}, r"^poisson: must lie between -1 and 0.5"),
+    ({"count": 0}, r"^count: must be a whole number >= 1"),
+    ({"count": 2.5}, r"^count: must be a whole number"),
+    ({"elements": 1}, r"^elements: must be a whole number >= 2"),
+    ({"max_frequency": float("inf")}, r"^max_frequency: must be finite"),
+    ({"honeycomb": 0.2}, r"^honeycomb: a face sheet must be thinner than half the thickness"),
+    ({"honeycomb": 0.01, "model": "solid"}, r"^honeycomb: a honeycomb top is an equivalent plate"),
+    ({"model": "shell"}, r"^model: must be one of plate, solid"),
+    ({"grid": (1, 5)}, r"^grid: two whole numbers of nodes >= 2"),
 ]
 
 
 @pytest.mark.parametrize(("change", "message"), BAD, ids=[m.split(":")[0][1:] for _, m in BAD])
 def test_bad_arguments_are_one_line_naming_them(change, message):
-    arguments = dict(size=(2.0, 1.0, 0.3), mass=4400.0, young=50e9, poisson=0.25) | change
+    arguments = {"size": (2.0, 1.0, 0.3), "mass": 4400.0, "young": 50e9, "poisson": 0.25} | change
     with pytest.raises(ParameterError, match=message) as caught:
         plate_modes(**arguments)
     assert "\n" not in str(caught.value)
