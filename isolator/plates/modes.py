@@ -294,7 +294,8 @@ def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float
     honeycomb : float, optional
         ``"plate"`` only: a honeycomb (sandwich) top's face-sheet thickness, m: its equivalent plate has the
         two face sheets' rigidity ``D = E / (1 - nu^2) (tf^3 / 6 + tf (t - tf)^2 / 2)`` (the core's bending
-        stiffness and its shear flexibility neglected) and ``mass`` (faces and core) spread evenly.
+        stiffness and its shear flexibility neglected, so its frequencies are upper bounds: a real core's
+        shear lowers them, most for the higher modes) and ``mass`` (faces and core) spread evenly.
     grid : sequence of int, optional
         Nodes written along x and y on each layer (default: the longer side in 24 intervals for the
         plate, 16 for the solid's two faces, the shorter side at that spacing).
