@@ -25,6 +25,7 @@ from isolator.cli.helpers import (
     seed,
     use_agg,
 )
+from isolator.cli.plate_command import register as register_plate_modes
 from isolator.cli.sequence_command import register as register_sequence
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
@@ -121,6 +122,7 @@ def register(sub: Any) -> None:
     register_calibrate(sub)
     register_budget(sub)
     register_compliance(sub)
+    register_plate_modes(sub)
 
 
 def _scenarios(args: argparse.Namespace) -> int:
