@@ -343,10 +343,8 @@ class Response:
                 if self.final is not None and math.isfinite(self.stop_time):
                     f = self.final[i] * 1e6
                     ax.axvline(self.stop_time, color="0.5", ls=":", lw=1)
-                    ax.fill_between(
-                        [self.stop_time, self.t[-1]], f - r.band * 1e6, f + r.band * 1e6,
-                        color="tab:green", alpha=0.15, lw=0,
-                    )
+                    ax.fill_between([self.stop_time, self.t[-1]], f - r.band * 1e6, f + r.band * 1e6,
+                                    color="tab:green", alpha=0.15, lw=0)
                     if r.time is not None and r.time > 0:
                         ax.axvline(self.stop_time + r.time, color="tab:red", ls="--", lw=1)
                 ax.set_ylabel(f"{name} [{_UNITS[name]}]")
