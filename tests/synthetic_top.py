@@ -79,3 +79,9 @@ def with_synthetic_top(scenario: Scenario | str = "paper-table-3-2", **modes: ob
 @dataclasses.dataclass(frozen=True)
 class _FlexTable(Table):
     flexible: object = None
+
+
+def without_top_modes(scenario: Scenario) -> Scenario:
+    """The same scenario with a rigid top."""
+    t = scenario.table
+    return dataclasses.replace(scenario, table=Table(t.mass, t.inertia, t.size))

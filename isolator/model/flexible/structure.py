@@ -12,7 +12,7 @@ a model is built (and compiled) once per structure; a rigid top has none and pay
 from __future__ import annotations
 
 import hashlib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from typing import Any
 
@@ -110,6 +110,8 @@ class ElasticStructure:
         The elastic translation at each attachment point per unit modal coordinate, (3, modes) flattened.
     carriages : tuple of CarriageShape
         One per carriage (a carriage on a carriage rides its table-level ancestor's feet).
+    source : FlexibleTop
+        The scenario's ``[table.flexible]`` the numbers come from (for shapes at other points; not compared).
     """
 
     digest: str
@@ -118,6 +120,12 @@ class ElasticStructure:
     isolators: tuple[tuple[float, ...], ...]
     actuators: tuple[tuple[float, ...], ...]
     carriages: tuple[CarriageShape, ...]
+    source: Any = field(default=None, compare=False, hash=False, repr=False)
+
+    def shape_at(self, position: Any, feet: Any = None, what: str = "point") -> np.ndarray:
+        """The elastic translation per modal coordinate (3, modes) of a point fixed to the top at ``position``
+        (table frame) [m], the mean over its ``feet``."""
+        return feet_translation(self.source.data, np.asarray(position, dtype=float), feet, what)
 
     @property
     def n_modes(self) -> int:
@@ -182,7 +190,7 @@ def _build(flexible: Any, isolators: tuple, actuators: tuple, carriages: tuple) 
     geometry = (data.digest, isolators, actuators, [c[:4] for c in carriages], [s.domain for s in out])
     digest = hashlib.sha256(repr(geometry).encode()).hexdigest()[:16]
     return ElasticStructure(digest, tuple(float(f) for f in data.frequencies), tuple(float(z) for z in data.damping),
-                            iso, act, tuple(out))
+                            iso, act, tuple(out), flexible)
 
 
 def _carriage_shape(data: Any, index: int, axis: np.ndarray, origin: np.ndarray,
