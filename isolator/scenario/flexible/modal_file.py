@@ -80,17 +80,20 @@ def load_modal_data(
         raise ScenarioError(f"{where}: {raw.mode_names[chosen[bad[0]]]} has the damping ratio {given[bad[0]]:g} "
                             "(must be >= 0 and < 1)")
     span = float(np.ptp(raw.nodes[:, 2]))
-    return ModalData(
-        path=str(path),
-        frequencies=raw.frequencies[chosen],
-        damping=np.where(np.isfinite(given), given, damping),
-        nodes=raw.nodes,
-        translations=raw.translations[chosen],
-        rotations=None if raw.rotations is None else raw.rotations[chosen],
-        thickness=float(thickness) if thickness is not None else span if span > 0 else math.nan,
-        rigid=rigid,
-        labels=tuple(raw.node_names),
-    )
+    try:
+        return ModalData(
+            path=str(path),
+            frequencies=raw.frequencies[chosen],
+            damping=np.where(np.isfinite(given), given, damping),
+            nodes=raw.nodes,
+            translations=raw.translations[chosen],
+            rotations=None if raw.rotations is None else raw.rotations[chosen],
+            thickness=float(thickness) if thickness is not None else span if span > 0 else math.nan,
+            rigid=rigid,
+            labels=tuple(raw.node_names),
+        )
+    except ScenarioError as exc:  # the faces' checks, naming the file
+        raise ScenarioError(f"{key}: {exc}") from None
 
 
 def _split(raw: RawModes, where: str) -> tuple[RigidCheck | None, np.ndarray]:

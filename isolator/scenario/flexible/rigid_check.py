@@ -150,8 +150,10 @@ def check_rigid(rigid: RigidCheck, mass: float, largest: float, where: str,
                             f"{mass:.4g} kg ({ratio:.3g} times; within 1 % needed): {_mass_cause(ratio)}")
     off = float(np.linalg.norm(rigid.centre))
     if off > MASS_TOLERANCE * largest:
-        c = ", ".join(f"{x:.4g}" for x in rigid.centre)
-        moved = ", ".join(f"{o - x:.4g}" for o, x in zip(origin, rigid.centre, strict=True))
+        tiny = 1e-9 * max(largest, 1.0)  # rounding noise of the fit shown as 0
+        c = ", ".join(f"{x if abs(x) > tiny else 0.0:.4g}" for x in rigid.centre)
+        moved = ", ".join(f"{o - x if abs(o - x) > tiny else 0.0:.4g}" for o, x in zip(origin, rigid.centre,
+                                                                                          strict=True))
         raise ScenarioError(f"{where}: its six rigid modes put the top's mass centre at [{c}] m in the table frame, "
                             f"{off:.4g} m from the table frame's origin (its mass centre; within 1 % of the top's "
                             f"largest size {largest:.4g} m = {MASS_TOLERANCE * largest:.3g} m needed): a file about "

@@ -110,7 +110,8 @@ def synthetic_top(size: tuple[float, float, float] = (2.0, 1.0, 0.2), mass: floa
         z = local[:, 2]
         shapes_u.append(np.column_stack([-z * dwdx, -z * dwdy, w]))
         shapes_r.append(np.column_stack([dwdy, -dwdx, np.zeros_like(w)]))
-    u, r = np.array(shapes_u), np.array(shapes_r)
+    u = np.array(shapes_u).reshape(-1, len(nodes), 3)
+    r = np.array(shapes_r).reshape(-1, len(nodes), 3)
     f = np.asarray(frequencies, dtype=float)
     if rigid:
         inertia = mass * np.array([ly**2 + t**2, lx**2 + t**2, lx**2 + ly**2]) / 12.0
