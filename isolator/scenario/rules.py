@@ -94,7 +94,8 @@ class Rule:
                    f"got {value:g}"
         low, high = self.low, self.high
         if low is not None and high is not None and not (low <= value <= high):
-            return f"must be in [{low:g}, {high:g}], got {value:g}"
+            left, right = "(" if self.low_open else "[", ")" if self.high_open else "]"
+            return f"must be in {left}{low:g}, {high:g}{right}, got {value:g}"
         if low is not None and low > 0 and value <= 0:  # the sign first: a floor is for tiny positive values
             return f"must be > 0, got {value:g}"
         if low is not None and (value <= low if self.low_open else value < low):
