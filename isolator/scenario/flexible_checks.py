@@ -51,15 +51,15 @@ def standing(scenario: Scenario) -> Iterator[tuple[str, np.ndarray, np.ndarray]]
         if sensor.on == "table":
             yield f"sensors[{i}] ({sensor.name}).position", np.asarray(sensor.position, dtype=float), one
     for i, point in enumerate(scenario.points):
-        yield from _feet(f"points[{i}] ({point.name})", np.asarray(point.position, dtype=float), point.feet)
+        yield from _feet(f"points[{i}] ({point.name})", "", np.asarray(point.position, dtype=float), point.feet)
     travel = carriage_travel(scenario)
     positions = scenario.carriage_positions(travel) if scenario.carriages else np.zeros((0, 3, 2))
     for i, carriage in enumerate(scenario.carriages):
         if carriage.parent != "table":
             continue
         for end in range(2):
-            at = f" at q = {travel[i, end]:.4g} m" if travel[i, 0] != travel[i, 1] else ""
-            yield from _feet(f"carriages[{i}] ({carriage.name}){at}", positions[i, :, end], carriage.feet)
+            at = f" (at q = {travel[i, end]:.4g} m)" if travel[i, 0] != travel[i, 1] else ""
+            yield from _feet(f"carriages[{i}] ({carriage.name})", at, positions[i, :, end], carriage.feet)
 
 
 def _named(thing: object) -> str:
@@ -67,13 +67,13 @@ def _named(thing: object) -> str:
     return f" ({name})" if name else ""
 
 
-def _feet(what: str, position: np.ndarray, feet: tuple[tuple[float, float], ...] | None
+def _feet(what: str, at: str, position: np.ndarray, feet: tuple[tuple[float, float], ...] | None
           ) -> Iterator[tuple[str, np.ndarray, np.ndarray]]:
     if feet is None:
-        yield f"{what}.position", position, np.zeros((1, 2))
+        yield f"{what}.position{at}", position, np.zeros((1, 2))
     else:
         for j, foot in enumerate(feet):
-            yield f"{what}.feet[{j}]", position, np.asarray(foot, dtype=float).reshape(1, 2)
+            yield f"{what}.feet[{j}]{at}", position, np.asarray(foot, dtype=float).reshape(1, 2)
 
 
 def check_flexible(scenario: Scenario) -> None:
@@ -102,4 +102,6 @@ def check_flexible(scenario: Scenario) -> None:
                             f"single layer of nodes, but table.size z is {size[2]:.4g} m (load it with that "
                             "thickness)")
     for what, position, feet in standing(scenario):
-        data.translation(position[:2] + feet, data.face_for(float(position[2])), what)
+        xy, face = position[:2] + feet, data.face_for(float(position[2]))
+        if not data.inside(xy, face).all():
+            data.translation(xy, face, what)  # refuses, naming the thing and the point

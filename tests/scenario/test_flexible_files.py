@@ -258,3 +258,23 @@ def test_without_pyuff_the_error_names_the_extra(tmp_path, monkeypatch):
     with pytest.raises(ScenarioError, match=r"bad.unv': reading a universal file needs pyuff: pip install "
                                             r"'isolator\[uff\]'"):
         load_modal_data(path)
+
+
+def test_nodes_from_a_dataset_15_and_a_negative_modal_mass(tmp_path):
+    top = synthetic_top(SIZE, MASS, frequencies=FREQUENCIES, layer="mid", rigid=False)
+    labels = np.arange(1, len(top.nodes) + 1)
+    nodes = pyuff.prepare_15(node_nums=labels, def_cs=np.zeros(len(labels), int), disp_cs=np.zeros(len(labels), int),
+                             color=np.ones(len(labels), int), x=top.nodes[:, 0], y=top.nodes[:, 1], z=top.nodes[:, 2])
+    modes = []
+    for m, f in enumerate(FREQUENCIES):
+        values = {f"r{k + 1}": top.translations[m, :, k] for k in range(3)}
+        values.update({f"r{k + 4}": top.rotations[m, :, k] for k in range(3)})
+        modes.append(pyuff.prepare_55(model_type=1, analysis_type=2, data_ch=3, spec_data_type=8, data_type=2,
+                                      n_data_per_node=6, node_nums=labels, load_case=1, mode_n=m + 1, freq=f,
+                                      modal_m=1.0, modal_damp_vis=0.0, modal_damp_his=0.0, **values))
+    data = load_modal_data(_uff(tmp_path, [nodes, *modes]), thickness=0.2)
+    np.testing.assert_allclose(data.nodes, top.nodes, atol=1e-12)
+    np.testing.assert_allclose(data.translations, top.translations, rtol=2e-5, atol=1e-12)
+    modes[2]["modal_m"] = -2.0
+    with pytest.raises(ScenarioError, match=r"dataset 4 \(mode 3\) has the modal mass -2 \(must be > 0"):
+        load_modal_data(_uff(tmp_path, [nodes, *modes]), thickness=0.2)

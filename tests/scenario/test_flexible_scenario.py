@@ -139,7 +139,7 @@ def test_a_foot_off_the_top_anywhere_along_the_travel_is_refused(tmp_path, modes
     data = _data(modes)
     data["carriages"][0]["feet"] = [[0.0, 0.4], [0.65, -0.4]]
     assert _error(data, tmp_path).startswith(
-        "carriages[0] (x-stage) at q = 0.4 m.feet[1]: (x, y) = (1.05, -0.4) m lies 50 mm outside the top face of "
+        "carriages[0] (x-stage).feet[1] (at q = 0.4 m): (x, y) = (1.05, -0.4) m lies 50 mm outside the top face of "
         "the top's nodes")
     data["carriages"][0]["feet"] = [[0.0, 0.4], [0.6, -0.4]]
     assert _load(data, tmp_path).carriages[0].feet[1] == (0.6, -0.4)

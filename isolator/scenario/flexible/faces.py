@@ -14,7 +14,7 @@ from collections.abc import Sequence
 
 import numpy as np
 from scipy.interpolate import CloughTocher2DInterpolator
-from scipy.spatial import QhullError
+from scipy.spatial import Delaunay, QhullError
 
 from isolator.errors import ScenarioError
 
@@ -100,20 +100,21 @@ class FaceInterpolant:
 
     def __init__(self, xy: np.ndarray, values: np.ndarray) -> None:
         try:
-            self._interpolant = CloughTocher2DInterpolator(xy, values, tol=GRADIENT_TOLERANCE, maxiter=10000)
+            self._tri = Delaunay(xy)
         except (QhullError, ValueError) as exc:  # check_face refuses what Qhull cannot triangulate
             raise ScenarioError(f"the face's nodes cannot be triangulated ({' '.join(str(exc).split())[:80]})"
                                 ) from None
-        tri = self._interpolant.tri
-        edges = tri.convex_hull
-        self._start = tri.points[edges[:, 0]]
-        self._end = tri.points[edges[:, 1]]
-        self._centre = tri.points.mean(axis=0)
+        self._values = values
+        self._interpolant: CloughTocher2DInterpolator | None = None  # built when first evaluated
+        edges = self._tri.convex_hull
+        self._start = self._tri.points[edges[:, 0]]
+        self._end = self._tri.points[edges[:, 1]]
+        self._centre = self._tri.points.mean(axis=0)
 
     def nearest(self, points: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The nearest point of the face's outline (convex hull) to each point, and the distance (0 inside) [m]."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
-        inside = self._interpolant.tri.find_simplex(p) >= 0
+        inside = self._tri.find_simplex(p) >= 0
         dist = np.zeros(len(p))
         out = p.copy()
         if not inside.all():
@@ -131,4 +132,7 @@ class FaceInterpolant:
     def __call__(self, points: np.ndarray) -> np.ndarray:
         """The interpolated values at ``points`` (k, 2), those just outside taken at the outline: (k, ...)."""
         inner, _ = self.nearest(points)
+        if self._interpolant is None:
+            self._interpolant = CloughTocher2DInterpolator(self._tri, self._values, tol=GRADIENT_TOLERANCE,
+                                                           maxiter=10000)
         return np.asarray(self._interpolant(inner), dtype=float)
