@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from isolator.scenario.flexible.reader import Feet, tupled_feet
 from isolator.scenario.random_sources import SpectralDensity
 
 __all__ = ["Actuator", "Point"]
@@ -53,7 +54,14 @@ class Point:
     name : str
     position : tuple of float
         In the table frame [m].
+    feet : tuple of (float, float) or None
+        Where a thing at the point stands on a bending top (a bridge): (x, y) offsets from it [m]; None: one
+        foot at the point.
     """
 
     name: str
     position: Vector3
+    feet: Feet | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "feet", tupled_feet(self.feet))

@@ -12,6 +12,8 @@ import numpy as np
 
 from isolator.scenario.actuators import Actuator, Point, Vector3
 from isolator.scenario.arguments import check_public
+from isolator.scenario.flexible import FlexibleTop, ModalData
+from isolator.scenario.flexible.reader import Feet, tupled_feet
 from isolator.scenario.ground import SIGNALS, FloorSpectrum, Ground
 from isolator.scenario.pneumatic import Air, LevelingGroup, PneumaticIsolator
 from isolator.scenario.profiles import Profile
@@ -38,7 +40,7 @@ __all__ = [
 
 @dataclass(frozen=True)
 class Table:
-    """The rigid table.
+    """The table: a rigid body, or a top that bends.
 
     Attributes
     ----------
@@ -48,11 +50,14 @@ class Table:
         Principal moments about the mass centre along the table axes [kg m^2].
     size : tuple of float or None
         Box length, width, thickness [m], if given.
+    flexible : FlexibleTop or None
+        The top's elastic modes (``[table.flexible]``); None: a rigid top.
     """
 
     mass: float
     inertia: Vector3
     size: Vector3 | None = None
+    flexible: FlexibleTop | None = None
 
 
 @dataclass(frozen=True)
@@ -114,6 +119,9 @@ class Carriage:
         q(t) [m].
     limits : MotionLimits
         The drive's speed, acceleration and jerk limits, for profile design.
+    feet : tuple of (float, float) or None
+        Where a carriage on a bending top rides it: (x, y) offsets from its position [m] (its rails); None:
+        one foot at its position.
     """
 
     name: str
@@ -123,6 +131,10 @@ class Carriage:
     origin: Vector3
     profile: Profile
     limits: MotionLimits = MotionLimits()
+    feet: Feet | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "feet", tupled_feet(self.feet))
 
 
 @dataclass(frozen=True)
@@ -235,6 +247,11 @@ class Scenario:
     def total_mass(self) -> float:
         """Table plus carriages [kg]."""
         return self.table.mass + sum(c.mass for c in self.carriages)
+
+    @property
+    def modal_data(self) -> ModalData | None:
+        """The bending top's kept elastic modes (``[table.flexible]``), None for a rigid top."""
+        return None if self.table.flexible is None else self.table.flexible.data
 
     @property
     def is_pneumatic(self) -> bool:

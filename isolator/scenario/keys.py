@@ -14,7 +14,7 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Any
 
-from isolator.errors import ScenarioError
+from isolator.errors import IsolatorError, ScenarioError
 from isolator.scenario.files import read_input
 from isolator.scenario.names import escaped
 
@@ -63,7 +63,8 @@ def _known_keys() -> frozenset[str]:
     folder = Path(__file__).parent
     text = "".join((folder / name).read_text() for name in ("reader.py", "pneumatic_reader.py", "windows_reader.py",
                                                                  "sequence.py", "tables.py", "sensors.py",
-                                                                 "ground_reader.py", "random_sources.py"))
+                                                                 "ground_reader.py", "random_sources.py",
+                                                                 "flexible/reader.py"))
     return frozenset(re.findall(r'"([a-z][a-z0-9_]*)"', text))
 
 
@@ -164,21 +165,23 @@ def number(
     positive: bool = False,
     nonnegative: bool = False,
     below: float | None = None,
+    error: type[IsolatorError] = ScenarioError,
 ) -> float:
+    """``value`` as a finite float, as asked; else ``error`` (default :class:`ScenarioError`) naming ``key``."""
     if isinstance(value, bool) or not isinstance(value, int | float):
-        raise ScenarioError(f"{key}: must be a number, got {escaped(repr(value), 40)}")
+        raise error(f"{key}: must be a number, got {escaped(repr(value), 40)}")
     try:
         value = float(value)
     except OverflowError:  # a TOML integer beyond any float (10**400)
-        raise ScenarioError(f"{key}: must be finite, got an integer of {len(str(abs(value)))} digits") from None
+        raise error(f"{key}: must be finite, got an integer of {len(str(abs(value)))} digits") from None
     if not math.isfinite(value):
-        raise ScenarioError(f"{key}: must be finite, got {value}")
+        raise error(f"{key}: must be finite, got {value}")
     if positive and value <= 0:
-        raise ScenarioError(f"{key}: must be > 0, got {value:g}")
+        raise error(f"{key}: must be > 0, got {value:g}")
     if nonnegative and value < 0:
-        raise ScenarioError(f"{key}: must be >= 0, got {value:g}")
+        raise error(f"{key}: must be >= 0, got {value:g}")
     if below is not None and value >= below:
-        raise ScenarioError(f"{key}: must be < {below:g}, got {value:g}")
+        raise error(f"{key}: must be < {below:g}, got {value:g}")
     return value
 
 

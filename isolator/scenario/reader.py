@@ -28,6 +28,8 @@ from isolator.scenario.definitions import (
     Table,
 )
 from isolator.scenario.field_checks import register_field_checks
+from isolator.scenario.flexible import read_feet, read_flexible
+from isolator.scenario.flexible_checks import check_flexible
 from isolator.scenario.ground_reader import read_spectrum
 from isolator.scenario.keys import KeyReader, load_toml, number, table_of_tables
 from isolator.scenario.names import MAX_NAME, escaped
@@ -136,7 +138,7 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
     top = KeyReader(data, "")
     name = top.string("name", default_name or "scenario")
     gravity = top.number("gravity", 9.81, nonnegative=True)
-    table = _read_table(KeyReader(top.raw("table"), "table"))
+    table = _read_table(KeyReader(top.raw("table"), "table"), base_dir)
     read = tuple(
         _read_isolator(KeyReader(item, f"isolators[{i}]"))
         for i, item in enumerate(table_of_tables(data, "isolators"))
@@ -199,10 +201,11 @@ def _scenario_from_dict(data: Mapping[str, Any], base_dir: Path, default_name: s
     check_sequence(scenario)
     check_extent(scenario)  # positions and strokes against table.size
     check_pneumatics(scenario)
+    check_flexible(scenario)  # the rigid modes against [table], everything on the top within its faces
     return scenario
 
 
-def _read_table(r: KeyReader) -> Table:
+def _read_table(r: KeyReader, base_dir: Path) -> Table:
     mass = r.number("mass", positive=True)
     size = r.vector("size", None, positive=True) if r.has("size") else None
     r.used.add("size")
@@ -219,8 +222,11 @@ def _read_table(r: KeyReader) -> Table:
         inertia = (mass * (ly**2 + lz**2) / 12, mass * (lx**2 + lz**2) / 12, mass * (lx**2 + ly**2) / 12)
     else:
         raise ScenarioError("table: needs size (box inertia) or inertia")
+    flexible = read_flexible(KeyReader(r.raw("flexible"), "table.flexible"), base_dir, mass, size) \
+        if r.has("flexible") else None
+    r.used.add("flexible")
     r.finish()
-    return Table(mass=mass, inertia=inertia, size=size)
+    return Table(mass=mass, inertia=inertia, size=size, flexible=flexible)
 
 
 def _one_kind(
@@ -306,6 +312,7 @@ def _read_carriage(r: KeyReader, base_dir: Path, sequence: StepSequence | None) 
         origin=r.vector("origin", (0.0, 0.0, 0.0)),
         profile=profile,
         limits=_read_limits(KeyReader(r.raw("limits", {}), r.key("limits"))),
+        feet=read_feet(r),
     )
     r.finish()
     return carriage
@@ -341,7 +348,7 @@ def _read_point(r: KeyReader) -> Point:
     name = r.string("name")
     if not name:
         raise ScenarioError(f"{r.key('name')}: must be a non-empty name")
-    point = Point(name=name, position=r.vector("position"))
+    point = Point(name=name, position=r.vector("position"), feet=read_feet(r))
     r.finish()
     return point
 

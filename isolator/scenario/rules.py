@@ -28,6 +28,7 @@ import numpy as np
 
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.definitions import Isolator, Scenario
+from isolator.scenario.flexible import flexible_values
 from isolator.scenario.names import check_scenario_names
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile, SineProfile
@@ -71,6 +72,8 @@ class Rule:
         The field is a direction: its three components a unit vector.
     triangle : bool
         Principal moments of inertia: each at most the sum of the other two.
+    integer : bool
+        A count: a whole number.
     """
 
     low: float | None = None
@@ -80,6 +83,7 @@ class Rule:
     unit: bool = False
     triangle: bool = False
     why: str = ""
+    integer: bool = False
 
     def problem(self, value: float) -> str | None:
         """Why ``value`` breaks the rule (None: it does not)."""
@@ -90,14 +94,15 @@ class Rule:
                    f"got {value:g}"
         low, high = self.low, self.high
         if low is not None and high is not None and not (low <= value <= high):
-            return f"must be in [{low:g}, {high:g}], got {value:g}"
+            left, right = "(" if self.low_open else "[", ")" if self.high_open else "]"
+            return f"must be in {left}{low:g}, {high:g}{right}, got {value:g}"
         if low is not None and low > 0 and value <= 0:  # the sign first: a floor is for tiny positive values
             return f"must be > 0, got {value:g}"
         if low is not None and (value <= low if self.low_open else value < low):
             return f"must be {'>' if self.low_open else '>='} {low:g}{self.why}, got {value:g}"
         if high is not None and (value >= high if self.high_open else value > high):
             return f"must be {'<' if self.high_open else '<='} {high:g}, got {value:g}"
-        return None
+        return f"must be a whole number, got {value:g}" if self.integer and value != math.floor(value) else None
 
 
 FINITE = Rule()
@@ -163,6 +168,9 @@ RULES: dict[str, Rule] = {
     "air.polytropic": Rule(low=POLYTROPIC_RANGE[0], high=POLYTROPIC_RANGE[1]),
     "simulation.duration": POSITIVE,
     "simulation.sample_rate": POSITIVE,
+    "table.flexible.count": Rule(low=1.0, integer=True), "table.flexible.max_frequency": POSITIVE,
+    "table.flexible.damping": Rule(low=0.0, high=1.0, high_open=True), "table.flexible.origin": FINITE,
+    "points.feet": FINITE, "carriages.feet": FINITE,
 }
 
 _INDEX = re.compile(r"\[\d+\]")
@@ -357,12 +365,14 @@ def scenario_values(scenario: Scenario) -> Iterator[tuple[str, object]]:
     if scenario.air is not None:
         for name in ("atmosphere", "temperature", "gas_constant", "viscosity", "polytropic"):
             yield f"air.{name}", getattr(scenario.air, name)
+    yield from flexible_values(scenario.table.flexible, scenario.points, scenario.carriages)
 
 
 _VECTOR_LENGTHS = {"table.inertia": 3, "table.size": 3, "carriages.axis": 3, "carriages.origin": 3,
                    "isolators.position": 3, "isolators.stiffness": 3, "isolators.damping": 3,
                    "actuators.position": 3, "actuators.direction": 3, "points.position": 3,
-                   "isolators.horizontal_stiffness": 2, "isolators.horizontal_damping": 2, "leveling.sensor": 2}
+                   "isolators.horizontal_stiffness": 2, "isolators.horizontal_damping": 2, "leveling.sensor": 2,
+                   "table.flexible.origin": 3, "points.feet": 2, "carriages.feet": 2}
 
 
 def check_scenario_values(scenario: Scenario) -> None:

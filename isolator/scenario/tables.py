@@ -10,12 +10,15 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public
-from isolator.scenario.definitions import FloorSpectrum
 from isolator.scenario.files import read_input_text
+from isolator.scenario.ground import FloorSpectrum
 from isolator.scenario.keys import KeyReader
 from isolator.scenario.names import escaped, excerpt
 
-__all__ = ["SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "read_samples", "spectrum_from_columns"]
+__all__ = ["LINE", "SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "read_samples", "spectrum_from_columns"]
+
+#: the entry of :func:`read_csv_columns`'s result that holds each data row's line number (``lines=True``)
+LINE = "#line"
 
 
 def read_csv_columns(
@@ -28,6 +31,8 @@ def read_csv_columns(
     min_rows: int = 2,
     increasing: str | None = None,
     repeats: bool = False,
+    blank: tuple[str, ...] = (),
+    lines: bool = False,
 ) -> dict[str, np.ndarray]:
     """Numeric columns of a CSV file with a header line, checked.
 
@@ -49,6 +54,10 @@ def read_csv_columns(
     increasing : str, optional
         A column whose values must increase strictly down the file (``repeats``: a value may
         appear twice in a row, for a step).
+    blank : tuple of str
+        Columns whose cells may be empty (read as NaN).
+    lines : bool
+        Add the entry :data:`LINE`: each data row's line number in the file.
 
     Raises
     ------
@@ -72,6 +81,9 @@ def read_csv_columns(
         if len(row) != len(header):
             raise ScenarioError(f"{where} line {line}: {len(row)} values for {len(header)} columns ({columns})")
         for j, cell in enumerate(row):
+            if header[j] in blank and not cell.strip():
+                values[i, j] = np.nan
+                continue
             try:
                 values[i, j] = float(cell)
             except ValueError:
@@ -87,7 +99,10 @@ def read_csv_columns(
     if increasing is not None:
         _check_increasing(where, [line for line, _ in rows[1:]], values[:, header.index(increasing)],
                           increasing, repeats)
-    return {name: values[:, i] for i, name in enumerate(header)}
+    out = {name: values[:, i] for i, name in enumerate(header)}
+    if lines:
+        out[LINE] = np.array([line for line, _ in rows[1:]], dtype=int)
+    return out
 
 
 def _check_header(

@@ -12,6 +12,7 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Carriage, Isolator, Scenario
+from isolator.scenario.flexible_checks import check_flexible
 from isolator.scenario.names import check_names
 from isolator.scenario.pneumatic import PneumaticIsolator, group_statics_matrix
 from isolator.scenario.rules import check_scenario_values
@@ -344,4 +345,5 @@ def validate_scenario(scenario: Scenario) -> Scenario:
     check_motion(scenario)
     check_strokes(scenario)
     check_pneumatics(scenario)
+    check_flexible(scenario)
     return scenario

@@ -1,5 +1,6 @@
 """Scenario files written back: a source file's keys with some values replaced (optimised profiles, fitted
-parameters), relative ``file`` keys made absolute so that the written file loads from anywhere."""
+parameters), relative ``file`` keys (and ``table.flexible.modes``) made absolute so that the written file loads
+from anywhere."""
 
 from __future__ import annotations
 
@@ -17,14 +18,16 @@ _COMPONENTS = {"x": 0, "y": 1, "z": 2}
 _TOKEN = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
 
 
-def absolute_files(data: Any, base: Path) -> None:
-    """Make every relative ``file`` key under ``data`` absolute (relative to ``base``)."""
+def absolute_files(data: Any, base: Path, parent: str = "") -> None:
+    """Make every relative file name under ``data`` absolute (relative to ``base``): each ``file`` key, and the
+    ``modes`` of a ``flexible`` table (``parent``: the key ``data`` is under)."""
     if isinstance(data, dict):
         for key, value in data.items():
-            if key == "file" and isinstance(value, str) and not Path(value).is_absolute():
+            named = key == "file" or (key == "modes" and parent == "flexible")
+            if named and isinstance(value, str) and not Path(value).is_absolute():
                 data[key] = str((base / value).resolve())
             else:
-                absolute_files(value, base)
+                absolute_files(value, base, key)
     elif isinstance(data, list):
         for item in data:
             absolute_files(item, base)
