@@ -13,6 +13,7 @@ import casadi as ca
 
 from isolator.model.elements.base import AttachmentMotion, IsolatorElement
 from isolator.model.elements.spring_damper import SPRING_DAMPER, isolator_preloads
+from isolator.model.blocks import solve_blocks
 from isolator.model.flexible.coupling import ElasticState, modal_shapes
 
 __all__ = ["attachment_motion", "carriage_kinematics", "carriage_paths", "newton_euler_residual", "solve_blocks"]
@@ -239,15 +240,3 @@ def newton_euler_residual(
     if elastic is None:
         return ca.vertcat(translation, rotation)
     return ca.vertcat(translation + elastic.terms[0], rotation + elastic.terms[1], elastic.modal_rows(modal_force))
-
-
-
-def solve_blocks(mass: ca.SX, rhs: ca.SX) -> ca.SX:
-    """Solve the 6x6 (translation, rotation) system by its 3x3 Schur complement."""
-    a_tt, a_tr = mass[:3, :3], mass[:3, 3:]
-    a_rt, a_rr = mass[3:, :3], mass[3:, 3:]
-    inv_tt = ca.inv(a_tt)
-    schur = a_rr - a_rt @ inv_tt @ a_tr
-    alpha = ca.solve(schur, rhs[3:, :] - a_rt @ inv_tt @ rhs[:3, :])
-    acc = inv_tt @ (rhs[:3, :] - a_tr @ alpha)
-    return ca.vertcat(acc, alpha)

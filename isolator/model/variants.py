@@ -220,7 +220,7 @@ class ExactModel(ModelVariant):
         parents, extra, rest_extra = layout.parents, sym.extra, sym.rest_extra
         if layout.flexible is not None:
             flex = flexible_equations(layout.flexible, parents, c, p, prm, z, rest, extra, rest_extra)
-            return _Equations(flex.x, flex.xdot, flex.static, flex.pose, flex.staged)
+            return _Equations(flex.x, flex.xdot, flex.static, flex.pose)  # no staged form (see its module)
         zero3 = ca.SX.zeros(3, 1)
         element = element_of(layout)
         x = ca.SX.sym("x", 13 + element.n_states(layout.pneumatic))

@@ -25,9 +25,10 @@ from dataclasses import dataclass
 import casadi as ca
 import numpy as np
 
+from isolator.model.blocks import solve_blocks
 from isolator.model.flexible.structure import ElasticStructure
 
-__all__ = ["ElasticState", "carriage_shapes", "carriage_terms", "inverse_mass", "modal_shapes"]
+__all__ = ["ElasticState", "carriage_shapes", "carriage_terms", "modal_shapes", "solve_mass"]
 
 
 @dataclass(frozen=True)
@@ -139,19 +140,24 @@ def carriage_terms(
     return trans, rot, modal
 
 
-def inverse_mass(rigid: ca.SX, coupling: ca.SX, shapes: dict[int, tuple[ca.SX, ca.SX, ca.SX]],
-                 root_masses: dict[int, ca.SX], nm: int) -> ca.SX:
-    """The inverse of the mass matrix ``[[A, B], [B^T, I + U U^T]]`` by blocks: ``A`` (6, 6) the rigid block,
-    ``B`` (6, modes) the coupling, ``U`` the columns ``sqrt(m_r) Psi_r^T`` of the carriages riding each root
-    (Woodbury's identity for the modal block, a 6 x 6 Schur complement for the rest)."""
+def solve_mass(rigid: ca.SX, coupling: ca.SX, shapes: dict[int, tuple[ca.SX, ca.SX, ca.SX]],
+               root_masses: dict[int, ca.SX], nm: int, rhs: ca.SX) -> ca.SX:
+    """``M^-1 rhs`` for the mass matrix ``[[A, B], [B^T, I + U U^T]]`` by blocks, never forming the inverse:
+    ``A`` (6, 6) the rigid block, ``B`` (6, modes) the coupling, ``U`` the columns ``sqrt(m_r) Psi_r^T`` of the
+    carriages riding each root (Woodbury's identity for the modal block, whose inverse is applied to vectors in
+    O(modes) operations, and a 6 x 6 Schur complement for the rest)."""
     if root_masses:
         u = ca.horzcat(*[ca.sqrt(root_masses[r]) * shapes[r][0].T for r in sorted(root_masses)])
         small = ca.SX.eye(u.shape[1]) + u.T @ u
-        d_inv = ca.SX.eye(nm) - u @ ca.solve(small, u.T)
+        small_inv = ca.inv(small) if u.shape[1] <= 3 else ca.solve(small, ca.SX.eye(u.shape[1]))
+
+        def modal_solve(v: ca.SX) -> ca.SX:
+            return v - u @ (small_inv @ (u.T @ v))
     else:
-        d_inv = ca.SX.eye(nm)
-    bd = coupling @ d_inv
-    schur = rigid - bd @ coupling.T
-    s_inv = ca.solve(schur, ca.SX.eye(6))
-    top_right = -s_inv @ bd
-    return ca.vertcat(ca.horzcat(s_inv, top_right), ca.horzcat(top_right.T, d_inv + bd.T @ s_inv @ bd))
+        def modal_solve(v: ca.SX) -> ca.SX:
+            return v
+
+    d_inv_bt = modal_solve(coupling.T)  # (modes, 6)
+    schur = rigid - coupling @ d_inv_bt
+    rigid_part = solve_blocks(schur, rhs[:6] - coupling @ modal_solve(rhs[6:]))
+    return ca.vertcat(rigid_part, modal_solve(rhs[6:] - coupling.T @ rigid_part))

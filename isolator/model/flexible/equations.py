@@ -4,7 +4,9 @@ State: the rigid table's 13 (position, quaternion, velocity, body rate), then th
 ``eta`` and their rates (``docs/scenario-format.md``, "A top that bends"). The static unknowns are the pose
 (position, Cardan angles) and ``eta`` at rest: the top's static deflection under the isolators' reactions,
 the carriages' weights and any steady force. Every term comes from the one residual
-(:func:`isolator.model.residual.newton_euler_residual` with an :class:`ElasticState`).
+(:func:`isolator.model.residual.newton_euler_residual` with an :class:`ElasticState`). The model has no
+staged form: the whole right-hand side is stepped (its time-only part, the carriages' elastic terms, would be
+larger than the state).
 """
 
 from __future__ import annotations
@@ -13,16 +15,12 @@ from dataclasses import dataclass
 
 import casadi as ca
 
-from isolator.model.flexible.coupling import ElasticState, carriage_shapes, carriage_terms, inverse_mass
+from isolator.model.flexible.coupling import ElasticState, carriage_shapes, carriage_terms, solve_mass
 from isolator.model.flexible.structure import ElasticStructure
-from isolator.model.residual import carriage_kinematics, carriage_paths, newton_euler_residual
+from isolator.model.residual import carriage_paths, newton_euler_residual
 from isolator.model.rotations import cardan_matrix, cardan_to_quaternion, quaternion_rate, quaternion_to_matrix
 
 __all__ = ["FlexibleEquations", "flexible_equations"]
-
-#: the rigid carriage moments the staged form keeps per stage time: (name, packed size)
-_MOMENTS = (("S", 3), ("Sd", 3), ("Sdd", 3), ("Jc", 9), ("Hd", 3), ("B", 9))
-
 
 @dataclass(frozen=True)
 class FlexibleEquations:
@@ -32,7 +30,6 @@ class FlexibleEquations:
     xdot: ca.SX
     static: ca.SX
     pose: ca.SX
-    staged: tuple[ca.Function, ca.Function]
 
 
 def _root_masses(structure: ElasticStructure, masses: ca.SX) -> dict[int, ca.SX]:
@@ -90,8 +87,8 @@ def flexible_equations(
     res = newton_euler_residual(pos, rot, vel, w, acc[:3], acc[3:6], c[: 3 * n], prm, parents,
                                 ground=extra["ground"], actuator_forces=extra["actuator_forces"], elastic=elastic)
     mass = ca.jacobian(res, acc)
-    inv = inverse_mass(mass[:6, :6], mass[:6, 6:], shapes, _root_masses(structure, prm["masses"]), nm)
-    accel = -inv @ ca.substitute(res, acc, ca.SX.zeros(6 + nm, 1))
+    accel = solve_mass(mass[:6, :6], mass[:6, 6:], shapes, _root_masses(structure, prm["masses"]), nm,
+                       -ca.substitute(res, acc, ca.SX.zeros(6 + nm, 1)))
     xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:6], rate, accel[6:])
 
     # the static residual: the same residual at rest in pose z[:6] with the modes at z[6:]
@@ -106,48 +103,4 @@ def flexible_equations(
         ground=rest_extra["ground"], actuator_forces=rest_extra["actuator_forces"],
         elastic=ElasticState(structure, z[6:], zero_m, zero_m, rest_terms))
     pose = ca.vertcat(z[:3], cardan_to_quaternion(z[3:6]), ca.SX.zeros(6, 1), z[6:], zero_m)
-    staged = _staged(structure, parents, x, c, p, prm, extra, inv, terms)
-    return FlexibleEquations(x, xdot, static, pose, staged)
-
-
-def _staged(structure: ElasticStructure, parents: tuple[int, ...], x: ca.SX, c: ca.SX, p: ca.SX,
-            prm: dict[str, ca.SX], extra: dict[str, ca.SX | None], inv: ca.SX, terms: object
-            ) -> tuple[ca.Function, ca.Function]:
-    """The right-hand side split as :mod:`isolator.model.staging` splits the rigid one: per stage time the
-    carriages' rigid moments, the inverse mass matrix and the carriages' elastic terms as the affine map
-    ``L y + l0`` of ``y = (eta, eta', omega, g_body)``; per run the rest."""
-    n, nm = len(parents), structure.n_modes
-    size = 6 + nm
-    y = ca.SX.sym("y", 2 * nm + 6)
-    zero_acc = ca.SX.zeros(size, 1)
-    parts = terms(y[:nm], y[nm:2 * nm], zero_acc, y[2 * nm:2 * nm + 3], y[2 * nm + 3:])  # type: ignore[operator]
-    affine = ca.vertcat(*parts)
-    lin, offset = ca.jacobian(affine, y), ca.substitute(affine, y, ca.SX.zeros(y.shape))
-    kin = carriage_kinematics(c[: 3 * n], prm, parents)
-    rest = c[3 * n:]
-    time_only = ca.vertcat(*[ca.vec(kin[name]) for name, _ in _MOMENTS], ca.vec(inv), ca.vec(lin), offset, rest)
-    staged_inputs = ca.Function("staged_inputs", [c, p], [time_only], ["c", "p"], ["v"])
-
-    v = ca.SX.sym("v", time_only.shape[0])
-    at, moments = 0, {"m": ca.sum1(prm["masses"])}
-    for name, k in _MOMENTS:
-        moments[name] = ca.reshape(v[at:at + k], 3, 3) if k == 9 else v[at:at + k]
-        at += k
-    inv_v = ca.reshape(v[at:at + size * size], size, size)
-    at += size * size
-    lin_v = ca.reshape(v[at:at + size * (2 * nm + 6)], size, 2 * nm + 6)
-    at += size * (2 * nm + 6)
-    offset_v = v[at:at + size]
-    at += size
-    moved = {k: None if e is None else ca.substitute(e, rest, v[at:]) for k, e in extra.items()}
-    pos, qt, vel, w, eta, rate = _state(x, nm)
-    rot = quaternion_to_matrix(qt)
-    g_body = rot.T @ ca.vertcat(0, 0, -prm["gravity"])
-    affine_v = lin_v @ ca.vertcat(eta, rate, w, g_body) + offset_v
-    elastic = ElasticState(structure, eta, rate, ca.SX.zeros(nm, 1), (affine_v[:3], affine_v[3:6], affine_v[6:]))
-    zero3 = ca.SX.zeros(3, 1)
-    bias = newton_euler_residual(pos, rot, vel, w, zero3, zero3, None, prm, parents, kin=moments,
-                                 ground=moved["ground"], actuator_forces=moved["actuator_forces"], elastic=elastic)
-    accel = -inv_v @ bias
-    xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:6], rate, accel[6:])
-    return staged_inputs, ca.Function("staged_rhs", [x, v, p], [xdot], ["x", "v", "p"], ["xdot"])
+    return FlexibleEquations(x, xdot, static, pose)
