@@ -37,6 +37,7 @@ from isolator.model.equilibrium import Equilibrium, RockingStiffness
 from isolator.model.parameters import ParameterLayout
 from isolator.model.signals import table_signals
 from isolator.model.variants import EXACT, MODEL_KINDS, PAPER, Model, ModelVariant, build_model
+from isolator.plates import PlateModes, plate_modes, plot_mode_shapes
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import (
     SIGNALS,
@@ -99,6 +100,7 @@ __all__ = [
     "ParameterError",
     "ParameterLayout",
     "PiecewisePolynomialProfile",
+    "PlateModes",
     "PneumaticIsolator",
     "PneumaticResult",
     "Point",
@@ -134,6 +136,8 @@ __all__ = [
     "load_spectrum",
     "modes",
     "modes_over_travel",
+    "plate_modes",
+    "plot_mode_shapes",
     "run_sequence",
     "samples",
     "scenario_from_dict",

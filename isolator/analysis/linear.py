@@ -25,17 +25,18 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import casadi as ca
 import numpy as np
 
 from isolator.analysis.frequency_response import state_space_response
+from isolator.analysis.elastic_outputs import point_rows, sensor_shapes
 from isolator.analysis.sensor_outputs import sensor_response, sensor_rows
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
+from isolator.model.flexible.structure import ElasticStructure
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
 from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
-from isolator.model.rotations import pose_rotation, skew
+from isolator.model.rotations import pose_rotation
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
@@ -140,19 +141,25 @@ class LinearModel:
         Carriage coordinates of the rest configuration [m].
     equilibrium : Equilibrium
         The static equilibrium it is linearised about.
-    mass, damping, stiffness : ndarray (6, 6)
-        ``M, C, K`` for the coordinates ``d`` (m, rad) and the equations' force and
-        moment rows (N, N m), world axes about the mass centre.
+    mass, damping, stiffness : ndarray (ndof, ndof)
+        ``M, C, K`` for the coordinates ``d`` (m, rad; then the top's modal
+        coordinates on a bending top) and the equations' force and moment rows
+        (N, N m), world axes about the mass centre (then the modes' rows).
     ground_stiffness, ground_damping : ndarray (6, 6)
         ``G0, G1``: the floor's displacement and velocity terms.
-    force_input : ndarray (6, 6 + n_a)
-        ``[Bw, Ba]``: a wrench at the mass centre and the actuator forces.
+    force_input : ndarray (ndof, 6 + n_a + modes)
+        ``[Bw, Ba, Bm]``: a wrench at the mass centre, the actuator forces, and on a
+        bending top the generalised forces on its modes.
     system : control.StateSpace
         States ``x, y, z, rx, ry, rz, vx, vy, vz, wx, wy, wz``; inputs
         ``ground:x .. ground:rz`` [m, rad], ``force:x .. torque:z`` [N, N m] and
         ``actuator:<name>`` [N]; outputs the six table signals ``x .. rz`` [m, rad]
         and ``<point>:x, :y, :z`` [m] per point of interest, then ``s:<sensor>`` per ``[[sensors]]`` entry
-        (:mod:`isolator.analysis.sensor_outputs`). With a moving floor
+        (:mod:`isolator.analysis.sensor_outputs`). On a top that bends (``[table.flexible]``) the states
+        add the modal coordinates ``eta1 ..`` after ``rz`` and their rates ``deta1 ..`` after ``wz``, the
+        inputs the generalised modal forces ``modal:eta1 ..`` [N per modal unit] (a force at a point:
+        :func:`isolator.analysis.elastic_outputs.point_force_weights`), and each point's outputs its elastic
+        translation ``<point>:ex, :ey, :ez`` (table axes) [m]. With a moving floor
         the velocity states are the table's velocity minus ``-M^-1 G1 g``, the
         part that the floor's velocity adds at once through the isolators' dampers.
     parameters : ndarray
@@ -271,10 +278,11 @@ def _feedthrough(mass: np.ndarray, ground_damping: np.ndarray, n_inputs: int, ai
     """``B1`` (states, n_inputs): what the floor's velocity adds at once to the states, through the dampers
     to the velocities and through the chambers' volumes to the pressures."""
     n_air = 0 if air is None else len(air.names)
-    out = np.zeros((12 + n_air, n_inputs))
-    out[6:12, :6] = -np.linalg.solve(mass, ground_damping)
+    ndof = mass.shape[0]
+    out = np.zeros((2 * ndof + n_air, n_inputs))
+    out[ndof:2 * ndof, :6] = -np.linalg.solve(mass, ground_damping)
     if air is not None:
-        out[12:, :6] = air.pgd
+        out[2 * ndof:, :6] = air.pgd
     return out
 
 
@@ -332,8 +340,9 @@ def linearise(
     mats = [np.asarray(m, dtype=float) for m in build_linearisation(layout)(eq.pose, c, p)]
     mass, damping, stiffness, g0, g1, bw, ba = mats[:7]
     air = None if layout.pneumatic is None else AirMatrices(_air_names(scenario), *mats[7:])
-    force_input = np.hstack([bw, ba.reshape(6, -1)])
-    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air)
+    ndof = mass.shape[0]
+    force_input = np.hstack([bw, ba.reshape(ndof, -1), -np.eye(ndof, ndof - 6, -6)])  # then generalised modal forces
+    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air, layout.flexible)
     return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p, air)
 
 
@@ -347,32 +356,37 @@ def _state_space(
     g1: np.ndarray,
     force_input: np.ndarray,
     air: AirMatrices | None = None,
+    flexible: ElasticStructure | None = None,
 ) -> control.StateSpace:
     import control  # python-control takes most of a second to import: only when needed
+    ndof = mass.shape[0]
     inv_m = np.linalg.inv(mass)
-    zero, eye = np.zeros((6, 6)), np.eye(6)
+    zero, eye = np.zeros((ndof, ndof)), np.eye(ndof)
     a = np.block([[zero, eye], [-inv_m @ stiffness, -inv_m @ damping]])
     n_in = 6 + force_input.shape[1]
-    b0 = np.vstack([np.zeros((6, n_in)), -inv_m @ np.hstack([g0, force_input])])
+    b0 = np.vstack([np.zeros((ndof, n_in)), -inv_m @ np.hstack([g0, force_input])])
     n_air = 0 if air is None else len(air.names)
     if air is not None:
-        a = np.block([[a, np.vstack([np.zeros((6, n_air)), -inv_m @ air.kp])],
+        a = np.block([[a, np.vstack([np.zeros((ndof, n_air)), -inv_m @ air.kp])],
                       [air.pd, air.pv, air.pp]])
         b0 = np.vstack([b0, np.hstack([air.pg, np.zeros((n_air, n_in - 6))])])
     b1 = _feedthrough(mass, g1, n_in, air)
     # x' = A x + B0 u + B1 u'  ->  xi = x - B1 u:  xi' = A xi + (A B1 + B0) u
     rot0 = pose_rotation(eq.pose[3:6])
-    rows = [np.hstack([eye, zero])]
+    rows = [np.hstack([np.eye(6, ndof), np.zeros((6, ndof))])]
     out_names = list(DOF_NAMES)
     for point in scenario.points:
-        arm = rot0 @ np.asarray(point.position, dtype=float)
-        cross = ca.evalf(skew(ca.SX(arm))).full()
-        rows.append(np.hstack([np.eye(3), -cross, np.zeros((3, 6))]))
+        rows.append(point_rows(point, rot0, ndof, scenario.table, flexible))
         out_names += [f"{point.name}:{a}" for a in "xyz"]
+        if flexible is not None:
+            out_names += [f"{point.name}:e{a}" for a in "xyz"]
     c = np.hstack([np.vstack(rows), np.zeros((sum(r.shape[0] for r in rows), n_air))])
-    inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators)]
-    states = [*STATE_NAMES, *(air.names if air is not None else ())]
-    c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1)
+    modes = [f"eta{i + 1}" for i in range(ndof - 6)]
+    inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators),
+              *(f"modal:{m}" for m in modes)]
+    states = [*DOF_NAMES, *modes, *STATE_NAMES[6:], *(f"d{m}" for m in modes), *(air.names if air is not None else ())]
+    c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1,
+                                       sensor_shapes(scenario, flexible))
     return control.ss(
         a, a @ b1 + b0, np.vstack([c, c_sensors]), np.vstack([c @ b1, d_sensors]),
         inputs=inputs, outputs=[*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)], states=states,

@@ -11,6 +11,7 @@ import numpy as np
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.errors import ParameterError
 from isolator.model.equilibrium import DOF_NAMES
+from isolator.model.flexible.naming import elastic_mode_names
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.readable import without_dust
@@ -20,23 +21,24 @@ __all__ = ["ModeTravel", "Modes", "modes", "modes_over_travel"]
 
 @dataclass(frozen=True)
 class Modes:
-    """The six rigid-body modes of the table on its isolators, by ascending frequency.
+    """The modes of the table on its isolators, by ascending frequency: the six rigid-body modes, and on a
+    top that bends (``[table.flexible]``) its elastic modes coupled with them.
 
     Attributes
     ----------
-    frequencies_hz : ndarray (6,)
+    frequencies_hz : ndarray (modes,)
         Undamped natural frequencies ``|lambda| / 2 pi`` [Hz].
-    damping_ratios : ndarray (6,)
+    damping_ratios : ndarray (modes,)
         ``-Re(lambda) / |lambda|`` (>= 1: overdamped).
-    eigenvalues : ndarray (6,) complex
+    eigenvalues : ndarray (modes,) complex
         One per mode: the one with positive imaginary part, or for an
         overdamped mode the slower of its two real ones [1/s].
-    shapes : ndarray (6, 6)
+    shapes : ndarray (modes, coordinates)
         Row k: mode k's displacement ``x, y, z`` [m] and rotation ``rx, ry, rz``
-        [rad] at the mass centre, phase-aligned and scaled so that its dominant
-        entry is 1.
-    energy_share : ndarray (6, 6)
-        Row k: the share of mode k's kinetic energy in each direction
+        [rad] at the mass centre (then the top's modal coordinates), phase-aligned
+        and scaled so that its dominant entry is 1.
+    energy_share : ndarray (modes, coordinates)
+        Row k: the share of mode k's kinetic energy in each coordinate
         (``M_ii |shape_i|^2``, normalised to sum 1).
     relaxation_rates : ndarray
         Pneumatic tables: the real poles ``-lambda`` [1/s], ascending: the
@@ -45,6 +47,9 @@ class Modes:
     integrators : int
         Pneumatic tables: poles at zero, one per leveling group (with the valves
         closed, the air in a group stays, and any such amount is at rest).
+    coordinates : tuple of str
+        The coordinates' names: ``x .. rz``, then the top's elastic modes by their
+        motion (``twist 1``, ``bending x 1``, ...).
     """
 
     frequencies_hz: np.ndarray
@@ -54,6 +59,7 @@ class Modes:
     energy_share: np.ndarray
     relaxation_rates: np.ndarray = field(default_factory=lambda: np.zeros(0))
     integrators: int = 0
+    coordinates: tuple[str, ...] = DOF_NAMES
 
     @property
     def relaxation_times(self) -> np.ndarray:
@@ -62,15 +68,16 @@ class Modes:
 
     @property
     def dominant(self) -> tuple[str, ...]:
-        """The direction holding most of each mode's kinetic energy."""
-        return tuple(DOF_NAMES[int(i)] for i in np.argmax(self.energy_share, axis=1))
+        """The coordinate holding most of each mode's kinetic energy (a direction ``x .. rz``, or an elastic
+        mode's name)."""
+        return tuple(self.coordinates[int(i)] for i in np.argmax(self.energy_share, axis=1))
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready: ``frequencies_hz``, ``damping_ratios``, ``shapes`` (objects keyed by direction), ``dominant``."""
         return {
             "frequencies_hz": [float(f) for f in self.frequencies_hz],
             "damping_ratios": [float(z) for z in self.damping_ratios],
-            "shapes": [{d: float(v) for d, v in zip(DOF_NAMES, row, strict=True)} for row in self.shapes],
+            "shapes": [{d: float(v) for d, v in zip(self.coordinates, row, strict=True)} for row in self.shapes],
             "dominant": list(self.dominant),
             "relaxation_rates": [float(r) for r in self.relaxation_rates],
             "integrators": self.integrators,
@@ -78,12 +85,13 @@ class Modes:
 
     def summary(self) -> str:
         """A text table: mode, frequency, damping ratio, dominant direction."""
-        lines = ["mode  frequency [Hz]  damping ratio  dominant  energy share"]
+        width = max(8, *(len(d) for d in self.dominant))
+        lines = [f"mode  frequency [Hz]  damping ratio  {'dominant':>{width}}  energy share"]
         for k, (f, z, d) in enumerate(zip(self.frequencies_hz, self.damping_ratios, self.dominant, strict=True)):
             share = ", ".join(
-                f"{n} {100 * e:.0f}%" for n, e in zip(DOF_NAMES, self.energy_share[k], strict=True) if e >= 0.05
+                f"{n} {100 * e:.0f}%" for n, e in zip(self.coordinates, self.energy_share[k], strict=True) if e >= 0.05
             )
-            lines.append(f"{k + 1:>4}  {f:>14.4g}  {z:>13.4g}  {d:>8}  {share}")
+            lines.append(f"{k + 1:>4}  {f:>14.4g}  {z:>13.4g}  {d:>{width}}  {share}")
         if self.relaxation_rates.size or self.integrators:
             rates = ", ".join(f"{r:.4g}" for r in self.relaxation_rates)
             lines.append(f"relaxation poles [1/s]: {rates or 'none'}; time constants "
@@ -95,10 +103,17 @@ class Modes:
         """Bar charts of each mode's energy share per direction; returns the figure."""
         import matplotlib.pyplot as plt
 
-        fig, axes = plt.subplots(2, 3, figsize=(11, 6), sharey=True, layout="constrained")
-        colours = ["tab:blue"] * 3 + ["tab:orange"] * 3
-        for k, ax in enumerate(axes.flat):
-            ax.bar(DOF_NAMES, 100 * self.energy_share[k], color=colours)
+        shown = min(len(self.frequencies_hz), 12)
+        rows = max(2, -(-shown // 3))
+        fig, axes = plt.subplots(rows, 3, figsize=(11 if len(self.coordinates) <= 6 else 14, 3 * rows), sharey=True,
+                                 layout="constrained")
+        colours = ["tab:blue"] * 3 + ["tab:orange"] * 3 + ["tab:green"] * (len(self.coordinates) - 6)
+        for ax in axes.flat[shown:]:
+            ax.set_visible(False)
+        for k, ax in enumerate(axes.flat[:shown]):
+            ax.bar(self.coordinates, 100 * self.energy_share[k], color=colours)
+            if len(self.coordinates) > 6:
+                ax.tick_params(axis="x", labelrotation=60, labelsize=7)
             ax.set_title(
                 f"mode {k + 1}: {self.frequencies_hz[k]:.3g} Hz, "
                 f"$\\zeta$ = {self.damping_ratios[k]:.3g}\nmostly {self.dominant[k]}",
@@ -108,9 +123,12 @@ class Modes:
             ax.grid(axis="y", alpha=0.3)
         for ax in axes[:, 0]:
             ax.set_ylabel("kinetic energy share [%]")
-        for ax in axes[1]:
-            ax.set_xlabel("direction (blue: translation, orange: rotation)")
-        fig.suptitle(title or "Rigid-body modes of the table on its isolators")
+        for ax in axes[-1]:
+            ax.set_xlabel("coordinate (blue: translation, orange: rotation, green: the top's elastic modes)"
+                          if len(self.coordinates) > 6 else "direction (blue: translation, orange: rotation)",
+                          fontsize=8 if len(self.coordinates) > 6 else None)
+        fig.suptitle(title or ("Modes of the table on its isolators, the top bending" if len(self.coordinates) > 6
+                               else "Rigid-body modes of the table on its isolators"))
         return fig
 
 
@@ -139,6 +157,7 @@ def modes(lin: LinearModel) -> Modes:
     """
     a = np.asarray(lin.system.A)
     eig, vec = np.linalg.eig(a)
+    ndof = lin.mass.shape[0]
     omega, zeta, lam, shapes = [], [], [], []
     scale = max(1.0, float(np.abs(eig).max()))
     relaxation, integrators = np.zeros(0), 0
@@ -160,7 +179,7 @@ def modes(lin: LinearModel) -> Modes:
             zeta.append(-(l1 + l2) / (2 * w) if w > 0 else 1.0)
             value = complex(max(l1, l2))  # the slower of the two
         lam.append(value)
-        shapes.append(vec[:6, idx[0]])
+        shapes.append(vec[:ndof, idx[0]])
     order = np.argsort(omega, kind="stable")
     omega_arr, zeta_arr = np.array(omega)[order], np.array(zeta)[order]
     lam_arr, shape_arr = np.array(lam)[order], np.array(shapes)[order]
@@ -170,7 +189,9 @@ def modes(lin: LinearModel) -> Modes:
     dominant = np.argmax(energy, axis=1)
     ref = shape_arr[np.arange(len(shape_arr)), dominant]
     real = without_dust((shape_arr / ref[:, None]).real, 1.0)  # each shape's largest entry is 1: dust reads 0
-    return Modes(omega_arr / (2 * np.pi), zeta_arr, lam_arr, real, energy, relaxation, integrators)
+    flexible = getattr(lin.scenario.table, "flexible", None)
+    names = DOF_NAMES + (elastic_mode_names(flexible.data) if flexible is not None else ())
+    return Modes(omega_arr / (2 * np.pi), zeta_arr, lam_arr, real, energy, relaxation, integrators, names)
 
 
 def _one_per_mode(eig: np.ndarray) -> list[tuple[int, ...]]:

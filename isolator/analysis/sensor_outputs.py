@@ -37,11 +37,12 @@ def _skew(r: np.ndarray) -> np.ndarray:
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
-def displacement_rows(sensors: Sequence[Sensor], rot0: np.ndarray, n_states: int, n_inputs: int
-                      ) -> tuple[np.ndarray, np.ndarray]:
+def displacement_rows(sensors: Sequence[Sensor], rot0: np.ndarray, n_states: int, n_inputs: int,
+                      shapes: Sequence[np.ndarray | None] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``C, D`` (sensors, states), (sensors, inputs) of each sensor's displacement along its direction [m]:
     table sensors on the displacement states (``rot0`` the rest pose's rotation), floor sensors on the
-    ``ground:x .. z`` inputs (the first three)."""
+    ``ground:x .. z`` inputs (the first three). ``shapes``: on a bending top, each table sensor's elastic
+    translation per modal coordinate (3, modes), whose coordinates follow the six rigid ones."""
     c = np.zeros((len(sensors), n_states))
     d = np.zeros((len(sensors), n_inputs))
     for i, s in enumerate(sensors):
@@ -51,15 +52,21 @@ def displacement_rows(sensors: Sequence[Sensor], rot0: np.ndarray, n_states: int
         else:
             arm = rot0 @ np.asarray(s.position, dtype=float)
             c[i, 0:3], c[i, 3:6] = n, -n @ _skew(arm)
+            shape = None if shapes is None else shapes[i]
+            if shape is not None:
+                c[i, 6:6 + shape.shape[1]] = n @ rot0 @ shape
     return c, d
 
 
-def sensor_rows(sensors: Sequence[Sensor], rot0: np.ndarray, a: np.ndarray, b_shifted: np.ndarray, b1: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+def sensor_rows(sensors: Sequence[Sensor], rot0: np.ndarray, a: np.ndarray, b_shifted: np.ndarray, b1: np.ndarray,
+                shapes: Sequence[np.ndarray | None] | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``C, D`` of the sensors as outputs of the system ``xi' = A xi + B u`` (``xi = x - B1 u``; ``b_shifted``
-    = ``A B1 + B0``): each sensor in its quantity (see the module's description for acceleration outputs)."""
+    = ``A B1 + B0``): each sensor in its quantity (see the module's description for acceleration outputs).
+    ``shapes`` as :func:`displacement_rows` takes them; the displacements then have ``6 + modes``
+    coordinates, their rates as many."""
     n_states, n_inputs = a.shape[0], b_shifted.shape[1]
-    c_disp, d_floor = displacement_rows(sensors, rot0, n_states, n_inputs)
+    c_disp, d_floor = displacement_rows(sensors, rot0, n_states, n_inputs, shapes)
+    ndof = 6 + max((s.shape[1] for s in (shapes or ()) if s is not None), default=0)
     c = np.zeros_like(c_disp)
     d = np.zeros_like(d_floor)
     b0 = b_shifted - a @ b1
@@ -69,7 +76,7 @@ def sensor_rows(sensors: Sequence[Sensor], rot0: np.ndarray, a: np.ndarray, b_sh
             continue
         row = c_disp[i]
         velocity = np.zeros(n_states)
-        velocity[6:12] = row[0:6]
+        velocity[ndof:2 * ndof] = row[0:ndof]
         if s.order == 0:
             c[i], d[i] = row, row @ b1
         elif s.order == 1:

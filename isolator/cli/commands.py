@@ -10,6 +10,7 @@ from typing import Any
 from isolator.analysis.linear import LinearModel, linearise
 from isolator.cli.budget_command import register as register_budget
 from isolator.cli.calibrate_command import register as register_calibrate
+from isolator.cli.compliance_command import register as register_compliance
 from isolator.cli.helpers import (
     check_memory,
     count,
@@ -24,6 +25,7 @@ from isolator.cli.helpers import (
     seed,
     use_agg,
 )
+from isolator.cli.plate_command import register as register_plate_modes
 from isolator.cli.sequence_command import register as register_sequence
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
@@ -119,6 +121,8 @@ def register(sub: Any) -> None:
     register_sequence(sub)
     register_calibrate(sub)
     register_budget(sub)
+    register_compliance(sub)
+    register_plate_modes(sub)
 
 
 def _scenarios(args: argparse.Namespace) -> int:

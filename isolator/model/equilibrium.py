@@ -128,9 +128,10 @@ def rocking_stiffness(model: Model, p: np.ndarray, positions: np.ndarray, pose: 
             k = k + np.asarray(lin(air_at, c, params)[-1], dtype=float)
         return condensed(k)
 
-    def condensed(k: np.ndarray) -> np.ndarray:
+    def condensed(k: np.ndarray) -> np.ndarray:  # onto the rotations, translations (and modes) following
         k = 0.5 * (k + k.T)
-        return k[3:, 3:] - k[3:, :3] @ np.linalg.pinv(k[:3, :3]) @ k[:3, 3:]
+        free = [0, 1, 2, *range(6, k.shape[0])]
+        return k[3:6, 3:6] - k[3:6, free] @ np.linalg.pinv(k[np.ix_(free, free)]) @ k[free, 3:6]
 
     pose = np.asarray(pose, dtype=float)
     values, vectors = np.linalg.eigh(stiffness(p, pose, pose))

@@ -8,9 +8,10 @@ import casadi as ca
 
 from isolator.model.elements.base import AttachmentMotion
 from isolator.model.elements.pneumatic import PNEUMATIC
+from isolator.model.flexible.coupling import ElasticState, carriage_shapes, carriage_terms
 from isolator.model.parameters import ParameterLayout, PneumaticStructure
 from isolator.model.pneumatic_statics import element_of, rest_element_states
-from isolator.model.residual import attachment_motion, newton_euler_residual
+from isolator.model.residual import attachment_motion, carriage_paths, newton_euler_residual
 from isolator.model.rotations import cardan_matrix
 
 __all__ = ["build_linearisation"]
@@ -29,6 +30,10 @@ def build_linearisation(layout: ParameterLayout) -> ca.Function:
     for floor motion ``g`` (6: translations, rotations about the world origin),
     a wrench ``w`` at the mass centre (force, moment; world axes) and actuator
     forces ``f``.
+
+    A top that bends (``layout.flexible``) adds its modal coordinates to ``d``
+    (after the six rigid ones) and their rest values to ``z0`` (last); the
+    modes' equations follow the six rows.
 
     For pneumatic tables ``z0`` also holds the groups' rest gauge pressures
     and the chamber pressure deviations ``e`` [Pa] are states too (valves
@@ -51,8 +56,10 @@ def build_linearisation(layout: ParameterLayout) -> ca.Function:
     p = ca.SX.sym("p", layout.size)
     c = ca.SX.sym("c", 3 * n)
     structure = layout.pneumatic
-    z0 = ca.SX.sym("z0", 6 + (len(structure.groups) if structure is not None else 0))
-    d, v, a = ca.SX.sym("d", 6), ca.SX.sym("v", 6), ca.SX.sym("a", 6)
+    flexible = layout.flexible
+    nm = flexible.n_modes if flexible is not None else 0
+    z0 = ca.SX.sym("z0", 6 + (len(structure.groups) if structure is not None else 0) + nm)
+    d, v, a = ca.SX.sym("d", 6 + nm), ca.SX.sym("v", 6 + nm), ca.SX.sym("a", 6 + nm)
     g = ca.SX.sym("g", 12)
     w = ca.SX.sym("w", 6)
     f = ca.SX.sym("f", layout.n_actuators)
@@ -60,14 +67,22 @@ def build_linearisation(layout: ParameterLayout) -> ca.Function:
     element = element_of(layout)
     e = ca.SX.sym("e", element.n_states(structure))
     states = rest_element_states(layout, prm, z0[6:]) + e if structure is not None else None
-    rot = cardan_matrix(d[3:]) @ cardan_matrix(z0[3:6])
-    pos, w_body = z0[:3] + d[:3], rot.T @ v[3:]
+    rot = cardan_matrix(d[3:6]) @ cardan_matrix(z0[3:6])
+    pos, w_body = z0[:3] + d[:3], rot.T @ v[3:6]
+    elastic = None
+    if flexible is not None:
+        eta = z0[z0.shape[0] - nm:] + d[6:]
+        g_world = ca.vertcat(0, 0, -prm["gravity"])
+        terms = carriage_terms(flexible, carriage_paths(c, prm, layout.parents), prm["masses"],
+                               carriage_shapes(flexible, c, n), eta, v[6:], a[6:], rot.T @ a[:3], rot.T @ a[3:6],
+                               w_body, rot.T @ g_world, g_world)
+        elastic = ElasticState(flexible, eta, v[6:], a[6:], terms)
     body = newton_euler_residual(
-        pos, rot, v[:3], w_body, rot.T @ a[:3], rot.T @ a[3:], c, prm, layout.parents,
+        pos, rot, v[:3], w_body, rot.T @ a[:3], rot.T @ a[3:6], c, prm, layout.parents,
         ground=g, actuator_forces=f if layout.n_actuators else None, wrench=w,
-        element=element, element_states=states,
+        element=element, element_states=states, elastic=elastic,
     )
-    res = ca.vertcat(rot @ body[:3], rot @ body[3:])
+    res = ca.vertcat(rot @ body[:3], rot @ body[3:6], body[6:])
     deviations = ca.vertcat(d, v, a, g, w, f, e)  # all zero at the rest pose
 
     def jac(expr: ca.SX, var: ca.SX) -> ca.SX:

@@ -9,6 +9,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.model.flexible.structure import ElasticStructure
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Isolator, Scenario
 from isolator.scenario.pneumatic import PneumaticIsolator
@@ -153,6 +154,9 @@ class ParameterLayout:
         One name per entry of ``p``, e.g. ``isolators[2].stiffness.z``.
     pneumatic : PneumaticStructure or None
         The pneumatic isolators' structure (groups, valves, chambers); None for spring-dampers.
+    flexible : ElasticStructure or None
+        A bending top's modes and their shapes where things touch it (``[table.flexible]``); None for a
+        rigid top.
 
     Notes
     -----
@@ -168,6 +172,7 @@ class ParameterLayout:
     n_actuators: int = 0
     ground: bool = False
     pneumatic: PneumaticStructure | None = None
+    flexible: ElasticStructure | None = None
     names: tuple[str, ...] = field(init=False)
 
     def __post_init__(self) -> None:
@@ -219,6 +224,10 @@ class ParameterLayout:
         check_scenario_values(scenario)
         check_carriage_tree(scenario.carriages)
         check_isolator_layout(scenario.isolators)
+        flexible = ElasticStructure.of(scenario)
+        if flexible is not None and scenario.is_pneumatic:
+            raise ScenarioError("table.flexible: a bending top on pneumatic isolators is not modelled yet; "
+                                "give the isolators as springs and dampers (their stiffness and damping at rest)")
         return cls(
             len(scenario.carriages),
             len(scenario.isolators),
@@ -226,6 +235,7 @@ class ParameterLayout:
             len(scenario.actuators),
             scenario.has_ground_motion,
             PneumaticStructure.of(scenario),
+            flexible,
         )
 
     def pack(self, scenario: Scenario) -> np.ndarray:

@@ -13,30 +13,58 @@ import casadi as ca
 
 from isolator.model.elements.base import AttachmentMotion, IsolatorElement
 from isolator.model.elements.spring_damper import SPRING_DAMPER, isolator_preloads
+from isolator.model.flexible.coupling import ElasticState, modal_shapes
 
-__all__ = ["attachment_motion", "carriage_kinematics", "newton_euler_residual", "solve_blocks"]
+__all__ = ["attachment_motion", "carriage_kinematics", "carriage_paths", "newton_euler_residual", "solve_blocks"]
 
 
 def attachment_motion(
-    pos: ca.SX, rot: ca.SX, vel: ca.SX, w_body: ca.SX, prm: dict[str, ca.SX], ground: ca.SX | None = None
+    pos: ca.SX, rot: ca.SX, vel: ca.SX, w_body: ca.SX, prm: dict[str, ca.SX], ground: ca.SX | None = None,
+    elastic: tuple[list[ca.SX], ca.SX, ca.SX] | None = None,
 ) -> AttachmentMotion:
     """The isolators' attachment points relative to their floor points (world axes) [m], [m/s].
 
     ``ground`` (12,): floor displacement [m], rotation about the world origin
-    [rad] and their rates; the floor points move with the floor.
+    [rad] and their rates; the floor points move with the floor. ``elastic``: a bending top's shapes at the
+    attachment points (3, modes) each, its modal coordinates and their rates; the points then move with the
+    top's elastic translation too.
     """
     w_world = rot @ w_body
     stretches, rates = [], []
     for k in range(prm["positions"].shape[1]):
         s = prm["positions"][:, k]
-        arm = rot @ s
-        stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
+        if elastic is None:
+            arm = rot @ s
+            stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
+        else:
+            shape, eta, eta_rate = elastic[0][k], elastic[1], elastic[2]
+            arm = rot @ (s + shape @ eta)
+            stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm) + rot @ (shape @ eta_rate)
         if ground is not None:
             stretch = stretch - ground[0:3] - ca.cross(ground[3:6], s)
             rate = rate - ground[6:9] - ca.cross(ground[9:12], s)
         stretches.append(stretch)
         rates.append(rate)
     return AttachmentMotion(stretches, rates, pos, rot)
+
+
+def carriage_paths(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...]) -> list[tuple[ca.SX, ca.SX, ca.SX]]:
+    """Each carriage's position, velocity and acceleration in the table frame from the mass centre
+    [m, m/s, m/s^2], from its coordinates ``c`` (q, q', q'', 3 n) and its parents' (in carriage order)."""
+    n = len(parents)
+    zero = ca.SX.zeros(3, 1)
+    d: dict[int, tuple[ca.SX, ca.SX, ca.SX]] = {}
+    remaining = list(range(n))
+    while remaining:
+        for i in list(remaining):
+            if parents[i] != -1 and parents[i] not in d:
+                continue
+            remaining.remove(i)
+            base = d[parents[i]] if parents[i] != -1 else (zero, zero, zero)
+            axis = prm["axes"][:, i]
+            d[i] = (base[0] + prm["origins"][:, i] + axis * c[i], base[1] + axis * c[n + i],
+                    base[2] + axis * c[2 * n + i])
+    return [d[i] for i in range(n)]
 
 
 def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...]) -> dict[str, ca.SX]:
@@ -59,33 +87,34 @@ def carriage_kinematics(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...
         about the table's mass centre [kg m^2]; ``Hd`` sum m d x d'' [N m];
         ``B`` the matrix with sum m d x (2 w x d') = B w [kg m^2/s].
     """
-    n = len(parents)
     zero = ca.SX.zeros(3, 1)
     out = {"m": ca.SX(0), "S": zero, "Sd": zero, "Sdd": zero, "Jc": ca.SX.zeros(3, 3),
            "Hd": zero, "B": ca.SX.zeros(3, 3)}
-    d: dict[int, tuple[ca.SX, ca.SX, ca.SX]] = {}
-    remaining = list(range(n))
-    while remaining:
-        for i in list(remaining):
-            if parents[i] != -1 and parents[i] not in d:
-                continue
-            remaining.remove(i)
-            base = d[parents[i]] if parents[i] != -1 else (zero, zero, zero)
-            axis = prm["axes"][:, i]
-            pos = base[0] + prm["origins"][:, i] + axis * c[i]
-            vel = base[1] + axis * c[n + i]
-            acc = base[2] + axis * c[2 * n + i]
-            d[i] = (pos, vel, acc)
-            m = prm["masses"][i]
-            out["m"] += m
-            out["S"] += m * pos
-            out["Sd"] += m * vel
-            out["Sdd"] += m * acc
-            out["Jc"] += m * (ca.dot(pos, pos) * ca.SX.eye(3) - pos @ pos.T)
-            out["Hd"] += m * ca.cross(pos, acc)
-            out["B"] += 2 * m * (ca.dot(pos, vel) * ca.SX.eye(3) - vel @ pos.T)
+    paths = carriage_paths(c, prm, parents)
+    for i in _carriage_order(parents):
+        pos, vel, acc = paths[i]
+        m = prm["masses"][i]
+        out["m"] += m
+        out["S"] += m * pos
+        out["Sd"] += m * vel
+        out["Sdd"] += m * acc
+        out["Jc"] += m * (ca.dot(pos, pos) * ca.SX.eye(3) - pos @ pos.T)
+        out["Hd"] += m * ca.cross(pos, acc)
+        out["B"] += 2 * m * (ca.dot(pos, vel) * ca.SX.eye(3) - vel @ pos.T)
     return out
 
+
+def _carriage_order(parents: tuple[int, ...]) -> list[int]:
+    """Carriages parents first (the order the moments were always summed in)."""
+    order: list[int] = []
+    remaining = list(range(len(parents)))
+    while remaining:
+        for i in list(remaining):
+            if parents[i] != -1 and parents[i] not in order:
+                continue
+            remaining.remove(i)
+            order.append(i)
+    return order
 
 
 def newton_euler_residual(
@@ -105,6 +134,7 @@ def newton_euler_residual(
     kin: dict[str, ca.SX] | None = None,
     element: IsolatorElement = SPRING_DAMPER,
     element_states: ca.SX | None = None,
+    elastic: ElasticState | None = None,
 ) -> ca.SX:
     """Newton's and Euler's laws for the table with its carriages, table frame.
 
@@ -143,14 +173,19 @@ def newton_euler_residual(
         The isolators' kind (:mod:`isolator.model.elements`).
     element_states : SX, optional
         Its internal states (the pneumatic element's chamber pressures [Pa]).
+    elastic : ElasticState, optional
+        A bending top's modal coordinates and the carriages' elastic terms
+        (:mod:`isolator.model.flexible.coupling`): the isolators and actuators act
+        at their elastically displaced points and load the modes.
 
     Returns
     -------
-    SX (6,)
+    SX (6,) or (6 + modes,)
         Table-frame components of [sum of m a - forces (N); moment balance
         about the table's mass centre (N m)]; zero when the motion obeys the
         laws. Linear in ``acc_body`` and ``alpha_body`` with the constant-form
-        mass matrix [[m I, -[S]x], [[S]x, J + Jc]].
+        mass matrix [[m I, -[S]x], [[S]x, J + Jc]]. With ``elastic``, the modes'
+        equations follow (:meth:`ElasticState.modal_rows`).
     """
     if kin is None:
         if c is None:
@@ -164,15 +199,28 @@ def newton_euler_residual(
     force = m_tot * g_world
     moment = ca.SX.zeros(3, 1)
     load = isolator_preloads(prm, kin["m"]) if preload and element is SPRING_DAMPER else None
-    motion = attachment_motion(pos, rot, vel, w, prm, ground)
+    structure = elastic.structure if elastic is not None else None
+    shapes = modal_shapes(structure.isolators, structure) if structure is not None else []
+    motion = attachment_motion(pos, rot, vel, w, prm, ground,
+                               None if elastic is None else (shapes, elastic.eta, elastic.rate))
+    modal_force = ca.SX.zeros(structure.n_modes if structure is not None else 0, 1)
     for k, f in enumerate(element.forces(prm, motion, element_states, load)):
         force += f
-        moment += ca.cross(rot @ prm["positions"][:, k], f)
+        if elastic is None:
+            moment += ca.cross(rot @ prm["positions"][:, k], f)
+        else:
+            moment += ca.cross(rot @ (prm["positions"][:, k] + shapes[k] @ elastic.eta), f)
+            modal_force += shapes[k].T @ (rot.T @ f)
     if actuator_forces is not None:
+        at = modal_shapes(structure.actuators, structure) if structure is not None else []
         for k in range(actuator_forces.shape[0]):
             f = prm["actuator_directions"][:, k] * actuator_forces[k]
             force += f
-            moment += ca.cross(rot @ prm["actuator_positions"][:, k], f)
+            if elastic is None:
+                moment += ca.cross(rot @ prm["actuator_positions"][:, k], f)
+            else:
+                moment += ca.cross(rot @ (prm["actuator_positions"][:, k] + at[k] @ elastic.eta), f)
+                modal_force += at[k].T @ (rot.T @ f)
     if wrench is not None:
         force += wrench[0:3]
         moment += wrench[3:6]
@@ -188,7 +236,9 @@ def newton_euler_residual(
         - rot.T @ moment
         - ca.cross(S, g_body)
     )
-    return ca.vertcat(translation, rotation)
+    if elastic is None:
+        return ca.vertcat(translation, rotation)
+    return ca.vertcat(translation + elastic.terms[0], rotation + elastic.terms[1], elastic.modal_rows(modal_force))
 
 
 

@@ -32,6 +32,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.model.flexible.equations import flexible_equations
 from isolator.model.parameters import ParameterLayout
 from isolator.model.pneumatic_statics import (
     element_of,
@@ -120,6 +121,8 @@ class Model:
         tag = f"{self.kind}_c{lay.n_carriages}_i{lay.n_isolators}_a{lay.n_actuators}_g{int(lay.ground)}"
         if lay.pneumatic is not None:
             tag += "_pn" + pneumatic_tag(lay.pneumatic)
+        if lay.flexible is not None:
+            tag += f"_fl{lay.flexible.n_modes}_{lay.flexible.digest}"
         return tag
 
 
@@ -192,6 +195,7 @@ class _Symbols:
             }
 
         n_static = 6 + (len(layout.pneumatic.groups) if layout.pneumatic is not None else 0)
+        n_static += layout.flexible.n_modes if layout.flexible is not None else 0
         return cls(p, c, ca.SX.sym("z", n_static), layout.unpack(p), rest, extra(c), extra(rest))
 
 
@@ -214,6 +218,9 @@ class ExactModel(ModelVariant):
     def equations(self, layout: ParameterLayout, sym: _Symbols) -> _Equations:
         n, c, p, prm, z, rest = layout.n_carriages, sym.c, sym.p, sym.prm, sym.z, sym.rest
         parents, extra, rest_extra = layout.parents, sym.extra, sym.rest_extra
+        if layout.flexible is not None:
+            flex = flexible_equations(layout.flexible, parents, c, p, prm, z, rest, extra, rest_extra)
+            return _Equations(flex.x, flex.xdot, flex.static, flex.pose, flex.staged)
         zero3 = ca.SX.zeros(3, 1)
         element = element_of(layout)
         x = ca.SX.sym("x", 13 + element.n_states(layout.pneumatic))
@@ -270,6 +277,9 @@ class PaperModel(ModelVariant):
             raise ParameterError(
                 "model: the paper's model is for spring-damper isolators; use model='exact' for pneumatic ones"
             )
+        if layout.flexible is not None:
+            raise ParameterError("model: the paper's model has a rigid top; use model='exact' for a top that "
+                                 "bends ([table.flexible])")
         x = ca.SX.sym("x", 12)
         gen = ca.SX.sym("g", 18)  # position/angles, rates, accelerations
         pos, th = gen[0:3], gen[3:6]

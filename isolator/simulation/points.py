@@ -12,9 +12,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.model.flexible.structure import point_shape
 from isolator.scenario.definitions import Scenario
 
-__all__ = ["PointSet", "point_positions", "rotation_matrices"]
+__all__ = ["PointSet", "elastic_translation", "point_positions", "rotation_matrices"]
 
 
 def rotation_matrices(states: np.ndarray, kind: str) -> np.ndarray:
@@ -36,12 +37,24 @@ def rotation_matrices(states: np.ndarray, kind: str) -> np.ndarray:
     return np.moveaxis(np.array(rows), 2, 0)
 
 
-def point_positions(states: np.ndarray, arms: np.ndarray, kind: str) -> np.ndarray:
+def elastic_translation(states: np.ndarray, shapes: np.ndarray) -> np.ndarray:
+    """Elastic translations (points, 3, N), table frame [m], of points with ``shapes`` (points, 3, modes) at
+    exact-model states (N, n_states) of a bending top (the modal coordinates after the first 13)."""
+    nm = shapes.shape[2]
+    return np.einsum("pim,nm->pin", shapes, np.atleast_2d(states)[:, 13:13 + nm])
+
+
+def point_positions(states: np.ndarray, arms: np.ndarray, kind: str, shapes: np.ndarray | None = None
+                    ) -> np.ndarray:
     """World positions (points, 3, N) [m] of table points with lever arms ``arms`` (points, 3; table frame,
-    from the mass centre) at states (N, n_states) of the model ``kind`` ("exact" or "paper")."""
+    from the mass centre) at states (N, n_states) of the model ``kind`` ("exact" or "paper"); on a bending
+    top with their elastic translation per modal coordinate ``shapes`` (points, 3, modes)."""
     states = np.atleast_2d(np.asarray(states, dtype=float))
     rot = rotation_matrices(states, kind)
-    turned = np.einsum("nij,pj->pin", rot, np.asarray(arms, dtype=float).reshape(-1, 3))
+    lever = np.asarray(arms, dtype=float).reshape(-1, 3)[:, :, None]
+    if shapes is not None:
+        lever = lever + elastic_translation(states, shapes)
+    turned = np.einsum("nij,pjn->pin", rot, np.broadcast_to(lever, (lever.shape[0], 3, states.shape[0])))
     return turned + states[:, 0:3].T[None, :, :]
 
 
@@ -61,6 +74,12 @@ class PointSet:
     settled : ndarray (points, 3) or None
         Displacement from ``start`` at the static equilibrium with the carriages at their final positions
         [m] (None when a carriage never stops).
+    shapes : ndarray (points, 3, modes) or None
+        On a bending top, each point's elastic translation per modal coordinate (table frame); the modal
+        coordinates are the states after the rigid table's 13.
+    rest : ndarray (points, 3) or None
+        On a bending top, each point's elastic translation at the initial equilibrium from the undeformed
+        top [m] (``deflection_at_rest``).
     """
 
     names: tuple[str, ...]
@@ -68,6 +87,8 @@ class PointSet:
     kind: str
     start: np.ndarray
     settled: np.ndarray | None
+    shapes: np.ndarray | None = None
+    rest: np.ndarray | None = None
 
     @classmethod
     def of(cls, scenario: Scenario, kind: str, start: np.ndarray, end: np.ndarray | None) -> PointSet:
@@ -75,9 +96,14 @@ class PointSet:
         arms = np.array([pt.position for pt in scenario.points], dtype=float).reshape(-1, 3)
         if not arms.size:  # no [[points]]: nothing to place (a run's hot path)
             return cls((), arms, kind, np.zeros((0, 3)), None if end is None else np.zeros((0, 3)))
-        first = point_positions(start, arms, kind)[:, :, 0]
-        settled = None if end is None else point_positions(end, arms, kind)[:, :, 0] - first
-        return cls(tuple(pt.name for pt in scenario.points), arms, kind, first, settled)
+        shapes = None
+        if getattr(scenario.table, "flexible", None) is not None:
+            shapes = np.array([point_shape(scenario.table, pt.position, getattr(pt, "feet", None),
+                                           f"points ({pt.name})") for pt in scenario.points])
+        first = point_positions(start, arms, kind, shapes)[:, :, 0]
+        settled = None if end is None else point_positions(end, arms, kind, shapes)[:, :, 0] - first
+        rest = None if shapes is None else elastic_translation(np.atleast_2d(start), shapes)[:, :, 0]
+        return cls(tuple(pt.name for pt in scenario.points), arms, kind, first, settled, shapes, rest)
 
     def index(self, name: str) -> int:
         """The position of the point ``name``; a KeyError naming the known points."""
@@ -87,7 +113,15 @@ class PointSet:
 
     def displacements(self, states: np.ndarray) -> np.ndarray:
         """Each point's displacement from its initial position (points, 3, N) [m] at states (N, n_states)."""
-        return point_positions(states, self.arms, self.kind) - self.start[:, :, None]
+        return point_positions(states, self.arms, self.kind, self.shapes) - self.start[:, :, None]
+
+    def elastic(self, states: np.ndarray) -> np.ndarray:
+        """Each point's elastic translation from the initial equilibrium (points, 3, N), table axes [m]
+        (``<point>:ex, :ey, :ez``; zeros on a rigid top)."""
+        states = np.atleast_2d(np.asarray(states, dtype=float))
+        if self.shapes is None or self.rest is None:
+            return np.zeros((len(self.names), 3, states.shape[0]))
+        return elastic_translation(states, self.shapes) - self.rest[:, :, None]
 
     def jacobian(self, state: np.ndarray) -> np.ndarray:
         """Each point's position's Jacobian (points, 3, n_states) at ``state`` [m per state unit], by central
@@ -95,10 +129,15 @@ class PointSet:
         state = np.asarray(state, dtype=float)
         step = 1e-7 * np.maximum(1.0, np.abs(state))
         moved = np.vstack([state + np.diag(step), state - np.diag(step)])
-        at = point_positions(moved, self.arms, self.kind)
+        at = point_positions(moved, self.arms, self.kind, self.shapes)
         return (at[:, :, : state.size] - at[:, :, state.size :]) / (2 * step)
 
     @property
     def columns(self) -> tuple[str, ...]:
         """The CSV/signal names ``<point>:x, <point>:y, <point>:z`` per point."""
         return tuple(f"{n}:{a}" for n in self.names for a in "xyz")
+
+    @property
+    def elastic_columns(self) -> tuple[str, ...]:
+        """``<point>:ex, :ey, :ez`` per point on a bending top (none on a rigid one)."""
+        return () if self.shapes is None else tuple(f"{n}:e{a}" for n in self.names for a in "xyz")

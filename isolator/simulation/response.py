@@ -6,7 +6,7 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass, field, replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -15,6 +15,7 @@ from isolator.scenario.definitions import SIGNALS
 from isolator.scenario.readable import clean_time, without_dust
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
+from isolator.simulation.elastic_figure import plot_elastic
 from isolator.simulation.points import PointSet
 from isolator.simulation.response_csv import response_dict, write_response_csv
 from isolator.simulation.settling import Band, SettlingResult
@@ -97,8 +98,8 @@ class Response:
     pneumatic_result: PneumaticResult | Callable[[], PneumaticResult] | None = field(default=None, repr=False)
     deadbands: dict[str, float] = field(default_factory=dict, repr=False)
     move_start: float = 0.0
-    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(default=None, repr=False,
-                                                                                          compare=False)
+    remeasure: Callable[[Band], tuple[dict[str, SettlingResult], Band, Any]] | None = field(
+        default=None, repr=False, compare=False)
     point_set: PointSet | None = field(default=None, repr=False)
     window_result: WindowResult | Callable[[], WindowResult] | None = field(default=None, repr=False, compare=False)
     point_history: np.ndarray | None = field(default=None, repr=False, compare=False)
@@ -123,11 +124,9 @@ class Response:
         """Every point's world displacement from its position at the initial equilibrium (points, 3, N) [m]
         (exact rotation of the lever arm); computed from the states on first use."""
         if self.point_history is None:
-            moved = np.zeros((0, 3, self.t.size)) if self.point_set is None or not self.point_set.names \
-                else self.point_set.displacements(self.states)
-            object.__setattr__(self, "point_history", moved)
-        assert self.point_history is not None
-        return self.point_history
+            object.__setattr__(self, "point_history", np.zeros((0, 3, self.t.size)) if self.point_set is None
+                               or not self.point_set.names else self.point_set.displacements(self.states))
+        return cast(np.ndarray, self.point_history)
 
     @property
     def sensor_names(self) -> tuple[str, ...]:
@@ -143,11 +142,13 @@ class Response:
         """The sensor ``name``'s signal (N,) [m, m/s or m/s^2] (a KeyError names the known ones)."""
         return self.sensor_signals[_index_of(name, self.sensor_names, "sensor")]
 
-    def point(self, name: str) -> np.ndarray:
-        """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]."""
+    def point(self, name: str, elastic: bool = False) -> np.ndarray:
+        """The point ``name``'s world displacement ``x, y, z`` from its initial position (3, N) [m]; ``elastic``:
+        its elastic translation ``ex, ey, ez`` from the initial equilibrium (table axes; 0 on a rigid top)."""
         if self.point_set is None:
             raise KeyError(f"point: unknown '{name}' (this run has no points)")
-        return self.point_signals[self.point_set.index(name)]
+        i = self.point_set.index(name)
+        return self.point_set.elastic(self.states)[i] if elastic else self.point_signals[i]
 
     @property
     def windows(self) -> WindowResult | None:
@@ -192,8 +193,7 @@ class Response:
                             title or f"{self.name}: settling windows ({self.model} model)")
 
     def with_band(self, band: Band) -> Response:
-        """The same run measured in another settling band (on the same dense output or internal grid as its
-        own metrics, so the numbers equal those of a run given ``band`` from the start)."""
+        """The same run measured in another settling band (as if given ``band`` from the start)."""
         if self.remeasure is None:
             raise ValueError("with_band: this response keeps no way to measure it again")
         settling, resolved, pneumatic = self.remeasure(band)
@@ -323,14 +323,16 @@ class Response:
         """
         import matplotlib.pyplot as plt
 
-        zoom = None
+        zoom = elastic = None
         if fig is None:
-            fig = plt.figure(figsize=(11, 10), constrained_layout=True)
-            grid = fig.add_gridspec(4, 2, height_ratios=(1, 1, 1, 1.1))
+            bends = self.point_set is not None and bool(self.point_set.elastic_columns)  # a top that bends
+            fig = plt.figure(figsize=(11, 13 if bends else 10), constrained_layout=True)
+            grid = fig.add_gridspec(4 + bends, 2, height_ratios=(1, 1, 1, 1.1, 1.1)[:4 + bends])
             first = fig.add_subplot(grid[0, 0])
             for row, col in ((0, 1), (1, 0), (1, 1), (2, 0), (2, 1)):
                 fig.add_subplot(grid[row, col], sharex=first)
             zoom = fig.add_subplot(grid[3, :]) if self.final is not None and math.isfinite(self.stop_time) else None
+            elastic = fig.add_subplot(grid[4, :], sharex=first) if bends else None
         axes = np.asarray(fig.axes[:6]).reshape(3, 2)
         for row in range(3):
             for col, name in enumerate((SIGNALS[3 + row], SIGNALS[row])):
@@ -341,10 +343,8 @@ class Response:
                 if self.final is not None and math.isfinite(self.stop_time):
                     f = self.final[i] * 1e6
                     ax.axvline(self.stop_time, color="0.5", ls=":", lw=1)
-                    ax.fill_between(
-                        [self.stop_time, self.t[-1]], f - r.band * 1e6, f + r.band * 1e6,
-                        color="tab:green", alpha=0.15, lw=0,
-                    )
+                    ax.fill_between([self.stop_time, self.t[-1]], f - r.band * 1e6, f + r.band * 1e6,
+                                    color="tab:green", alpha=0.15, lw=0)
                     if r.time is not None and r.time > 0:
                         ax.axvline(self.stop_time + r.time, color="tab:red", ls="--", lw=1)
                 ax.set_ylabel(f"{name} [{_UNITS[name]}]")
@@ -366,11 +366,12 @@ class Response:
             axes[0, 1].legend(handles=handles, loc="upper left", fontsize=8)
         if zoom is not None:
             self._plot_residual(zoom)
+        if elastic is not None:
+            plot_elastic(elastic, self.t, self.point_set.names, self.point_set.elastic(self.states), self.stop_time)
         return fig
 
     def _plot_residual(self, ax: Any) -> None:
-        """After the stop, each signal's distance from its final value in units of its band: the residual
-        vibration, readable even when a quasi-static tilt dwarfs it; settled below 1."""
+        """After the stop, each signal's distance from its final value in units of its band (settled below 1)."""
         if self.final is None:
             return
         after = self.t >= self.stop_time

@@ -18,7 +18,7 @@ __all__ = ["response_dict", "write_response_csv"]
 
 def write_response_csv(response: Any, path: str | Path) -> Path:
     """Write a :class:`~isolator.simulation.response.Response`'s samples to ``path``:
-    ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m], ``s:<sensor>``
+    ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m] (on a bending top then ``<point>:ex,:ey,:ez``), ``s:<sensor>``
     per sensor (its SI quantity), ``f:<actuator>`` [N] when actuators applied forces, then a pneumatic run's
     ``p:<isolator>`` [Pa] and ``h:<group>`` [m] columns, to ``path``; returns the path."""
     path = Path(path)
@@ -28,6 +28,9 @@ def write_response_csv(response: Any, path: str | Path) -> Path:
     if r.point_names:
         header += [f"{n}:{a}" for n in r.point_names for a in "xyz"]
         columns.append(r.point_signals.reshape(-1, r.t.size).T)
+        if r.point_set.elastic_columns:  # a top that bends: <point>:ex, :ey, :ez
+            header += list(r.point_set.elastic_columns)
+            columns.append(r.point_set.elastic(r.states).reshape(-1, r.t.size).T)
     if r.sensor_names:
         header += [f"s:{n}" for n in r.sensor_names]
         columns.append(r.sensor_signals.T)
@@ -69,6 +72,15 @@ def response_dict(response: Any) -> dict[str, Any]:
         "band": response.band.to_dict(),
         "point_peak": {n: {a: num(float(np.max(np.abs(response.point_signals[i, j])))) for j, a in enumerate("xyz")}
                        for i, n in enumerate(response.point_names)},
+        **_deflection(response),
         **({} if response.windows is None else response.windows.to_dict()),
         **({} if response.pneumatic is None else response.pneumatic.to_dict()),
     }
+
+
+def _deflection(response: Any) -> dict[str, Any]:
+    """``deflection_at_rest`` on a bending top: each point's elastic translation at the initial equilibrium."""
+    points = response.point_set
+    if points is None or points.rest is None:
+        return {}
+    return {"deflection_at_rest": {n: [float(v) for v in points.rest[i]] for i, n in enumerate(points.names)}}

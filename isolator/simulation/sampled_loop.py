@@ -102,20 +102,30 @@ def readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.S
         return model.variant.sensed_motion(x, ref)
     motion, rates = _motion_function(model)(x, c, p, ref)
     rot, rot0 = rotation(x, model.kind), rotation(ref, model.kind)
+    flexible = model.layout.flexible
+    nm = 0 if flexible is None else flexible.n_modes
+    modal = None if flexible is None else (x[13:13 + nm], x[13 + nm:13 + 2 * nm],
+                                           model.rhs(x, c, p)[13 + nm:13 + 2 * nm], ref[13:13 + nm])
     out = []
     for s in sensors:
         if s.on != "table":
             out.append(ca.SX(0.0))
             continue
         arm, n = ca.DM(list(s.position)), ca.DM(list(s.direction))
-        turned = rot @ arm
+        lever, lever0, moving, accelerating = arm, arm, ca.SX.zeros(3, 1), ca.SX.zeros(3, 1)
+        if flexible is not None and modal is not None:  # a top that bends: the elastic translation there
+            shape = ca.DM(flexible.shape_at(s.position, None, f"sensors ({s.name})"))
+            lever, lever0 = arm + shape @ modal[0], arm + shape @ modal[3]
+            moving, accelerating = rot @ (shape @ modal[1]), rot @ (shape @ modal[2])
+        turned = rot @ lever
+        w = motion[9:12]
         if s.order == 0:
-            value = x[0:3] + turned - ref[0:3] - rot0 @ arm
+            value = x[0:3] + turned - ref[0:3] - rot0 @ lever0
         elif s.order == 1:
-            value = motion[6:9] + ca.cross(motion[9:12], turned)
+            value = motion[6:9] + ca.cross(w, turned) + moving
         else:
-            w = motion[9:12]
-            value = rates[0:3] + ca.cross(rates[3:6], turned) + ca.cross(w, ca.cross(w, turned))
+            value = (rates[0:3] + ca.cross(rates[3:6], turned) + ca.cross(w, ca.cross(w, turned))
+                     + 2 * ca.cross(w, moving) + accelerating)
         out.append(ca.dot(n, value))
     return ca.vertcat(*out)
 

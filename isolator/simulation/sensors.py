@@ -63,6 +63,11 @@ def table_motion(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.nda
     return motion[:, 6:9], rates[:, 0:3], motion[:, 9:12], rates[:, 3:6]
 
 
+def model_rates(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.ndarray) -> np.ndarray:
+    """The model's right-hand side (N, n_states) at states (N, n_states) with its inputs (N, input size)."""
+    return np.asarray(model.rhs(states.T, inputs.T, p)).T
+
+
 def floor_motion(scenario: Scenario, t: np.ndarray) -> np.ndarray:
     """The floor's translation, its velocity and its acceleration (3, 3, N) at times ``t`` [s]: [quantity order,
     axis x y z, sample] in [m], [m/s], [m/s^2] (zero for a still floor)."""
@@ -105,15 +110,29 @@ def sensor_signals(scenario: Scenario, model: Model, t: np.ndarray, states: np.n
         directions = np.array([sensors[i].direction for i in table], dtype=float)
         orders = [sensors[i].order for i in table]
         by_order: dict[int, np.ndarray] = {}
+        flexible = model.layout.flexible
+        shapes = None if flexible is None else np.array(
+            [flexible.shape_at(sensors[i].position, None, f"sensors ({sensors[i].name})") for i in table])
         if 0 in orders:
-            moved = point_positions(states, arms, model.kind) - point_positions(start[None, :], arms, model.kind)
+            moved = (point_positions(states, arms, model.kind, shapes)
+                     - point_positions(start[None, :], arms, model.kind, shapes))
             by_order[0] = np.einsum("pin,pi->pn", moved, directions)
         if max(orders) > 0:
             v, a, w, alpha = table_motion(model, states, inputs, p, start)
-            turned = np.einsum("nij,pj->pni", rotation_matrices(states, model.kind), arms)  # (points, N, 3)
-            by_order[1] = np.einsum("pni,pi->pn", v[None] + np.cross(w[None], turned), directions)
+            rot = rotation_matrices(states, model.kind)
+            lever = np.broadcast_to(arms[:, None, :], (len(table), states.shape[0], 3))
+            moving = accelerating = np.zeros_like(lever)
+            if shapes is not None:  # a top that bends: the elastic translation at the sensor and its rates
+                nm = shapes.shape[2]
+                rates = model_rates(model, states, inputs, p)[:, 13 + nm:13 + 2 * nm]
+                lever = lever + np.einsum("pim,nm->pni", shapes, states[:, 13:13 + nm])
+                moving = np.einsum("nij,pjm,nm->pni", rot, shapes, states[:, 13 + nm:13 + 2 * nm])
+                accelerating = np.einsum("nij,pjm,nm->pni", rot, shapes, rates)
+            turned = np.einsum("nij,pnj->pni", rot, lever)  # (points, N, 3)
+            by_order[1] = np.einsum("pni,pi->pn", v[None] + np.cross(w[None], turned) + moving, directions)
             by_order[2] = np.einsum("pni,pi->pn", a[None] + np.cross(alpha[None], turned)
-                                    + np.cross(w[None], np.cross(w[None], turned)), directions)
+                                    + np.cross(w[None], np.cross(w[None], turned)) + 2 * np.cross(w[None], moving)
+                                    + accelerating, directions)
         for j, i in enumerate(table):
             out[i] = by_order[orders[j]][j]
     floor = [i for i, s in enumerate(sensors) if s.on == "floor"]

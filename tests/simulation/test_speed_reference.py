@@ -34,6 +34,13 @@ def test_the_same_numbers_are_computed(now, stored):
 
 #: the largest relative difference from the reference a number may have (round-off of ~1e-16 per operation)
 ROUND_OFF = 1e-12
+#: a settling instant is a root of a signal's dense polynomial minus its band, where the signal crosses the band
+#: at a shallow slope: the round-off of the stages (eight SIMD lanes with fused multiply-adds on an AVX-512 CPU,
+#: four elsewhere) moves it by up to ~1e-9 of itself (measured: 1.1e-9 on this machine at the commit that
+#: wrote the reference)
+CROSSING = 1e-8
+#: numbers below this (m, rad, s) are round-off of zero (a free motion's offset of 1e-31 m)
+ZERO = 1e-20
 
 
 @pytest.mark.parametrize("group", ["batch/", "batch-paper/", "batch-short/", "batch-pneumatic/", "single", "sweep/"])
@@ -51,4 +58,5 @@ def test_every_number_is_the_references_within_round_off(now, stored, group):
         # round-off of the array's largest number: a signal that does not move (a peak of 1e-16 m, round-off
         # itself) has no relative digits to keep
         scale = float(np.nanmax(np.abs(want), initial=0.0)) if want.size else 0.0
-        np.testing.assert_allclose(got, want, rtol=ROUND_OFF, atol=ROUND_OFF * scale, equal_nan=True, err_msg=key)
+        rtol = CROSSING if key.endswith("settling") else ROUND_OFF
+        np.testing.assert_allclose(got, want, rtol=rtol, atol=max(rtol * scale, ZERO), equal_nan=True, err_msg=key)

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.analysis.elastic_outputs import point_force_weights
 from isolator.analysis.linear import LinearModel
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.definitions import Scenario
@@ -105,14 +106,8 @@ def budget_sources(lin: LinearModel, sample_rate: float | None = None) -> tuple[
     spectrum = scenario.ground.spectrum if scenario.ground is not None else None
     if spectrum is not None:
         out += [_floor(lin, k, f"floor:{a}") for k, a in enumerate("xyz") if a in spectrum.values]
-    rot0 = pose_rotation(lin.equilibrium.pose[3:6])
-    first_force = names.index("force:x")
     for d in scenario.disturbances:
-        direction = np.asarray(d.direction, dtype=float)
-        arm = rot0 @ np.asarray(d.position, dtype=float)
-        weights = np.zeros(len(names))
-        weights[first_force:first_force + 3] = direction
-        weights[first_force + 3:first_force + 6] = np.cross(arm, direction)
+        weights = point_force_weights(lin, d.position, d.direction, None, f"disturbances ({d.name})")
         out.append(_input(f"force:{d.name}", d.psd, weights))
     for act in scenario.actuators:
         if act.noise_psd is not None:
