@@ -1,7 +1,9 @@
 """A synthetic bending top for the model's tests: smooth analytic mode shapes on a rectangular top, mass-orthogonal
 to the rigid translations and rotations of a homogeneous box (so the top's own weight does not load them), in the
 interface the model reads (``ModalData``: ``frequencies``, ``damping``, ``digest``, ``face_for``, ``inside``,
-``translation``). Not a finite-element model: the plate tests use ``isolator plate-modes``."""
+``translation``), held in the scenario as a real :class:`FlexibleTop` whose :class:`ModalData` samples them on a
+grid (``Table.flexible`` takes nothing else). Not a finite-element model: the plate tests use ``isolator
+plate-modes``."""
 
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ import numpy as np
 from isolator import load_scenario
 from isolator.errors import ScenarioError
 from isolator.scenario.definitions import Scenario, Table
+from isolator.scenario.flexible import FlexibleTop, ModalData
 
 
 class SyntheticModes:
@@ -24,7 +27,8 @@ class SyntheticModes:
         self.lx, self.ly, self.t, self.mass = lx, ly, t, mass
         self.frequencies = np.array(frequencies, dtype=float)
         self.damping = np.full(len(frequencies), zeta)
-        self.nodes = np.array([[x, y, z] for x in (-lx / 2, lx / 2) for y in (-ly / 2, ly / 2) for z in (-t / 2, t / 2)])
+        self.nodes = np.array([[x, y, z] for x in (-lx / 2, lx / 2) for y in (-ly / 2, ly / 2)
+                               for z in (-t / 2, t / 2)])
         self.digest = hashlib.sha256(repr((lx, ly, t, mass, frequencies, zeta)).encode()).hexdigest()
         self.n_modes = len(frequencies)
         # mean squares over the box of x y (= 1/9 in normalised coordinates) and P2 (= 1/5)
@@ -52,16 +56,18 @@ class SyntheticModes:
         return out
 
 
-@dataclasses.dataclass(frozen=True)
-class _Flexible:
-    data: SyntheticModes
-    damping: float = 0.01
-
-    def __hash__(self) -> int:
-        return hash(self.data.digest)
-
-    def __eq__(self, other: object) -> bool:
-        return isinstance(other, _Flexible) and other.data.digest == self.data.digest
+def synthetic_flexible(modes: SyntheticModes, grid: tuple[int, int] = (21, 11)) -> FlexibleTop:
+    """``modes`` as the scenario holds a bending top: a :class:`FlexibleTop` whose :class:`ModalData` samples the
+    analytic shapes on a grid of both faces (interpolated between the nodes as any modal file is)."""
+    x, y = np.meshgrid(np.linspace(-modes.lx / 2, modes.lx / 2, grid[0]),
+                       np.linspace(-modes.ly / 2, modes.ly / 2, grid[1]), indexing="ij")
+    xy = np.column_stack([x.ravel(), y.ravel()])
+    nodes = np.vstack([np.column_stack([xy, np.full(len(xy), h)]) for h in (modes.t / 2, -modes.t / 2)])
+    shapes = modes.translation(xy, "top", "the synthetic top's grid")  # (nodes of a face, modes, 3)
+    data = ModalData(path="synthetic top", frequencies=modes.frequencies, damping=modes.damping, nodes=nodes,
+                     translations=np.concatenate([shapes, shapes]).transpose(1, 0, 2), rotations=None,
+                     thickness=modes.t)
+    return FlexibleTop(modes="synthetic top", data=data, damping=float(modes.damping[0]))
 
 
 def with_synthetic_top(scenario: Scenario | str = "paper-table-3-2", **modes: object) -> Scenario:
@@ -70,15 +76,7 @@ def with_synthetic_top(scenario: Scenario | str = "paper-table-3-2", **modes: ob
     t = sc.table
     size = t.size if t.size is not None else (2.0, 1.0, 0.3)
     data = SyntheticModes(size[0], size[1], size[2], t.mass, **modes)  # type: ignore[arg-type]
-    fields = {f.name for f in dataclasses.fields(Table)}
-    if "flexible" in fields:
-        return dataclasses.replace(sc, table=dataclasses.replace(t, flexible=_Flexible(data)))
-    return dataclasses.replace(sc, table=_FlexTable(t.mass, t.inertia, t.size, flexible=_Flexible(data)))
-
-
-@dataclasses.dataclass(frozen=True)
-class _FlexTable(Table):
-    flexible: object = None
+    return dataclasses.replace(sc, table=dataclasses.replace(t, flexible=synthetic_flexible(data)))
 
 
 def without_top_modes(scenario: Scenario) -> Scenario:

@@ -82,10 +82,16 @@ def check_flexible(scenario: Scenario) -> None:
     Raises
     ------
     ScenarioError
-        The rigid modes' mass or mass centre against ``[table]``; a single layer's thickness other than
-        ``table.size`` z; ``feet`` on a carriage that rides another carriage; a thing, a foot or a carriage's
+        Empty ``feet``; the rigid modes' mass or mass centre against ``[table]``; a single layer's thickness
+        other than ``table.size`` z; ``feet`` on a carriage that rides another carriage; a thing, a foot or a carriage's
         foot anywhere along its travel farther than 1 mm outside its face of the top's nodes, naming it.
     """
+    things: list[tuple[str, Any]] = [(f"points[{i}]", x) for i, x in enumerate(scenario.points)]
+    things += [(f"carriages[{i}]", x) for i, x in enumerate(scenario.carriages)]
+    for key, thing in things:
+        if thing.feet is not None and len(thing.feet) == 0:
+            raise ScenarioError(f"{key}.feet: must be a non-empty list of [x, y] offsets (m), or none (one foot at "
+                                "the position)")
     for i, carriage in enumerate(scenario.carriages):
         if carriage.feet is not None and carriage.parent != "table":
             raise ScenarioError(f"carriages[{i}].feet: carriage '{carriage.name}' rides its parent "

@@ -31,7 +31,8 @@ def _plate(nx, ny, z=(0.1, -0.1), lx=2.0, ly=1.0):
 @given(seed=st.integers(0, 2**31), coefficients=st.lists(st.floats(-5, 5), min_size=9, max_size=9))
 def test_a_linear_field_is_exact_everywhere_on_scattered_nodes(seed, coefficients):
     rng = np.random.default_rng(seed)
-    xy = np.vstack([[(-1, -0.5), (1, -0.5), (1, 0.5), (-1, 0.5)], rng.uniform((-1, -0.5), (1, 0.5), (30, 2))])
+    scattered = np.round(rng.uniform((-1, -0.5), (1, 0.5), (30, 2)), 6)  # a mesh's micrometres (rounded to nm)
+    xy = np.vstack([[(-1, -0.5), (1, -0.5), (1, 0.5), (-1, 0.5)], scattered])
     c = np.reshape(coefficients, (3, 3))
     field = c[:, 0] + xy[:, :1] * c[:, 1] + xy[:, 1:] * c[:, 2]  # (k, 3)
     nodes = np.column_stack([xy, np.full(len(xy), 0.1)])

@@ -158,3 +158,24 @@ def test_a_mode_below_1_hz_that_is_no_rigid_motion_is_refused(tmp_path):
     path = write_modal_csv(tmp_path / "top.csv", [0.0] * 6 + [200.0], top.nodes, u)
     with pytest.raises(ScenarioError, match=r"mode 6 \(line \d+\) \(0 Hz\) is no rigid motion"):
         load_modal_data(path, thickness=0.2)
+
+
+@settings(max_examples=15, deadline=None)
+@given(centre=st.tuples(coordinate, coordinate, coordinate))
+def test_a_file_about_any_origin_with_the_origin_key_is_the_centred_file(centre):
+    """The same top written about another origin and read with ``origin`` putting it back: the same rigid body
+    and the same face translations at every point of the table frame."""
+    import tempfile
+    from pathlib import Path
+
+    with tempfile.TemporaryDirectory() as folder:
+        centred = _file(Path(folder), "a.csv")
+        moved = _file(Path(folder), "b.csv", centre=centre)
+        a = load_modal_data(centred, thickness=SIZE[2])
+        b = load_modal_data(moved, thickness=SIZE[2], origin=tuple(-np.array(centre)))
+    check_rigid(b.rigid, MASS, 2.0, "x")
+    np.testing.assert_allclose(b.rigid.centre, 0.0, atol=1e-9)
+    np.testing.assert_allclose(b.nodes, a.nodes, atol=1e-12)
+    xy = np.random.default_rng(0).uniform((-1.0, -0.5), (1.0, 0.5), (20, 2))
+    for face in ("top", "bottom"):
+        np.testing.assert_allclose(b.translation(xy, face, "p"), a.translation(xy, face, "p"), atol=1e-12)

@@ -191,3 +191,7 @@ def test_a_bending_top_built_in_python(tmp_path, modes, monkeypatch):
         FlexibleTop(modes="x", data=top.data, damping=2.0)
     with pytest.raises(ParameterError, match=r"Point.feet: must be a number"):
         Point("tool", (0.0, 0.0, 0.4), feet=[["a", 0.0]])
+    with pytest.raises(ScenarioError, match=r"points\[0\].feet: must be a non-empty list"):
+        validate_scenario(base.with_changes(points=(Point("tool", (0.0, 0.0, 0.4), feet=()),)))
+    with pytest.raises(ScenarioError, match=r"points\[0\].feet\[0\]: must be a list of 2 numbers, got 3"):
+        validate_scenario(base.with_changes(points=(Point("tool", (0.0, 0.0, 0.4), feet=[(0.0, 0.1, 0.2)]),)))

@@ -27,6 +27,8 @@ FACES = ("top", "bottom")
 #: the relative tolerance of the interpolant's gradient estimate (scipy's default 1e-6 leaves errors of some 1e-6
 #: even in a linear field; this one reproduces it to rounding at about twice the cost)
 GRADIENT_TOLERANCE = 1e-12
+#: the decimals [m] the nodes' (x, y) are rounded to before they are triangulated
+_ROUND = 9
 
 
 def is_single_layer(nodes: np.ndarray) -> bool:
@@ -99,6 +101,9 @@ class FaceInterpolant:
     """
 
     def __init__(self, xy: np.ndarray, values: np.ndarray) -> None:
+        # a structured mesh's cells have four nodes on a circle, whose Delaunay diagonal rounding decides: nodes
+        # rounded to 1 nm triangulate alike whichever file (CSV or UFF) or origin they came through
+        xy = np.round(np.asarray(xy, dtype=float), _ROUND)
         try:
             self._tri = Delaunay(xy)
         except (QhullError, ValueError) as exc:  # check_face refuses what Qhull cannot triangulate
