@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
+from numpy.polynomial import chebyshev
 
 from isolator.model.blocks import solve_blocks
 from isolator.model.flexible.structure import ElasticStructure
@@ -65,25 +66,32 @@ def modal_shapes(flat: tuple[tuple[float, ...], ...], structure: ElasticStructur
     return [ca.DM(structure.shape_matrix(s)) for s in flat]
 
 
+def _clenshaw(coeffs: np.ndarray, s: ca.SX) -> ca.SX:
+    """``sum_k C_k T_k(s)`` for constant (degree + 1, 3, modes) coefficients (Clenshaw's recurrence)."""
+    nm = coeffs.shape[2]
+    b1, b2 = ca.SX.zeros(3, nm), ca.SX.zeros(3, nm)
+    for k in range(coeffs.shape[0] - 1, 0, -1):
+        b1, b2 = ca.DM(coeffs[k]) + 2 * s * b1 - b2, b1
+    return ca.DM(coeffs[0]) + s * b1 - b2
+
+
 def carriage_shapes(structure: ElasticStructure, c: ca.SX, n: int) -> dict[int, tuple[ca.SX, ca.SX, ca.SX]]:
     """``Psi, dPsi/dt, d2Psi/dt2`` (each (3, modes)) of every root carriage, from the carriages' inputs ``c``
-    (q, q', q'', 3 n): Chebyshev series by Clenshaw's recurrence, differentiated exactly."""
+    (q, q', q'', 3 n): the Chebyshev series and its derivatives' series (``numpy.polynomial.chebyshev.chebder``)
+    by Clenshaw's recurrence."""
     out: dict[int, tuple[ca.SX, ca.SX, ca.SX]] = {}
     nm = structure.n_modes
     for shape in {s.root: s for s in structure.carriages}.values():
         r = shape.root
         q, qd, qdd = c[r], c[n + r], c[2 * n + r]
         lo, hi = shape.domain
-        s_sym = ca.SX.sym("s")
-        coeffs = shape.array(nm)
-        b1, b2 = ca.SX.zeros(3, nm), ca.SX.zeros(3, nm)
-        for k in range(coeffs.shape[0] - 1, 0, -1):
-            b1, b2 = ca.DM(coeffs[k]) + 2 * s_sym * b1 - b2, b1
-        psi_s = ca.DM(coeffs[0]) + s_sym * b1 - b2
         scale = 2.0 / (hi - lo)
-        d1 = ca.reshape(ca.jacobian(ca.vec(psi_s), s_sym), 3, nm) * scale
-        d2 = ca.reshape(ca.jacobian(ca.vec(d1), s_sym), 3, nm) * scale
-        fn = ca.Function("psi", [s_sym], [psi_s, d1, d2])
+        coeffs = shape.array(nm)
+        first = chebyshev.chebder(coeffs, 1, scl=scale) if coeffs.shape[0] > 1 else np.zeros((1, 3, nm))
+        second = chebyshev.chebder(coeffs, 2, scl=scale) if coeffs.shape[0] > 2 else np.zeros((1, 3, nm))
+        s_sym = ca.SX.sym("s")
+        fn = ca.Function("psi", [s_sym], [_clenshaw(coeffs, s_sym), _clenshaw(first, s_sym),
+                                          _clenshaw(second, s_sym)])
         psi, dpsi, ddpsi = fn((2 * q - lo - hi) / (hi - lo))
         out[r] = (psi, dpsi * qd, ddpsi * qd * qd + dpsi * qdd)
     return out
