@@ -8,7 +8,8 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from isolator.analysis.linear import LinearModel, linearise
+from isolator.analysis.linear import LinearModel, linearise, rest_positions
+from isolator.analysis.travel import check_travel
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 
@@ -98,7 +99,8 @@ def error_budget(
     band : (float, float), optional
         [Hz], 0 < low < high; default 0.1 Hz to 1 kHz (with a controller, ending just below half its rate).
     positions : mapping or sequence, optional
-        Carriage positions [m] by name or one per carriage (a scenario only).
+        Carriage positions [m] by name or one per carriage (a scenario only), within the carriages' travel
+        (:func:`isolator.analysis.travel.carriage_travel`).
 
     Returns
     -------
@@ -108,9 +110,11 @@ def error_budget(
     Raises
     ------
     ScenarioError
-        The scenario has no random source.
+        The scenario has no random source; a source whose RMS over the band, or the motion it makes, is not a
+        finite number (naming its key).
     ParameterError
-        An unknown point or quantity, a bad band, a controller for another table.
+        An unknown point or quantity, a bad band (beyond :data:`MAX_FREQUENCY`), a controller for another
+        table, a carriage parked beyond its travel.
     UnstableClosedLoopError
         The sampled loop is unstable.
 
@@ -133,6 +137,8 @@ def error_budget(
             raise ParameterError("positions: give them to linearise(); a LinearModel is parked already")
         lin = scenario
     elif isinstance(scenario, Scenario):
+        if positions is not None:  # parked where the carriages go, not beyond their travel
+            check_travel(scenario, rest_positions(scenario, positions))
         lin = linearise(scenario, positions)
     else:
         raise ParameterError(f"scenario: must be a Scenario or a LinearModel, got {type(scenario).__name__}")
