@@ -248,3 +248,68 @@ def test_a_sequences_travel_is_its_start_and_targets_and_the_budget_checks_posit
         check_travel(scenario, q.max(axis=0) + 0.01)
     with pytest.raises(ParameterError, match=r"^positions.x-stage: 0.75 m is beyond the carriage's travel"):
         error_budget(load_scenario("paper-table-3-2-budget"), positions={"x-stage": 0.75})
+
+
+# -- the figure ----------------------------------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def probe_figure():
+    import matplotlib
+
+    matplotlib.use("Agg")
+    budget = error_budget(load_scenario("paper-table-3-2-budget"), points=["probe"])
+    figure = budget.plot()
+    yield budget, figure
+    import matplotlib.pyplot as plt
+
+    plt.close(figure)
+
+
+def test_the_figures_legend_is_readable_and_finished(probe_figure):
+    budget, figure = probe_figure
+    panel, twin = figure.axes[0], figure.axes[3]  # probe:x and its cumulative axis
+    labels = [t.get_text() for t in twin.get_legend().get_texts()]
+    assert labels[0] == "total (2624 nm RMS)"  # not 2.62e+03
+    assert not any("e+" in label for label in labels)
+    parts = sorted(budget.source_rms[0, 0] * 1e9, reverse=True)
+    assert f"floor:x ({parts[0]:.0f} nm)" in labels
+    smaller = [label for label in labels if "smaller" in label]
+    assert smaller == [f"4 smaller sources, each at most {parts[6]:.1f} nm"]
+    lines = {line.get_label(): line for line in panel.get_lines()}
+    total, dominant = lines["total (2624 nm RMS)"], lines[f"floor:x ({parts[0]:.0f} nm)"]
+    assert dominant.get_zorder() > total.get_zorder()  # the source that makes the total shows on top of it
+    cumulative = next(line for line in twin.get_lines() if line.get_label() == "cumulative RMS")
+    colours = {matplotlib_colour(line.get_color()) for line in panel.get_lines() if line is not total}
+    assert matplotlib_colour(cumulative.get_color()) not in colours
+
+
+def matplotlib_colour(colour: object) -> tuple[float, ...]:
+    from matplotlib.colors import to_rgba
+
+    return tuple(round(c, 6) for c in to_rgba(colour))  # type: ignore[arg-type]
+
+
+@given(low=st.floats(-3.0, 5.0), decades=st.floats(0.005, 6.0), width=st.sampled_from([5.0, 3.0]))
+@settings(max_examples=25, deadline=None)
+def test_frequency_tick_labels_never_overlap(low, decades, width):
+    import matplotlib.pyplot as plt
+
+    from isolator.analysis.budget.figure import _frequency_ticks
+
+    lo, hi = 10.0**low, 10.0 ** (low + decades)
+    fig, ax = plt.subplots(figsize=(width, 3.0))
+    try:
+        ax.loglog([lo, hi], [1.0, 2.0])
+        ax.set_xlim(lo, hi)
+        _frequency_ticks(ax, lo, hi)
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()  # type: ignore[attr-defined]
+        boxes = sorted((t.get_window_extent(renderer) for t in ax.get_xticklabels(which="both")
+                        if t.get_visible() and t.get_text() and lo * (1 - 1e-9) <= t.get_position()[0] <= hi * (1 + 1e-9)),
+                       key=lambda b: b.x0)
+        assert len(boxes) >= 2, (lo, hi)
+        for a, b in zip(boxes, boxes[1:]):
+            assert a.x1 <= b.x0, (lo, hi)
+    finally:
+        plt.close(fig)
