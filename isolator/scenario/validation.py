@@ -55,8 +55,8 @@ FRAME_MARGIN = 2.0
 def check_positions(scenario: Scenario) -> None:
     """Every position in the table frame (isolators, actuators, table sensors, points, carriage origins, random
     forces' points of action) within the table's box grown by :data:`FRAME_MARGIN` of its largest dimension on
-    every side, when ``table.size`` is given; else one error naming the key, the table's extent along the axis and, when a thousandth of it would
-    lie inside, the likely cause (millimetres)."""
+    every side, when ``table.size`` is given; else one error naming the key, the table's extent along the axis
+    and, when a thousandth of it would lie inside, the likely cause (millimetres)."""
     size = scenario.table.size
     if size is None:
         return

@@ -8,9 +8,9 @@ import json
 
 import pytest
 import tomli_w
-
 from analysis.test_budget_loop import GAIN, sensed_table, skyhook
 from cli.test_budget_command import exit_code
+
 from conftest import make
 from isolator.cli.app import main
 

@@ -8,8 +8,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import tomli_w
-
 from analysis.test_budget_loop import sensed_table
+
 from conftest import make
 from conftest import run_command as run
 from isolator import Simulator, load_scenario

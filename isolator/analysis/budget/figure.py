@@ -107,7 +107,8 @@ def _frequency_ticks(ax: Any, low: float, high: float) -> None:
             major = LogLocator(base=10.0, subs=subs, numticks=count)
             if fit(major.tick_values(low, high)):
                 ax.xaxis.set_major_locator(major)
-                ax.xaxis.set_minor_locator(LogLocator(base=10.0, subs=np.arange(2, 10) * 1.0, numticks=count))
+                minor = LogLocator(base=10.0, subs=tuple(float(k) for k in range(2, 10)), numticks=count)
+                ax.xaxis.set_minor_locator(minor)
                 break
         else:
             continue
