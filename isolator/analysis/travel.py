@@ -1,41 +1,24 @@
-"""Where the carriages may be parked: their travel, the range their profiles cover over the run or, with a
-``[sequence]``, the range of its configurations (``docs/scenario-format.md``, "Additions to the budget and the
-FMU (trust round 4)"). Commands that park the table (``isolator budget --position``) check positions against
-it with :func:`check_travel`."""
+"""Where the carriages may be parked: within their travel (:meth:`~isolator.scenario.definitions.Scenario.travel`:
+the range their profiles cover over the run or, with a ``[sequence]``, that of its start and targets;
+``docs/scenario-format.md``, "Additions to the budget and the FMU (trust round 4)"). Commands that park the table
+(``isolator budget --position``) check the positions given with :func:`check_travel`."""
 
 from __future__ import annotations
-
-import math
 
 import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.scenario.definitions import Scenario
 
-__all__ = ["carriage_travel", "check_travel"]
+__all__ = ["check_travel"]
 
 #: relative slack of the travel's ends (a position printed and typed back)
 _SLACK = 1e-9
 
 
-def carriage_travel(scenario: Scenario) -> np.ndarray:
-    """Each carriage's travel [m], shape (carriages, 2): least and greatest position of its profile over the run
-    (to its stop when it stops later), or of the ``[sequence]``'s configurations (its start and every step's
-    target)."""
-    names = [c.name for c in scenario.carriages]
-    if not names:
-        return np.zeros((0, 2))
-    if scenario.sequence is not None:
-        q = scenario.sequence.configurations(names)
-        return np.column_stack([q.min(axis=0), q.max(axis=0)])
-    t_end = scenario.simulation.duration
-    if math.isfinite(scenario.stop_time):
-        t_end = max(t_end, scenario.stop_time)
-    return np.array([c.profile.position_range(t_end) for c in scenario.carriages], dtype=float).reshape(-1, 2)
-
-
 def check_travel(scenario: Scenario, positions: np.ndarray, key: str = "positions") -> None:
-    """Refuse carriage positions [m] (one per carriage) beyond the carriages' travel (:func:`carriage_travel`).
+    """Refuse carriage positions [m] (one per carriage) beyond the carriages' travel
+    (:meth:`~isolator.scenario.definitions.Scenario.travel`).
 
     Raises
     ------
@@ -43,7 +26,7 @@ def check_travel(scenario: Scenario, positions: np.ndarray, key: str = "position
         ``positions.x-stage: 0.75 m is beyond the carriage's travel, -0.7 to 0.7 m (its profile's range)``:
         the first carriage out of its travel, naming it and its travel.
     """
-    travel = carriage_travel(scenario)
+    travel = scenario.travel()
     q = np.asarray(positions, dtype=float).ravel()
     for i, carriage in enumerate(scenario.carriages):
         low, high = travel[i]

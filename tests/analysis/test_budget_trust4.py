@@ -20,7 +20,7 @@ from hypothesis import strategies as st
 from conftest import make
 from isolator import linearise, load_scenario
 from isolator.analysis.budget import error_budget
-from isolator.analysis.travel import carriage_travel, check_travel
+from isolator.analysis.travel import check_travel
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.tables import MAX_FLOOR_VELOCITY, spectrum_from_columns
 
@@ -232,7 +232,7 @@ def test_a_loop_that_helps_is_not_worse_than_passive():
 @settings(max_examples=60, deadline=None)
 def test_positions_beyond_a_carriages_profile_range_are_refused_naming_it_and_its_travel(x, y):
     scenario = load_scenario("paper-table-3-2-budget")  # x-stage -0.7 .. 0.7 m, y-stage -0.3 .. 0.3 m
-    np.testing.assert_allclose(carriage_travel(scenario), [[-0.7, 0.7], [-0.3, 0.3]], atol=1e-12)
+    np.testing.assert_allclose(scenario.travel(), [[-0.7, 0.7], [-0.3, 0.3]], atol=1e-12)
     inside = {"x-stage": abs(x) <= 0.7, "y-stage": abs(y) <= 0.3}
     if all(inside.values()):
         check_travel(scenario, np.array([x, y]))
@@ -248,7 +248,7 @@ def test_a_sequences_travel_is_its_start_and_targets_and_the_budget_checks_posit
     scenario = load_scenario("paper-table-3-2-sequence")
     names = [c.name for c in scenario.carriages]
     q = scenario.sequence.configurations(names)  # type: ignore[union-attr]
-    np.testing.assert_allclose(carriage_travel(scenario), np.column_stack([q.min(axis=0), q.max(axis=0)]))
+    np.testing.assert_allclose(scenario.travel(), np.column_stack([q.min(axis=0), q.max(axis=0)]))
     with pytest.raises(ParameterError, match=r"the \[sequence\]'s start and targets"):
         check_travel(scenario, q.max(axis=0) + 0.01)
     with pytest.raises(ParameterError, match=r"^positions.x-stage: 0.75 m is beyond the carriage's travel"):
