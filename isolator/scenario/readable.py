@@ -43,7 +43,13 @@ def length_text(meters: float, digits: int = 4) -> str:
 def number_text(value: float, digits: int = 3) -> str:
     """``value`` to ``digits`` significant digits without an exponent where one is not needed (``2624``, not
     ``2.62e+03``; ``13.2``; ``0.0293``): every digit of the integer part kept, plain notation from 1e-3 to 1e6,
-    ``:.{digits}g`` outside it (``1.5e+07``); ``0`` for zero, ``inf`` and ``nan`` as they are."""
+    ``:.{digits}g`` outside it (``1.5e+07``); ``0`` for zero, ``inf`` and ``nan`` as they are.
+
+    Examples
+    --------
+    >>> number_text(2624.3), number_text(13.24), number_text(9.996), number_text(1.5e7)
+    ('2624', '13.2', '10.0', '1.5e+07')
+    """
     value = float(value)
     if value == 0.0 or not math.isfinite(value):
         return f"{value:g}"
