@@ -19,7 +19,7 @@ from isolator.cli.helpers import (
     scenario_argument,
     use_agg,
 )
-from isolator.errors import ParameterError
+from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.names import escaped
 
 __all__ = ["BUDGET_SCENARIO", "parse_band", "register"]
@@ -90,6 +90,10 @@ def _budget(args: argparse.Namespace) -> int:
     except ParameterError as exc:  # the API's argument names as the command's options
         raise ParameterError(_OPTION.sub(lambda m: _OPTIONS[m.group(1)] + (f" {m.group(2)}" if m.group(2) else ""),
                                          str(exc), count=1)) from None
+    except ScenarioError as exc:
+        if not str(exc).startswith("the scenario has no random source"):
+            raise
+        raise ScenarioError(f"{exc}; the bundled {BUDGET_SCENARIO} has ten (the command's default)") from None
     if out:
         budget.to_csv(out)
     if plot is not None:

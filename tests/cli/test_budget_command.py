@@ -85,4 +85,6 @@ def test_a_scenario_without_random_sources_is_refused(tmp_path, capsys):
     path = tmp_path / "quiet.toml"
     path.write_text(tomli_w.dumps(base_dict()))
     assert exit_code(["budget", str(path)]) == 2
-    assert "no random source for a budget" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no random source for a budget" in err
+    assert err.strip().endswith("; the bundled paper-table-3-2-budget has ten (the command's default)")

@@ -100,7 +100,7 @@ def error_budget(
         [Hz], 0 < low < high; default 0.1 Hz to 1 kHz (with a controller, ending just below half its rate).
     positions : mapping or sequence, optional
         Carriage positions [m] by name or one per carriage (a scenario only), within the carriages' travel
-        (:func:`isolator.analysis.travel.carriage_travel`).
+        (:meth:`Scenario.travel() <isolator.scenario.definitions.Scenario.travel>`).
 
     Returns
     -------
