@@ -16,6 +16,10 @@ code does now.
 - ``toml`` blocks must parse, a ``c`` block of the controller's interface must match the header
   :func:`controllers.feedback.write_c` writes.
 
+A number the prose states is shown by a block or checked like one: an invisible block computes it, shows it
+as the text says it and finds that text in ``__prose__`` (the page's prose, its blocks and comments left out,
+whitespace collapsed), so the sentence and the code cannot drift apart.
+
 A block a test cannot run (set-up commands CI runs itself, a Dask cluster) is preceded by
 ``<!-- skip: next "the reason" -->``, which sybil reads and GitHub and MyST do not show; set-up a block
 needs (a bad scenario file to show an error) is an ``<!-- invisible-code-block: python -->``.
@@ -180,6 +184,7 @@ def _run_page(page: Path, folder: Path) -> list[str]:
     (folder / "docs" / "examples").symlink_to(ROOT / "docs" / "examples")
     document = DOCS.parse(page)
     document.namespace["__folder__"] = folder
+    document.namespace["__prose__"] = prose(page.read_text(encoding="utf-8"))
     skipped = []
     for example in document:
         try:
@@ -187,6 +192,14 @@ def _run_page(page: Path, folder: Path) -> list[str]:
         except SkipTest as why:
             skipped.append(str(why))
     return skipped
+
+
+def prose(text: str) -> str:
+    """A page's prose, whitespace collapsed: without its fenced blocks and HTML comments (where invisible blocks
+    are), for the checks of numbers the text states (``shown in __prose__``)."""
+    text = re.sub(r"<!--.*?-->", " ", text, flags=re.S)
+    text = re.sub(r"^(```|~~~)[^\n]*\n.*?^\1", " ", text, flags=re.S | re.M)
+    return " ".join(text.split())
 
 
 def _page_id(page: Path) -> str:
@@ -217,6 +230,22 @@ def test_a_changed_number_fails_the_page(tmp_path: Path):
     (tmp_path / "again").mkdir()
     with pytest.raises(AssertionError, match="paper-table-3-7"):
         _run_page(page, tmp_path / "again")
+
+
+def test_a_number_in_the_prose_is_checked_by_its_invisible_block(tmp_path: Path):
+    """A sentence stating a number, and an invisible block that computes it and finds the sentence in the prose:
+    the page fails when the text says another number (the block's own expected output does not count)."""
+    block = ("<!-- invisible-code-block: python\n>>> shown = f\"settles in {0.5385:.2g} s\"\n>>> shown\n"
+             "'settles in 0.54 s'\n>>> shown in __prose__\nTrue\n-->\n")
+    page = tmp_path / "page.md"
+    page.write_text("H-infinity settles\nin 0.54 s.\n\n" + block, encoding="utf-8")
+    (tmp_path / "run").mkdir()
+    _run_page(page, tmp_path / "run")
+    page.write_text("H-infinity settles\nin 0.42 s.\n\n" + block, encoding="utf-8")
+    (tmp_path / "again").mkdir()
+    with pytest.raises(AssertionError, match=r"Expected:\s+True\s+Got:\s+False"):
+        _run_page(page, tmp_path / "again")
+    assert prose("a\n```python\n>>> 1\n```\nb <!-- c -->  d") == "a b d"
 
 
 def test_console_blocks_are_read_as_commands_and_output():

@@ -28,7 +28,7 @@ from typing import NoReturn
 import numpy as np
 
 from isolator.cli import commands, fmu_command, sweep_command
-from isolator.cli.helpers import MADE_FOLDERS, remove_made_folders
+from isolator.cli.helpers import MADE_FOLDERS, command_words, remove_made_folders
 from isolator.errors import IsolatorError
 from isolator.scenario.names import escaped
 
@@ -87,7 +87,7 @@ def _run(args: argparse.Namespace) -> int:
     try:
         return int(args.handler(args))
     except IsolatorError as exc:
-        return _error(str(exc))
+        return _error(command_words(str(exc)))  # 'isolator sweep SCENARIO --list', not a Python name
     except MemoryError as exc:
         return _error(f"out of memory ({exc or 'an allocation failed'}): the inputs ask for more than this "
                       "machine has (a very long run, a high sample rate, or a design so stiff that the "

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import math
 import re
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -18,9 +19,13 @@ from isolator.cli.helpers import (
     scenario_argument,
     use_agg,
 )
-from isolator.errors import ParameterError
+from isolator.errors import ParameterError, ScenarioError
+from isolator.scenario.names import escaped
 
-__all__ = ["parse_band", "register"]
+__all__ = ["BUDGET_SCENARIO", "parse_band", "register"]
+
+#: the scenario ``isolator budget`` runs without one: the bundled table with random sources
+BUDGET_SCENARIO = "paper-table-3-2-budget"
 
 #: an error's leading argument name and the option that gave it
 _OPTIONS = {"band": "--band", "points": "--points", "positions": "--position", "controller": "--controller"}
@@ -34,9 +39,11 @@ def register(sub: Any) -> None:
         description="The random motion of the table's points (nm RMS), source by source: the floor "
         "([ground.spectrum], or vc = \"VC-C\"), [[disturbances]], the actuators' noise_psd and, with "
         "--controller, the sensors' noise through the exported controller's sampled loop. Prints each point "
-        "and axis's RMS and its largest source.",
+        "and axis's RMS and its largest source; with --controller, warns (stderr) where the loop makes a point "
+        "move more than the passive table.",
     )
-    scenario_argument(bud)
+    scenario_argument(bud, f"scenario file or bundled name (default: {BUDGET_SCENARIO}, the bundled table with "
+                      "random sources)")
     bud.add_argument("--controller", type=Path, metavar="DIR",
                      help="an exported controller (DIR/controller.json) in the loop (default: the passive table)")
     bud.add_argument("--points", metavar="NAME,...", help="[[points]] names, comma-separated (default: all)")
@@ -76,13 +83,17 @@ def _budget(args: argparse.Namespace) -> int:
     points = None if args.points is None else [p.strip() for p in args.points.split(",")]
     if points is not None and not all(points):
         raise ParameterError(f"--points: expected NAME,... (comma-separated names), got '{args.points[:40]}'")
-    scenario = load_scenario(args.scenario)
+    scenario = load_scenario(args.scenario or BUDGET_SCENARIO)
     controller = None if args.controller is None else read_controller(args.controller, "--controller")
     try:
         budget = error_budget(scenario, controller, points, args.quantity, band, parse_positions(args.position))
     except ParameterError as exc:  # the API's argument names as the command's options
         raise ParameterError(_OPTION.sub(lambda m: _OPTIONS[m.group(1)] + (f" {m.group(2)}" if m.group(2) else ""),
                                          str(exc), count=1)) from None
+    except ScenarioError as exc:
+        if not str(exc).startswith("the scenario has no random source"):
+            raise
+        raise ScenarioError(f"{exc}; the bundled {BUDGET_SCENARIO} has ten (the command's default)") from None
     if out:
         budget.to_csv(out)
     if plot is not None:
@@ -94,5 +105,7 @@ def _budget(args: argparse.Namespace) -> int:
                     if w.point in budget.points:
                         spec[(w.point, axis)] = w.translation / (w.random or 1.0)
         save_figure(budget.plot(spec, title=f"Error budget of {scenario.name}"), plot)
+    for line in budget.worse_lines():  # one line (stderr) per point and axis the loop makes worse
+        print(f"isolator: warning: {escaped(line)}", file=sys.stderr)
     text = "\n".join(budget.summary_lines())
     return report(args.json, budget.to_dict(), text, [("budget table", out), ("figure", plot)])

@@ -26,12 +26,14 @@ if TYPE_CHECKING:
     pass
 
 __all__ = [
+    "API_WORDS",
     "CLI_NAMES",
     "MADE_FOLDERS",
     "Handler",
     "available_memory",
     "check_memory",
     "check_run_memory",
+    "command_words",
     "count",
     "default_output",
     "figure_path",
@@ -83,6 +85,18 @@ def _quoted(path: Path) -> str:
 #: how the messages of :func:`isolator.sweep.cluster.connect` name the command's options
 CLI_NAMES = {"scheduler": "--scheduler", "ca": "--tls-ca-file", "cert": "--tls-cert", "key": "--tls-key",
              "tls": "--tls-ca-file, --tls-cert, --tls-key"}
+
+
+#: Python names the API's messages cite, and the command-line way to the same thing
+API_WORDS = {"Simulator(...).layout.names": "'isolator sweep SCENARIO --list'",
+             "Simulator.layout.names": "'isolator sweep SCENARIO --list'"}
+
+
+def command_words(message: str) -> str:
+    """An API message as a command-line user reads it: the Python names of :data:`API_WORDS` replaced."""
+    for api, cli in API_WORDS.items():
+        message = message.replace(api, cli)
+    return message
 
 
 def scenario_argument(parser: argparse.ArgumentParser, help_text: str | None = None) -> None:

@@ -46,7 +46,7 @@ def register(sub: Any) -> None:
     """Add ``isolator sweep`` to the ``isolator`` command's subparsers."""
     p = sub.add_parser(
         "sweep", help="run many designs (a grid, zipped lists or samples of any parameters); rows to a file",
-        description="Run a scenario for many designs of any named parameters (Simulator.layout.names; [*] for "
+        description="Run a scenario for many designs of any named parameters (--list prints a scenario's; [*] for "
         "every element, a vector's name for all its components) and write one row per design: the swept "
         "values, settling_time_max, settling:<signal>, peak:<signal>, status (ok, tipped, diverged, refused, "
         "invalid, unsettled: no settling time within the run, or a step of the [sequence] did not settle, failed: its "
@@ -81,7 +81,9 @@ def register(sub: Any) -> None:
                    "budget:<point>:<axis> (isolator budget's value, default band); repeat or separate by commas")
     p.add_argument("--model", choices=MODEL_KINDS, default="exact", help="exact or the paper's small-angle model")
     p.add_argument("--chunk-size", type=count, metavar="N", help="designs per task (default: about four per worker)")
-    p.add_argument("--out", type=Path, required=True, metavar="FILE.csv", help="the rows (.csv or .parquet)")
+    p.add_argument("--out", type=Path, metavar="FILE.csv", help="the rows (.csv or .parquet); required unless --list")
+    p.add_argument("--list", action="store_true",
+                   help="print the names of the scenario's parameters that --set and --scale take, and exit")
     p.add_argument("--plot", type=Path, metavar="FILE.png",
                    help="write a figure: the largest settling time (a sequence: its total time) against the "
                    "swept values")
@@ -177,7 +179,21 @@ def _resume_command(args: argparse.Namespace) -> str:
     return shlex.join(["isolator", *words, *([] if "--resume" in words else ["--resume"])])
 
 
+def _names(scenario: str | None) -> int:
+    """``--list``: the scenario's parameter names, one a line, in the parameter vector's order."""
+    from isolator.model.parameters import ParameterLayout
+    from isolator.scenario.reader import load_scenario
+
+    print("\n".join(ParameterLayout.of(load_scenario(scenario)).names))
+    return 0
+
+
 def _sweep(args: argparse.Namespace) -> int:
+    if args.list:
+        return _names(args.scenario)
+    if args.out is None:
+        raise ParameterError("--out: required: the file the rows go to (.csv or .parquet), or --list for the "
+                             "parameter names")
     swept = _swept(args)
     if args.workers is not None:
         check_workers(args.workers, "--workers")

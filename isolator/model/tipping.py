@@ -25,16 +25,8 @@ __all__ = ["rocking_over", "tipping_verdict", "travel_configurations"]
 def travel_configurations(scenario: Scenario) -> np.ndarray:
     """Carriage coordinates [m] to check, (configurations, carriages): the start, the end (when the
     carriages stop), and every combination of each carriage's extremes and mid-point over the run."""
-    t_end = scenario.simulation.duration
-    levels = []
     # a [sequence] moves the carriages between its configurations (the S-curves stay between them)
-    steps = None if scenario.sequence is None else scenario.sequence.configurations([c.name for c in
-                                                                                      scenario.carriages])
-    for i, carriage in enumerate(scenario.carriages):
-        lo, hi = carriage.profile.position_range(t_end)
-        if steps is not None:
-            lo, hi = min(lo, float(steps[:, i].min())), max(hi, float(steps[:, i].max()))
-        levels.append(sorted({lo, 0.5 * (lo + hi), hi}))
+    levels = [sorted({lo, 0.5 * (lo + hi), hi}) for lo, hi in scenario.travel().tolist()]
     configs = [scenario.initial_positions()]
     finals = scenario.final_positions()
     if finals is not None:

@@ -341,6 +341,16 @@ class Scenario:
                     return i, axis, k, float(pos[i, axis, k])
         return None
 
+    def travel(self) -> np.ndarray:
+        """Each carriage's travel [m], (carriages, 2): the least and greatest position its profile reaches over
+        the run (to its stop, when that is later), or with a ``[sequence]`` those of its start and targets."""
+        if self.sequence is not None:
+            q = self.sequence.configurations([c.name for c in self.carriages])
+            return np.column_stack([q.min(axis=0), q.max(axis=0)]).reshape(-1, 2)
+        stop = self.stop_time
+        t_end = max(self.simulation.duration, stop if stop < float("inf") else 0.0)
+        return np.array([c.profile.position_range(t_end) for c in self.carriages], dtype=float).reshape(-1, 2)
+
     def initial_positions(self) -> np.ndarray:
         """Carriage coordinates at t = 0 [m]."""
         return np.array([c.profile.position(0.0) for c in self.carriages])

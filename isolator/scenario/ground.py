@@ -69,6 +69,21 @@ class FloorSpectrum:
         idx = np.searchsorted(upper, f, side="left")
         return np.where((f >= lower[0]) & (f <= upper[-1]), density[np.clip(idx, 0, fs.size - 1)], 0.0)
 
+    def band_rms(self) -> tuple[np.ndarray, dict[str, np.ndarray]]:
+        """The RMS velocity [m/s] in each one-third-octave band and its centre [Hz]: a third-octave spectrum's
+        own values; a PSD integrated over the bands (centres ``10^(n/10)`` Hz) its frequencies reach, each band
+        cut to them. Overflow gives infinity, not an error."""
+        fs = np.asarray(self.frequency, dtype=float)
+        if self.kind != "psd":
+            return fs, {a: np.asarray(v, dtype=float) for a, v in self.values.items()}
+        n = np.arange(round(10 * np.log10(fs[0])), round(10 * np.log10(fs[-1])) + 1)
+        low = np.clip(10.0 ** ((n - 0.5) / 10), fs[0], fs[-1])
+        high = np.clip(10.0 ** ((n + 0.5) / 10), fs[0], fs[-1])
+        grid = np.geomspace(low, np.maximum(high, low), 33, axis=-1)  # (bands, 33)
+        with np.errstate(over="ignore", invalid="ignore"):
+            rms = {a: np.sqrt(np.trapezoid(self.velocity_psd(a, grid), grid, axis=-1)) for a in self.values}
+        return 10.0 ** (n / 10), rms
+
 
 @dataclass(frozen=True)
 class Ground:

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-__all__ = ["DUST", "clean_time", "length_text", "without_dust"]
+__all__ = ["DUST", "clean_time", "length_text", "number_text", "without_dust"]
 
 #: relative size below which a value is rounding dust (of its own size for times, of its signal's scale else)
 DUST = 1e-12
@@ -38,3 +38,24 @@ def length_text(meters: float, digits: int = 4) -> str:
         if size < below:
             return f"{meters * factor:.{digits}g} {unit}"
     return f"{meters:.{digits}g} m"
+
+
+def number_text(value: float, digits: int = 3) -> str:
+    """``value`` to ``digits`` significant digits without an exponent where one is not needed (``2624``, not
+    ``2.62e+03``; ``13.2``; ``0.0293``): every digit of the integer part kept, plain notation from 1e-3 to 1e6,
+    ``:.{digits}g`` outside it (``1.5e+07``); ``0`` for zero, ``inf`` and ``nan`` as they are.
+
+    Examples
+    --------
+    >>> number_text(2624.3), number_text(13.24), number_text(9.996), number_text(1.5e7)
+    ('2624', '13.2', '10.0', '1.5e+07')
+    """
+    value = float(value)
+    if value == 0.0 or not math.isfinite(value):
+        return f"{value:g}"
+    size = abs(value)
+    if not 1e-3 <= size < 1e6:
+        return f"{value:.{digits}g}"
+    rounded = abs(float(f"{value:.{digits}g}"))  # 9.996 -> 10.0: its digits counted after rounding
+    decimals = max(digits - 1 - math.floor(math.log10(rounded)), 0)
+    return f"{value:.{decimals}f}"

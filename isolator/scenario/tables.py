@@ -15,7 +15,8 @@ from isolator.scenario.ground import FloorSpectrum
 from isolator.scenario.keys import KeyReader
 from isolator.scenario.names import escaped, excerpt
 
-__all__ = ["LINE", "SPECTRUM_KINDS", "load_spectrum", "read_csv_columns", "read_samples", "spectrum_from_columns"]
+__all__ = ["LINE", "MAX_FLOOR_VELOCITY", "SPECTRUM_KINDS", "check_floor_level", "load_spectrum", "read_csv_columns",
+           "read_samples", "spectrum_from_columns"]
 
 #: the entry of :func:`read_csv_columns`'s result that holds each data row's line number (``lines=True``)
 LINE = "#line"
@@ -189,7 +190,35 @@ def spectrum_from_columns(
         if not np.all(np.isfinite(v)) or np.any(v < 0):
             raise ScenarioError(f"{name}: values must be finite and >= 0")
     _check_kind(f, kind, where)
-    return FloorSpectrum(kind=kind, frequency=f, values=columns)
+    spectrum = FloorSpectrum(kind=kind, frequency=f, values=columns)
+    check_floor_level(spectrum, where)
+    return spectrum
+
+
+#: the largest RMS velocity [m/s] a floor may have in a one-third-octave band: above any floor a machine is set up
+#: on (VC-A is 50 um/s, ISO's workshop curve 800 um/s); a floor in um/s typed as m/s is a million times too large
+MAX_FLOOR_VELOCITY = 1e-3
+#: the units a floor spectrum's numbers were likely typed in, by their factor on m/s
+_VELOCITY_UNITS = ((1e3, "mm/s"), (1e6, "um/s"), (1e9, "nm/s"))
+
+
+def check_floor_level(spectrum: FloorSpectrum, where: str) -> None:
+    """Refuse a floor spectrum whose RMS velocity in a one-third-octave band exceeds :data:`MAX_FLOOR_VELOCITY`
+    on any axis: one :class:`ScenarioError` starting with ``where``, naming the largest band, its axis and the
+    unit the numbers were likely typed in (the least factor that brings the band below the limit)."""
+    centres, rms = spectrum.band_rms()
+    worst = max(((float(np.nan_to_num(v, nan=np.inf).max(initial=0.0)), a) for a, v in rms.items()), default=(0.0, ""))
+    value, axis = worst
+    if value <= MAX_FLOOR_VELOCITY:
+        return
+    band = float(centres[int(np.argmax(np.nan_to_num(rms[axis], nan=np.inf)))])
+    likely = next((u for factor, u in _VELOCITY_UNITS if value / factor <= MAX_FLOOR_VELOCITY), None)
+    per_hz = spectrum.kind == "psd"
+    unit = (f"; the numbers look like ({likely})^2/Hz given as (m/s)^2/Hz" if per_hz else
+            f"; the numbers look like {likely} given as m/s") if likely else ""
+    raise ScenarioError(f"{where}: the floor's RMS velocity in the one-third-octave band at {band:.3g} Hz is "
+                        f"{value:.3g} m/s on {axis}, above {MAX_FLOOR_VELOCITY * 1e3:g} mm/s (more than any floor a "
+                        f"machine stands on: VC-A is 50 um/s){unit}")
 
 
 def _check_kind(f: np.ndarray, kind: str, where: str) -> None:

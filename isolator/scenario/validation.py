@@ -54,10 +54,10 @@ FRAME_MARGIN = 2.0
 
 
 def check_positions(scenario: Scenario) -> None:
-    """Every position in the table frame (isolators, actuators, table sensors, points, carriage origins) within
-    the table's box grown by :data:`FRAME_MARGIN` of its largest dimension on every side, when ``table.size`` is
-    given; else one error naming the key, the table's extent along the axis and, when a thousandth of it would
-    lie inside, the likely cause (millimetres)."""
+    """Every position in the table frame (isolators, actuators, table sensors, points, carriage origins, random
+    forces' points of action) within the table's box grown by :data:`FRAME_MARGIN` of its largest dimension on
+    every side, when ``table.size`` is given; else one error naming the key, the table's extent along the axis
+    and, when a thousandth of it would lie inside, the likely cause (millimetres)."""
     size = scenario.table.size
     if size is None:
         return
@@ -70,6 +70,7 @@ def check_positions(scenario: Scenario) -> None:
     groups += [(f"sensors[{i}].position", x.position) for i, x in sensors]
     groups += [(f"points[{i}].position", x.position) for i, x in enumerate(scenario.points)]
     groups += [(f"carriages[{i}].origin", x.origin) for i, x in enumerate(scenario.carriages)]
+    groups += [(f"disturbances[{i}].position", x.position) for i, x in enumerate(scenario.disturbances)]
     for key, position in groups:
         p = np.asarray(position, dtype=float)
         beyond = np.abs(p) - half - margin

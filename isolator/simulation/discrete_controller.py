@@ -211,10 +211,15 @@ class DiscreteController:
             for i in range(max(len(names), len(theirs))):
                 mine = names[i] if i < len(names) else None
                 other = theirs[i] if i < len(theirs) else None
-                if mine != other:
-                    raise ParameterError(
-                        f"controller.{key}[{i}]: {other!r} where the scenario's [[{key}]] has {mine!r} "
-                        f"({len(theirs)} against {len(names)}, in file order)")
+                if mine == other:
+                    continue
+                if other is None or mine is None:  # one list ends first: count them, no "has None"
+                    extra = f"its {key}[{i}] is {other!r}" if mine is None else f"[[{key}]][{i}] is {mine!r}"
+                    raise ParameterError(f"controller.{key}: the controller has {len(theirs)} where the scenario's "
+                                         f"[[{key}]] has {len(names)} ({extra}; in file order)")
+                raise ParameterError(
+                    f"controller.{key}[{i}]: {other!r} where the scenario's [[{key}]] has {mine!r} "
+                    f"({len(theirs)} against {len(names)}, in file order)")
 
     def schedule_weights(self, q: np.ndarray) -> np.ndarray:
         """Each design point's weight (N, points) at the carriages' positions ``q`` (N, carriages) [m]:

@@ -261,9 +261,9 @@ def sweep(
             executor = client.get_executor()
         n_workers = _workers(workers, executor)
         size = chunk_size_for(int(np.sum(~done)), n_workers) if chunk_size is None else _positive(chunk_size)
-        swept = sorted({i for c in designs.columns for i in c.entries} & joint_entries(layout))
+        swept = {i: f"{c.mode}[{c.name!r}]" for c in designs.columns for i in joint_entries(layout) & {*c.entries}}
         template = Chunk(key, scene, model, 0, np.zeros((0, layout.size)), tuple(swept), band, freqs, n_modes,
-                         budget=requests)
+                         budget=requests, labels=tuple(swept.values()))
         simulator_for(template)  # the scenario checked before anything is written; the forked workers inherit it
         chunks = _chunk_count(done, size)  # no more processes than chunks to run
         pool, renew = _executor(executor, n_workers, min(n_workers, chunks))  # made (a function's executor checked)

@@ -66,6 +66,9 @@ class Chunk:
     budget : tuple of (str, str)
         (point, axis) pairs of the passive error budget's displacement RMS columns
         (:func:`isolator.sweep.budget.budget_requests`).
+    labels : tuple of str
+        How the sweep's caller named what drives each entry of ``check`` (``set['isolators[*].position.x']``),
+        for the reason of a design refused whole (default: the entry's own name).
     """
 
     key: str
@@ -79,6 +82,7 @@ class Chunk:
     modes: int = 0
     threads: int = 1
     budget: tuple[tuple[str, str], ...] = ()
+    labels: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -153,9 +157,10 @@ def run_chunk(chunk: Chunk) -> ChunkResult:
     status = np.full(n, "ok", dtype=object)
     reason = np.full(n, "", dtype=object)
     if chunk.check:
+        label = dict(zip(chunk.check, chunk.labels, strict=False))  # what the user typed, not isolators[0]
         for r, p in enumerate(chunk.params):
             try:
-                sim.layout.check(p, lambda i: sim.layout.names[i], chunk.check)
+                sim.layout.check(p, lambda i: label.get(i, sim.layout.names[i]), chunk.check)
             except IsolatorError as exc:
                 status[r], reason[r] = "invalid", str(exc)
     valid = np.flatnonzero(status == "ok")

@@ -41,7 +41,7 @@ def white_floor_acceleration(level: float, axes: str = "z") -> dict:
 def test_heave_under_white_floor_acceleration_matches_the_closed_form():
     """Absolute acceleration of m z'' + c z' + k z = c g' + k g under white floor acceleration S0: its one-sided
     variance is S0 (c/m + k/c) / 4 (the standard integral of |(cs + k)/(ms^2 + cs + k)|^2)."""
-    s0 = 1e-6
+    s0 = 1e-12  # (m/s^2)^2/Hz: a quiet floor (its velocity, S0 / (2 pi f)^2, within the plausible at 1e-4 Hz)
     scenario = make(heave_dict(ground=white_floor_acceleration(s0)))
     budget = error_budget(scenario, quantity="acceleration", band=(1e-3, 1e5))
     k, c = 4 * K, 4 * C

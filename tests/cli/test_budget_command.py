@@ -27,7 +27,8 @@ def test_budget_json_csv_and_figure(tmp_path, capsys):
     assert main(["budget", "paper-table-3-2-budget", "--points", "probe", "--json", "--out", str(out),
                  "--plot", str(plot)]) == 0
     data = json.loads(capsys.readouterr().out)
-    assert set(data) == {"quantity", "band", "controller", "points"}
+    assert set(data) == {"quantity", "band", "controller", "points", "worse_than_passive"}
+    assert data["worse_than_passive"] == []
     assert data["band"] == [0.1, 1000.0]
     assert data["controller"] is None
     assert list(data["points"]) == ["probe"]
@@ -56,9 +57,10 @@ def test_budget_text_names_the_largest_source(capsys):
     assert main(["budget", "paper-table-3-2-budget", "--points", "lens", "--quantity", "velocity",
                  "--band", "1:100"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert len(lines) == 3
-    assert lines[2].startswith("lens:z: ")
-    assert "µm/s RMS; largest floor:z" in lines[2]
+    assert len(lines) == 4
+    assert lines[0] == "band 1-100 Hz"  # the band it integrated over
+    assert lines[3].startswith("lens:z: ")
+    assert "µm/s RMS; largest floor:z" in lines[3]
 
 
 @pytest.mark.parametrize(("args", "message"), [
@@ -83,4 +85,6 @@ def test_a_scenario_without_random_sources_is_refused(tmp_path, capsys):
     path = tmp_path / "quiet.toml"
     path.write_text(tomli_w.dumps(base_dict()))
     assert exit_code(["budget", str(path)]) == 2
-    assert "no random source for a budget" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "no random source for a budget" in err
+    assert err.strip().endswith("; the bundled paper-table-3-2-budget has ten (the command's default)")

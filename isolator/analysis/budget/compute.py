@@ -8,14 +8,15 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 
-from isolator.analysis.linear import LinearModel, linearise
+from isolator.analysis.linear import LinearModel, linearise, rest_positions
+from isolator.analysis.travel import check_travel
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
 
 from .grid import integrate_psd, seed_grid
 from .loop import SampledController, SourceResponses, closed_loop_poles
 from .result import AXES, QUANTITY_UNITS, ErrorBudget
-from .sources import BUDGET_POINT, budget_sources, has_random_sources
+from .sources import BUDGET_POINT, Source, budget_sources, has_random_sources
 
 __all__ = ["DEFAULT_BAND", "budget_band", "error_budget"]
 
@@ -23,6 +24,9 @@ __all__ = ["DEFAULT_BAND", "budget_band", "error_budget"]
 DEFAULT_BAND = (0.1, 1000.0)
 #: how far below half the controller's rate the default band ends
 _BELOW_NYQUIST = 0.999
+#: the highest frequency [Hz] a band may reach: no model of a table holds far beyond, and beyond it the powers
+#: of the frequency that turn displacement into acceleration leave the floating-point range
+MAX_FREQUENCY = 1.0e6
 
 
 def _point_outputs(lin: LinearModel, points: Sequence[str] | None) -> tuple[tuple[str, ...], list[str]]:
@@ -57,6 +61,9 @@ def budget_band(band: Sequence[float] | None, controller: SampledController | No
     low, high = float(values[0]), float(values[1])
     if not 0 < low < high:
         raise ParameterError(f"band: must be 0 < low < high [Hz], got {low:g} to {high:g}")
+    if high > MAX_FREQUENCY:
+        raise ParameterError(f"band: ends at {high:g} Hz, beyond {MAX_FREQUENCY:g} Hz, where no model of a table "
+                             "holds (its modes and sources lie far below)")
     if nyquist is not None and high >= nyquist:
         raise ParameterError(f"band: ends at {high:g} Hz, at or beyond half the controller's sample rate "
                              f"({nyquist:g} Hz), where the budget neglects aliasing; end it below {nyquist:g} Hz")
@@ -92,7 +99,8 @@ def error_budget(
     band : (float, float), optional
         [Hz], 0 < low < high; default 0.1 Hz to 1 kHz (with a controller, ending just below half its rate).
     positions : mapping or sequence, optional
-        Carriage positions [m] by name or one per carriage (a scenario only).
+        Carriage positions [m] by name or one per carriage (a scenario only), within the carriages' travel
+        (:meth:`Scenario.travel() <isolator.scenario.definitions.Scenario.travel>`).
 
     Returns
     -------
@@ -102,9 +110,11 @@ def error_budget(
     Raises
     ------
     ScenarioError
-        The scenario has no random source.
+        The scenario has no random source; a source whose RMS over the band, or the motion it makes, is not a
+        finite number (naming its key).
     ParameterError
-        An unknown point or quantity, a bad band, a controller for another table.
+        An unknown point or quantity, a bad band (beyond :data:`MAX_FREQUENCY`), a controller for another
+        table, a carriage parked beyond its travel.
     UnstableClosedLoopError
         The sampled loop is unstable.
 
@@ -127,6 +137,8 @@ def error_budget(
             raise ParameterError("positions: give them to linearise(); a LinearModel is parked already")
         lin = scenario
     elif isinstance(scenario, Scenario):
+        if positions is not None:  # parked where the carriages go, not beyond their travel
+            check_travel(scenario, rest_positions(scenario, positions))
         lin = linearise(scenario, positions)
     else:
         raise ParameterError(f"scenario: must be a Scenario or a LinearModel, got {type(scenario).__name__}")
@@ -140,12 +152,31 @@ def error_budget(
                             "spectrum or vc = \"VC-C\"), [[disturbances]], an actuator's noise_psd"
                             + (" or a sensor's noise" if controller is not None else
                                " (sensors' noise counts only with --controller)"))
+    order = {"displacement": 0, "velocity": 1, "acceleration": 2}[quantity]
     sources = budget_sources(lin, rate)
+    f, psd = _spectra(lin, sources, outputs, controller, limits, order)
+    silent = _silent_sources(sources, f)
+    psd = psd.reshape(f.size, len(names), len(AXES), len(sources)).transpose(1, 2, 3, 0)
+    _check_finite(psd, f, names, sources)
+    passive = None
+    if controller is not None:  # the same table without the loop, to say where the loop makes it worse
+        plain = budget_sources(lin)
+        passive = np.zeros((len(names), len(AXES)))
+        if plain:
+            fp, pp = _spectra(lin, plain, outputs, None, limits, order)
+            passive = np.sqrt(np.trapezoid(pp.sum(axis=2), fp, axis=0)).reshape(len(names), len(AXES))
+    return ErrorBudget(quantity, limits, None if controller is None else str(controller.method), names,
+                       tuple(s.name for s in sources), f, psd, np.asarray(lin.positions, dtype=float),
+                       passive_rms=passive, silent=silent)
+
+
+def _spectra(lin: LinearModel, sources: Sequence[Source], outputs: Sequence[str],
+             controller: SampledController | None, limits: tuple[float, float], order: int
+             ) -> tuple[np.ndarray, np.ndarray]:
+    """The grid [Hz] and each output's PSD per source (nf, outputs, sources), refined until converged."""
     poles = lin.eigenvalues if controller is None else np.concatenate(
         [lin.eigenvalues, closed_loop_poles(lin, controller)])
     corners = np.concatenate([np.asarray(s.corners, dtype=float) for s in sources] + [np.zeros(0)])
-    order = {"displacement": 0, "velocity": 1, "acceleration": 2}[quantity]
-
     responses = SourceResponses(lin, sources, outputs, controller)
 
     def evaluate(f: np.ndarray) -> np.ndarray:
@@ -154,7 +185,36 @@ def error_budget(
         density = np.stack([np.asarray(s.density(f), dtype=float) for s in sources], axis=1)  # (nf, sources)
         return np.asarray(gain * density[:, None, :])
 
-    f, psd = integrate_psd(evaluate, seed_grid(limits, poles, corners))
-    psd = psd.reshape(f.size, len(names), len(AXES), len(sources)).transpose(1, 2, 3, 0)
-    return ErrorBudget(quantity, limits, None if controller is None else str(controller.method), names,
-                       tuple(s.name for s in sources), f, psd, np.asarray(lin.positions, dtype=float))
+    return integrate_psd(evaluate, seed_grid(limits, poles, corners))
+
+
+def _silent_sources(sources: Sequence[Source], f: np.ndarray) -> tuple[str, ...]:
+    """The sources with nothing inside the band (their density zero on the whole grid ``f`` [Hz]).
+
+    Raises
+    ------
+    ScenarioError
+        A source whose own variance over the band is not a finite number (a PSD of 1e308 N^2/Hz), naming
+        its key.
+    """
+    silent = []
+    for s in sources:
+        with np.errstate(over="ignore", invalid="ignore"):
+            variance = float(np.trapezoid(np.asarray(s.density(f), dtype=float), f))
+        if not math.isfinite(variance):
+            raise ScenarioError(f"{s.key or s.name}: the source {s.name}'s RMS over the band {f[0]:g} to {f[-1]:g} "
+                                "Hz is not a finite number (its power spectral density is too large to be real)")
+        if variance == 0.0:
+            silent.append(s.name)
+    return tuple(silent)
+
+
+def _check_finite(psd: np.ndarray, f: np.ndarray, points: Sequence[str], sources: Sequence[Source]) -> None:
+    """Refuse a budget whose RMS is not a finite number at some point (naming the point, axis and source)."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        rms = np.trapezoid(psd, f, axis=-1)  # (points, axes, sources)
+    bad = np.argwhere(~np.isfinite(rms))
+    if bad.size:
+        i, j, k = (int(v) for v in bad[0])
+        raise ScenarioError(f"{sources[k].key or sources[k].name}: the motion it makes at {points[i]}:{AXES[j]} is "
+                            f"not a finite number: the source is too large, or the table too soft, to be real")

@@ -4,7 +4,6 @@ cumulative RMS (``docs/scenario-format.md``, "Error budget"), with its JSON, CSV
 from __future__ import annotations
 
 import csv
-import math
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -15,7 +14,8 @@ from .units import AXES, QUANTITY_UNITS, display_unit
 
 __all__ = ["AXES", "QUANTITY_UNITS", "ErrorBudget"]
 
-
+#: how much above the passive table's RMS a closed loop's must be to count as worse (the integrals' accuracy)
+WORSE = 1e-3
 
 @dataclass(frozen=True)
 class ErrorBudget:
@@ -40,6 +40,10 @@ class ErrorBudget:
         One-sided PSD of each source's part [SI^2/Hz].
     positions : ndarray
         The carriages' rest positions [m] the table was linearised at.
+    passive_rms : ndarray (points, 3) or None
+        With a controller: the passive table's total RMS over the same band [SI] (None without one).
+    silent : tuple of str
+        The sources with nothing inside the band (their density zero over it).
     """
 
     quantity: str
@@ -50,6 +54,8 @@ class ErrorBudget:
     frequency: np.ndarray
     psd: np.ndarray
     positions: np.ndarray
+    passive_rms: np.ndarray | None = None
+    silent: tuple[str, ...] = ()
 
     @property
     def unit(self) -> str:
@@ -105,9 +111,30 @@ class ErrorBudget:
             raise KeyError(f"axis: must be one of x, y, z, got {axis!r}")
         return self.points.index(point), AXES.index(axis)
 
+    def worse_than_passive(self) -> list[dict[str, Any]]:
+        """Where the controller raises the RMS above the passive table's: ``{point, axis, passive, closed,
+        largest}`` (RMS [SI], ``largest`` the closed loop's largest source) per point and axis, in order, where
+        the closed loop's RMS exceeds the passive one's by more than :data:`WORSE` of it; empty without a
+        controller or where it helps."""
+        if self.passive_rms is None:
+            return []
+        rms, parts = self.rms, self.source_rms
+        return [{"point": p, "axis": a, "passive": float(self.passive_rms[i, j]), "closed": float(rms[i, j]),
+                 "largest": self.sources[int(np.argmax(parts[i, j]))]}
+                for i, p in enumerate(self.points) for j, a in enumerate(AXES)
+                if rms[i, j] > self.passive_rms[i, j] * (1 + WORSE)]
+
+    def worse_lines(self) -> list[str]:
+        """One line per entry of :meth:`worse_than_passive`, in readable units (what ``isolator budget`` warns)."""
+        scale, unit = display_unit(self.quantity)
+        return [f"{w['point']}:{w['axis']}: the closed loop's {w['closed'] * scale:.4g} {unit} RMS is above the "
+                f"passive table's {w['passive'] * scale:.4g} {unit} (largest source {w['largest']})"
+                for w in self.worse_than_passive()]
+
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``isolator budget --json``: ``quantity``, ``band``, ``controller`` and ``points``
-        ``{point: {axis: {"rms": total, "sources": {source: rms}}}}`` [SI]."""
+        """The JSON of ``isolator budget --json``: ``quantity``, ``band``, ``controller``, ``points``
+        ``{point: {axis: {"rms": total, "sources": {source: rms}}}}`` [SI] and ``worse_than_passive``
+        (:meth:`worse_than_passive`)."""
         rms, parts = self.rms, self.source_rms
         return {
             "quantity": self.quantity,
@@ -117,6 +144,7 @@ class ErrorBudget:
                                "sources": {s: float(parts[i, j, k]) for k, s in enumerate(self.sources)}}
                            for j, a in enumerate(AXES)}
                        for i, p in enumerate(self.points)},
+            "worse_than_passive": self.worse_than_passive(),
         }
 
     def columns(self) -> dict[str, np.ndarray]:
@@ -144,16 +172,21 @@ class ErrorBudget:
         return target
 
     def summary_lines(self) -> list[str]:
-        """One line per point and axis: the total RMS and the largest source, in readable units."""
+        """The band, then one line per point and axis: the total RMS and the largest source, in readable units;
+        then a note for each source with nothing inside the band."""
         scale, unit = display_unit(self.quantity)
-        lines = []
+        lines = [f"band {self.band[0]:g}-{self.band[1]:g} Hz"]
         rms, parts = self.rms, self.source_rms
         for i, p in enumerate(self.points):
             for j, a in enumerate(AXES):
                 k = int(np.argmax(parts[i, j])) if self.sources else -1
-                share = (parts[i, j, k] / rms[i, j]) ** 2 if k >= 0 and rms[i, j] > 0 else math.nan
-                largest = f"; largest {self.sources[k]} ({share:.0%} of the square)" if k >= 0 else ""
+                if k >= 0 and rms[i, j] > 0:
+                    share = (parts[i, j, k] / rms[i, j]) ** 2
+                    largest = f"; largest {self.sources[k]} ({share:.0%} of the square)"
+                else:
+                    largest = " (no source moves it inside the band)"
                 lines.append(f"{p}:{a}: {rms[i, j] * scale:.4g} {unit} RMS{largest}")
+        lines += [f"note: {s} has nothing inside the band" for s in self.silent]
         return lines
 
     def plot(self, specification: dict[tuple[str, str], float] | None = None, title: str = "") -> Any:

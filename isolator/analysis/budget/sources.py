@@ -57,6 +57,9 @@ class Source:
         The linear model's inputs it drives, one weight per input (None for a sensor's noise).
     sensor : int or None
         The sensor whose reading it adds to (a sensor's noise), else None.
+    key : str
+        The scenario's key that gives its density (``ground.spectrum``, ``disturbances[0].psd``, ...), for
+        messages.
     """
 
     name: str
@@ -64,6 +67,7 @@ class Source:
     corners: np.ndarray
     inputs: np.ndarray | None = None
     sensor: int | None = None
+    key: str = ""
 
 
 def _floor(lin: LinearModel, axis: int, name: str) -> Source:
@@ -72,15 +76,17 @@ def _floor(lin: LinearModel, axis: int, name: str) -> Source:
 
     def density(f: np.ndarray) -> np.ndarray:  # velocity PSD over (2 pi f)^2: the floor's translation
         f = np.asarray(f, dtype=float)
-        return np.asarray(spectrum.velocity_psd(letter, f)) / np.maximum(2 * np.pi * f, 1e-300) ** 2  # type: ignore
+        velocity = np.asarray(spectrum.velocity_psd(letter, f))  # type: ignore[union-attr]
+        with np.errstate(over="ignore", divide="ignore"):  # 0 where the floor is still, even at f -> 0
+            return np.divide(velocity, (2 * np.pi * f) ** 2, out=np.zeros_like(velocity), where=velocity > 0)
 
     weights = np.zeros(len(lin.input_names))
     weights[lin.input_names.index(f"ground:{letter}")] = 1.0
-    return Source(name, density, spectrum.edges, weights)  # type: ignore[union-attr]
+    return Source(name, density, spectrum.edges, weights, key="ground.spectrum")  # type: ignore[union-attr]
 
 
-def _input(name: str, psd: SpectralDensity, weights: np.ndarray) -> Source:
-    return Source(name, psd, psd.corners, weights)
+def _input(name: str, psd: SpectralDensity, weights: np.ndarray, key: str) -> Source:
+    return Source(name, psd, psd.corners, weights, key=key)
 
 
 def budget_sources(lin: LinearModel, sample_rate: float | None = None) -> tuple[Source, ...]:
@@ -106,17 +112,18 @@ def budget_sources(lin: LinearModel, sample_rate: float | None = None) -> tuple[
     spectrum = scenario.ground.spectrum if scenario.ground is not None else None
     if spectrum is not None:
         out += [_floor(lin, k, f"floor:{a}") for k, a in enumerate("xyz") if a in spectrum.values]
-    for d in scenario.disturbances:
+    for i, d in enumerate(scenario.disturbances):
         weights = point_force_weights(lin, d.position, d.direction, None, f"disturbances ({d.name})")
-        out.append(_input(f"force:{d.name}", d.psd, weights))
-    for act in scenario.actuators:
+        out.append(_input(f"force:{d.name}", d.psd, weights, f"disturbances[{i}].psd"))
+    for i, act in enumerate(scenario.actuators):
         if act.noise_psd is not None:
             weights = np.zeros(len(names))
             weights[names.index(f"actuator:{act.name}")] = 1.0
-            out.append(_input(f"actuator:{act.name}", act.noise_psd, weights))
+            out.append(_input(f"actuator:{act.name}", act.noise_psd, weights, f"actuators[{i}].noise_psd"))
     if sample_rate is not None:
         for i, sensor in enumerate(scenario.sensors):
             psd = sensor.noise_density(sample_rate)
             if psd is not None:
-                out.append(Source(f"sensor:{sensor.name}", psd, psd.corners, None, i))
+                key = f"sensors[{i}].{'noise_psd' if sensor.noise_psd is not None else 'noise'}"
+                out.append(Source(f"sensor:{sensor.name}", psd, psd.corners, None, i, key))
     return tuple(out)
