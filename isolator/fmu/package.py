@@ -29,8 +29,8 @@ from pathlib import Path
 from typing import Any
 
 from isolator.errors import ParameterError
-from isolator.numerics.native import find_compiler
 from isolator.fmu.units import unit_definitions
+from isolator.numerics.native import find_compiler
 from isolator.numerics.rendering import render
 
 __all__ = ["FMI_HEADERS", "FmuVariable", "build_fmu", "c_compiler", "fmi_platform", "model_identifier",
@@ -44,10 +44,10 @@ FLAGS = ("-std=c99", "-O2", "-fPIC", "-shared")
 #: the longest model identifier (its binary's and sources' names stay short on every file system)
 IDENTIFIER_LENGTH = 48
 _IDENTIFIER = re.compile(r"[A-Za-z][A-Za-z0-9]*(?:_[A-Za-z0-9]+)*")
-_C_KEYWORDS = frozenset(
-    "auto break case char const continue default do double else enum extern float for goto if inline int long "
-    "register restrict return short signed sizeof static struct switch typedef union unsigned void volatile "
-    "while".split())
+_C_KEYWORDS = frozenset({
+    "auto", "break", "case", "char", "const", "continue", "default", "do", "double", "else", "enum", "extern",
+    "float", "for", "goto", "if", "inline", "int", "long", "register", "restrict", "return", "short", "signed",
+    "sizeof", "static", "struct", "switch", "typedef", "union", "unsigned", "void", "volatile", "while"})
 #: letters NFKD does not take apart
 _TRANSLITERATION = {"ß": "ss", "æ": "ae", "Æ": "AE", "ø": "o", "Ø": "O", "œ": "oe", "Œ": "OE", "ł": "l", "Ł": "L",
                     "đ": "d", "Đ": "D", "þ": "th", "Þ": "Th"}

@@ -60,8 +60,9 @@ def parameter_checks(layout: ParameterLayout, tunable: Sequence[tuple[str, tuple
     -------
     dict
         ``bounds``: per tunable parameter, its name, the rule in words (``rule``; ``sign``: what a value <= 0
-        is told), ``low``, ``high`` and whether they are open; ``vectors``: the unit vectors and principal moments the tunable entries are part of (name, rule
-        in words, kind, the three entries); ``magnitude``, ``magnitude_rule``, ``unit_tolerance``.
+        is told), ``low``, ``high`` and whether they are open; ``vectors``: the unit vectors and principal
+        moments the tunable entries are part of (name, rule in words, kind, the three entries);
+        ``magnitude``, ``magnitude_rule``, ``unit_tolerance``.
     """
     names = layout.names
     bounds = [_bound(name, rule_for(names[entries[0]]) or FINITE) for name, entries in tunable]

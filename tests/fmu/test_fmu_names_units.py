@@ -27,10 +27,10 @@ from isolator.scenario.rules import field_of
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
 
 pytest.importorskip("fmpy")
-from fmpy import read_model_description  # noqa: E402
-from fmpy.validation import validate_fmu  # noqa: E402
+from fmpy import read_model_description
+from fmpy.validation import validate_fmu
 
-from controllers.feedback import design_controller, write_controller_fmu  # noqa: E402
+from controllers.feedback import design_controller, write_controller_fmu
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
 
@@ -47,11 +47,16 @@ def test_any_file_name_makes_a_valid_model_identifier(stem):
     """A C identifier (and a casadi function prefix) of at most IDENTIFIER_LENGTH characters, no keyword, the
     same every time; a name that already is one is kept."""
     identifier = model_identifier(stem)
-    assert identifier.isascii() and identifier[0].isalpha() and "__" not in identifier
-    assert all(c.isalnum() or c == "_" for c in identifier) and not identifier.endswith("_")
-    assert len(identifier) <= IDENTIFIER_LENGTH and identifier not in C_KEYWORDS
+    assert identifier.isascii()
+    assert identifier[0].isalpha()
+    assert "__" not in identifier
+    assert all(c.isalnum() or c == "_" for c in identifier)
+    assert not identifier.endswith("_")
+    assert len(identifier) <= IDENTIFIER_LENGTH
+    assert identifier not in C_KEYWORDS
     assert ca.Function.check_name(f"{identifier}_ode")
-    assert valid_identifier(identifier) and model_identifier(stem) == identifier
+    assert valid_identifier(identifier)
+    assert model_identifier(stem) == identifier
     assert (identifier == stem) == valid_identifier(stem)
 
 
@@ -66,7 +71,7 @@ def test_the_fmu_command_takes_legal_file_names(tmp_path, capsys, stem):
     """``isolator fmu --out`` crashed in casadi (or on a file name too long) for these: now each FMU is
     written, valid, its binary named by its model identifier, and it runs."""
     out = tmp_path / f"{stem}.fmu"
-    status, text, err = run_command(["fmu", "paper-table-3-2", "--out", str(out)], capsys)
+    status, _text, err = run_command(["fmu", "paper-table-3-2", "--out", str(out)], capsys)
     assert status == 0, err
     assert validate_fmu(str(out)) == []
     md = read_model_description(str(out))
@@ -88,7 +93,9 @@ def test_every_parameter_field_of_the_bundled_scenarios_has_a_unit():
     assert fields <= set(PARAMETER_UNITS), fields - set(PARAMETER_UNITS)
     assert set(PARAMETER_UNITS.values()) <= set(BASE_UNITS)
     units, rates = state_units(21, 2)  # a pneumatic table: 8 chamber pressures; two lagged actuators
-    assert units[13:21] == ["Pa"] * 8 and units[21:] == ["N", "N"] and rates[3:7] == ["1/s"] * 4
+    assert units[13:21] == ["Pa"] * 8
+    assert units[21:] == ["N", "N"]
+    assert rates[3:7] == ["1/s"] * 4
 
 
 @pytest.fixture(scope="module")
@@ -128,7 +135,9 @@ def test_every_real_variable_carries_its_si_unit(geophones, tmp_path):
     controller = write_controller_fmu(scheduled(scenario), tmp_path / "controller.fmu", scenario=scenario)
     assert validate_fmu(str(controller)) == []
     units = {v.name: v.unit for v in read_model_description(str(controller)).modelVariables}
-    assert units["u:z1"] == "N" and units["q:x-stage"] == "m" and units["time"] == "s"
+    assert units["u:z1"] == "N"
+    assert units["q:x-stage"] == "m"
+    assert units["time"] == "s"
     assert {units[f"y:{s.name}"] for s in scenario.sensors} == {"m/s"}
 
 
@@ -181,7 +190,9 @@ def test_a_cc_that_is_not_found_is_one_line_naming_it(tmp_path, capsys, monkeypa
         status, _, err = run_command(argv, capsys)
         assert status == 2
         assert len(err) == 1
-        assert "CC" in err[0] and "/nonexistent/cc" in err[0] and "not found" in err[0], err
+        assert "CC" in err[0], err
+        assert "/nonexistent/cc" in err[0], err
+        assert "not found" in err[0], err
     assert sorted(p.name for p in tmp_path.rglob("*") if p.is_file()) == []
 
 
@@ -192,7 +203,10 @@ def test_a_cc_that_does_not_compile_is_one_line_naming_it(tmp_path, capsys, monk
     monkeypatch.setenv("CC", false)
     status, _, err = run_command(["fmu", "paper-table-3-2", "--out", str(tmp_path / "t.fmu")], capsys)
     assert status == 2
-    assert len(err) == 1 and "CC" in err[0] and false in err[0] and "does not compile" in err[0], err
+    assert len(err) == 1, err
+    assert "CC" in err[0], err
+    assert false in err[0], err
+    assert "does not compile" in err[0], err
     assert not (tmp_path / "t.fmu").exists()
 
 

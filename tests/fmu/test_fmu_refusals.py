@@ -112,7 +112,7 @@ def plant_calls(fmu: Fmu):
     """A plant's Co-Simulation calls: set an input (finite, or not), set an input derivative, step."""
     inputs = [v.name for v in fmu.md.modelVariables if v.causality == "input"]
     value = st.one_of(st.floats(-1e3, 1e3), NON_FINITE)
-    scaled = lambda name, x: x if name.startswith("f:") or not math.isfinite(x) else x * 1e-6  # noqa: E731
+    scaled = lambda name, x: x if name.startswith("f:") or not math.isfinite(x) else x * 1e-6
     set_input = st.tuples(st.just("set"), st.sampled_from(inputs), value).map(lambda c: (*c[:2], scaled(c[1], c[2])))
     derivative = st.tuples(st.just("derivative"), st.sampled_from(inputs), value, st.integers(1, 3)).map(
         lambda c: (c[0], c[1], scaled(c[1], c[2]), c[3]))
@@ -146,7 +146,9 @@ def test_non_finite_inputs_and_their_derivatives_are_refused_naming_them(plant):
                 assert refused(method, *args) == fmi2Error
                 assert len(log.messages) == 1
                 status, text = log.messages[0]
-                assert status == fmi2Error and name in text and "must be finite" in text, text
+                assert status == fmi2Error
+                assert name in text, text
+                assert "must be finite" in text, text
                 assert refused(instance.doStep, t, 1e-3) == fmi2Error  # failed: only a reset now
                 instance.reset()
                 instance.setupExperiment(startTime=0.0)
@@ -181,7 +183,9 @@ def test_non_finite_times_and_states_are_refused(plant, bad):
         changed[k] = bad
         assert refused(me.setContinuousStates, changed, n) == fmi2Discard
         status, text = log.messages[-1]
-        assert status == fmi2Discard and f"state[{k}]" in text and "finite" in text, text
+        assert status == fmi2Discard
+        assert f"state[{k}]" in text, text
+        assert "finite" in text, text
     now = (c_double * n)()
     me.getContinuousStates(now, n)
     assert list(now) == list(states)  # not taken
@@ -192,7 +196,8 @@ def test_non_finite_times_and_states_are_refused(plant, bad):
     for point, step in ((bad, 1e-3), (0.0, bad)):
         cs, log = fmu.instance()
         assert refused(cs.doStep, point, step) == fmi2Error
-        assert "fmi2DoStep" in log.messages[-1][1] and "finite" in log.messages[-1][1]
+        assert "fmi2DoStep" in log.messages[-1][1]
+        assert "finite" in log.messages[-1][1]
         cs.freeInstance()
 
 
@@ -205,7 +210,9 @@ def test_a_step_longer_than_the_count_is_discarded_and_changes_nothing(plant):
     instance, log = fmu.instance()
     assert refused(instance.doStep, 0.0, 1e7) == fmi2Discard
     status, text = log.messages[-1]
-    assert status == fmi2Discard and "1e+07 s" in text and "shorter" in text
+    assert status == fmi2Discard
+    assert "1e+07 s" in text
+    assert "shorter" in text
     assert instance.getRealStatus(fmi2LastSuccessfulTime) == 0.0
     assert not instance.getBooleanStatus(fmi2Terminated)
     instance.doStep(0.0, 0.5)
@@ -243,10 +250,10 @@ def test_parameters_the_reader_refuses_fail_initialisation_naming_them(plant, ca
         instance.enterInitializationMode()
         try:
             instance.exitInitializationMode()
-            c_refuses = None
+            c_refuses, status = None, 0
         except FMICallException as exc:
-            assert exc.status == fmi2Error
-            c_refuses = log.messages[-1][1]
+            c_refuses, status = log.messages[-1][1], exc.status
+        assert status in (0, fmi2Error)
         if python_refuses is None:  # valid: the FMU starts (or finds no equilibrium, without blaming the rule)
             assert c_refuses is None or "parameter" not in c_refuses, c_refuses
         else:
@@ -295,7 +302,8 @@ def test_the_controller_fmu_refuses_non_finite_inputs_and_steps(controller):
                 else:
                     assert refused(instance.doStep, t, x) == fmi2Error
                     assert "fmi2DoStep" in log.messages[-1][1]
-                assert len(log.messages) == 1 and "must be finite" in log.messages[0][1]
+                assert len(log.messages) == 1
+                assert "must be finite" in log.messages[0][1]
                 return
             assert np.all(np.isfinite(instance.getReal(outputs)))
         finally:
