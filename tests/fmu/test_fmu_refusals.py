@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import math
 import shutil
+import subprocess
 from ctypes import byref, c_double
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -326,3 +328,13 @@ def test_the_controller_fmu_refuses_steps_it_cannot_count(controller):
     assert refused(instance.setupExperiment, None, math.nan) == fmi2Error
     assert "startTime" in log.messages[-1][1]
     instance.freeInstance()
+
+
+def test_the_controller_fmus_sources_compile_strictly(controller, tmp_path):
+    """The refusals' C (printf-style messages, 64-bit counts) is C99 without a warning."""
+    _, fmu = controller
+    sources = Path(fmu.unzip) / "sources"
+    for source in sorted(sources.glob("*.c")):
+        subprocess.run(["gcc" if shutil.which("gcc") else "cc", "-std=c99", "-Wall", "-Wextra", "-Werror",
+                        "-pedantic", "-trigraphs", "-c", "-o", str(tmp_path / "probe.o"), str(source)], check=True,
+                       capture_output=True, cwd=sources)
