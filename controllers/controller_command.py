@@ -166,7 +166,7 @@ def _controller(args: argparse.Namespace) -> int:
         write_c(controller, staged)
         names: tuple[str, ...] = ("controller.json", "controller.h", "controller.c")
         if args.fmu:
-            write_controller_fmu(controller, staged / "controller.fmu", key="--fmu")
+            write_controller_fmu(controller, staged / "controller.fmu", key="--fmu", scenario=scenario)
             names += ("controller.fmu",)
         for name in names:
             os.replace(staged / name, folder / name)

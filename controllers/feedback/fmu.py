@@ -16,15 +16,19 @@ from pathlib import Path
 from controllers.feedback.export import c_sources
 from isolator.errors import ParameterError
 from isolator.fmu.package import FmuVariable, build_fmu
+from isolator.fmu.units import sensor_unit
 from isolator.numerics.rendering import render
 from isolator.scenario.arguments import check_public
+from isolator.scenario.definitions import Scenario
 from isolator.simulation.discrete_controller import DiscreteController
 
 __all__ = ["write_controller_fmu"]
 
 
-def write_controller_fmu(controller: DiscreteController, out: str | Path, key: str = "out") -> Path:
-    """Write ``controller`` as the Co-Simulation FMU ``out`` (its model identifier ``controller``).
+def write_controller_fmu(controller: DiscreteController, out: str | Path, key: str = "out",
+                         scenario: Scenario | None = None) -> Path:
+    """Write ``controller`` as the Co-Simulation FMU ``out`` (its model identifier ``controller``), every
+    variable with its SI unit.
 
     Parameters
     ----------
@@ -34,6 +38,9 @@ def write_controller_fmu(controller: DiscreteController, out: str | Path, key: s
         The ``.fmu`` file.
     key : str
         How errors name ``out``.
+    scenario : Scenario, optional
+        The scenario the controller was designed for: the units of the readings ``y:`` are its sensors'
+        (without it, theirs are not stated).
 
     Returns
     -------
@@ -48,13 +55,15 @@ def write_controller_fmu(controller: DiscreteController, out: str | Path, key: s
     if not isinstance(controller, DiscreteController):
         raise ParameterError(f"controller: must be a DiscreteController, got {type(controller).__name__}")
     m, p = len(controller.actuators), len(controller.sensors)
-    variables = [FmuVariable(f"u:{a}", k, "output", "discrete", "actuator command [N]", "exact", 0.0)
+    units = {s.name: sensor_unit(s) for s in scenario.sensors} if scenario is not None else {}
+    variables = [FmuVariable(f"u:{a}", k, "output", "discrete", "actuator command [N]", "exact", 0.0, unit="N")
                  for k, a in enumerate(controller.actuators)]
     variables += [FmuVariable(f"y:{s}", m + k, "input", "continuous", "sensor reading minus its equilibrium value "
-                              "[SI]", start=0.0) for k, s in enumerate(controller.sensors)]
-    variables += [FmuVariable(f"q:{c}", m + p + k, "input", "continuous", "carriage position [m]", start=0.0)
-                  for k, c in enumerate(controller.carriages)]
-    variables.append(FmuVariable("time", len(variables), "independent"))
+                              f"[{units.get(s, 'SI')}]", start=0.0, unit=units.get(s))
+                  for k, s in enumerate(controller.sensors)]
+    variables += [FmuVariable(f"q:{c}", m + p + k, "input", "continuous", "carriage position along its axis [m]",
+                              start=0.0, unit="m") for k, c in enumerate(controller.carriages)]
+    variables.append(FmuVariable("time", len(variables), "independent", unit="s"))
     sources = {**c_sources(controller),
                "controller_fmu.c": render("isolator.fmu", "templates/controller_fmu.c.j2", guid="@GUID@",
                                           delay=controller.delay)}

@@ -37,7 +37,8 @@ class PlantFunctions:
         with a lag) and the inputs ``u`` (the model's inputs with the actuators' commands in place of their
         forces).
     outputs : casadi.Function
-        ``(x, u, p, ref, floor_acceleration) -> y``: the six table signals, the sensors, the points' x, y, z.
+        ``(x, u, p, ref, floor_acceleration) -> y``: the six table signals, the sensors, the points' x, y, z
+        (and with ``positions``, each carriage's position along its axis [m], from ``u``).
     static : casadi.Function
         ``(z, c, p) -> (r, dr/dz)``: the static residual (:attr:`Model.static_residual`).
     pose : casadi.Function
@@ -58,8 +59,9 @@ class PlantFunctions:
         return self.model.n_states + len(self.lagged)
 
 
-def plant_functions(scenario: Scenario) -> PlantFunctions:
-    """The FMU's casadi functions of a scenario's structure (see :class:`PlantFunctions`)."""
+def plant_functions(scenario: Scenario, positions: bool = False) -> PlantFunctions:
+    """The FMU's casadi functions of a scenario's structure (see :class:`PlantFunctions`); with ``positions``
+    the outputs end with the carriages' positions (a plant whose carriages follow the profiles)."""
     layout = dataclasses.replace(ParameterLayout.of(scenario), ground=True)
     model = get_model(layout, "exact")
     nx, nu, npar = model.n_states, layout.input_size, layout.size
@@ -84,7 +86,8 @@ def plant_functions(scenario: Scenario) -> PlantFunctions:
     rot, rot0 = rotation(x, "exact"), rotation(ref, "exact")
     points = [x[0:3] + rot @ ca.DM(list(pt.position)) - ref[0:3] - rot0 @ ca.DM(list(pt.position))
               for pt in scenario.points]
-    y = ca.vertcat(model.variant.sensed_motion(x[:nx], ref[:nx])[:6], *sensors, *points)
+    carriages = [u[k] for k in range(layout.n_carriages)] if positions else []
+    y = ca.vertcat(model.variant.sensed_motion(x[:nx], ref[:nx])[:6], *sensors, *points, *carriages)
     outputs = ca.Function("outputs", [x, u, p, ref, floor_acc], [y], ["x", "u", "p", "ref", "floor_acceleration"],
                           ["y"])
     z = ca.SX.sym("z", model.n_static)

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import math
 import os
-import re
 import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -23,7 +22,9 @@ import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.fmu.functions import PlantFunctions, plant_functions, state_nominals
-from isolator.fmu.package import FmuVariable, build_fmu, c_compiler
+from isolator.fmu.package import FmuVariable, build_fmu, c_compiler, model_identifier
+from isolator.fmu.parameter_checks import parameter_checks
+from isolator.fmu.units import parameter_unit, sensor_unit, state_units
 from isolator.model.names import expand_changes, resolve
 from isolator.model.parameters import ParameterLayout
 from isolator.numerics.rendering import render
@@ -67,12 +68,6 @@ def _profile_rows(profiles: Sequence[tuple[str, Profile | None]]) -> tuple[list[
     return rows, knots, coefs
 
 
-def _identifier(out: Path) -> str:
-    """The model identifier from the file's name: a C identifier."""
-    stem = re.sub(r"[^A-Za-z0-9_]", "_", out.stem) or "table"
-    return stem if re.match(r"[A-Za-z_]", stem) else f"t_{stem}"
-
-
 def _tunable(layout: ParameterLayout, names: Sequence[str], key: str) -> list[tuple[str, tuple[int, ...]]]:
     """Each name and the parameter entries it sets (errors name ``key``)."""
     out = []
@@ -108,43 +103,48 @@ def _generated(functions: PlantFunctions, identifier: str) -> tuple[str, str, li
     return source, header, rows
 
 
-def _variables(scenario: Scenario, inputs_mode: bool, tunable: list[tuple[str, tuple[int, ...]]], p: np.ndarray,
-               nominals: np.ndarray) -> tuple[list[FmuVariable], int, list[float]]:
+def _variables(scenario: Scenario, functions: PlantFunctions, inputs_mode: bool,
+               tunable: list[tuple[str, tuple[int, ...]]], p: np.ndarray, nominals: np.ndarray
+               ) -> tuple[list[FmuVariable], int, list[float]]:
     """The FMU's variables in value-reference order (outputs, inputs, parameters, states, their derivatives,
-    time), the number of outputs and the inputs' start values."""
+    time), each with its SI unit; the number of outputs and the inputs' start values."""
     variables: list[FmuVariable] = []
-    names = ["x", "y", "z", "rx", "ry", "rz"] + [f"s:{s.name}" for s in scenario.sensors]
-    names += [f"{pt.name}:{a}" for pt in scenario.points for a in "xyz"]
-    what = ["mass centre displacement [m]"] * 3 + ["rotation vector [rad]"] * 3
-    what += [f"sensor reading [{ {0: 'm', 1: 'm/s', 2: 'm/s2'}[s.order]}], noise-free" for s in scenario.sensors]
-    what += ["point displacement [m]"] * (3 * len(scenario.points))
-    for name, text in zip(names, what, strict=True):
-        variables.append(FmuVariable(name, len(variables), "output", description=text))
-    inputs = [(f"f:{a.name}", 0.0, "actuator command [N]") for a in scenario.actuators]
-    inputs += [(f"floor:{a}", 0.0, "floor translation [m]") for a in "xyz"]
-    inputs += [(f"floor:v{a}", 0.0, "floor velocity [m/s]") for a in "xyz"]
+    outputs = [(n, "m", "mass centre displacement [m]") for n in ("x", "y", "z")]
+    outputs += [(n, "rad", "rotation vector [rad]") for n in ("rx", "ry", "rz")]
+    outputs += [(f"s:{s.name}", sensor_unit(s), f"sensor reading [{sensor_unit(s)}], noise-free")
+                for s in scenario.sensors]
+    outputs += [(f"{pt.name}:{a}", "m", "point displacement [m]") for pt in scenario.points for a in "xyz"]
+    if not inputs_mode:
+        outputs += [(f"q:{c.name}", "m", "carriage position along its axis [m] (its profile)")
+                    for c in scenario.carriages]
+    for name, unit, text in outputs:
+        variables.append(FmuVariable(name, len(variables), "output", description=text, unit=unit))
+    inputs = [(f"f:{a.name}", 0.0, "N", "actuator command [N]") for a in scenario.actuators]
+    inputs += [(f"floor:{a}", 0.0, "m", "floor translation [m]") for a in "xyz"]
+    inputs += [(f"floor:v{a}", 0.0, "m/s", "floor velocity [m/s]") for a in "xyz"]
     if inputs_mode:
         q0 = scenario.initial_positions()
         for kind, unit in (("q", "m"), ("v", "m/s"), ("a", "m/s2")):
-            inputs += [(f"{kind}:{c.name}", float(q0[i]) if kind == "q" else 0.0, f"carriage {kind} [{unit}]")
+            inputs += [(f"{kind}:{c.name}", float(q0[i]) if kind == "q" else 0.0, unit, f"carriage {kind} [{unit}]")
                        for i, c in enumerate(scenario.carriages)]
-    for name, value, text in inputs:
-        variables.append(FmuVariable(name, len(variables), "input", description=text, start=value))
+    for name, value, unit, text in inputs:
+        variables.append(FmuVariable(name, len(variables), "input", description=text, start=value, unit=unit))
     for name, entries in tunable:
         variables.append(FmuVariable(name, len(variables), "parameter", "fixed", "parameter (as --set)",
-                                     "exact", float(p[entries[0]])))
+                                     "exact", float(p[entries[0]]), unit=parameter_unit(name)))
     first_state = len(variables) + 1
+    units, rates = state_units(functions.model.n_states, len(functions.lagged))
     for k in range(nominals.size):
         variables.append(FmuVariable(f"state[{k}]", len(variables), "local", description="model state",
-                                     initial="calculated", nominal=float(nominals[k])))
+                                     initial="calculated", nominal=float(nominals[k]), unit=units[k]))
     for k in range(nominals.size):
         variables.append(FmuVariable(f"der(state[{k}])", len(variables), "local", initial="calculated",
-                                     derivative=first_state + k))
-    variables.append(FmuVariable("time", len(variables), "independent"))
+                                     derivative=first_state + k, unit=rates[k]))
+    variables.append(FmuVariable("time", len(variables), "independent", unit="s"))
     if len({v.name for v in variables}) != len(variables):
         raise ParameterError("scenario: two of its names make the same FMU variable name")
 
-    return variables, len(names), [v for _, v, _ in inputs]
+    return variables, len(outputs), [v for _, v, _, _ in inputs]
 
 
 def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles", "inputs"] = "profiles",
@@ -191,23 +191,23 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     tunable = _tunable(sim.layout, list(parameters), names["parameters"])  # the same names as the FMU's model
     sim.check_tipping(p)
     start, end = sim.equilibria(p)
-    functions = plant_functions(scenario)
+    inputs_mode = carriages == "inputs"
+    functions = plant_functions(scenario, positions=not inputs_mode)
     model, layout = functions.model, functions.model.layout
     omega = max(fastest_rate(scenario, max(start.max_frequency, end.max_frequency if end is not None else 0.0),
                              actuated=True), 1e-9)  # the simulator's rule: a host may drive the actuators
     max_step = min(COMMUNICATION_STEP, STEP_ANGLE / omega / REFINE)
-    inputs_mode = carriages == "inputs"
     floor = scenario.ground.motion if scenario.ground is not None else {}
     profiles: list[tuple[str, Profile | None]] = [] if inputs_mode else [
         (f"carriages[{i}] {c.name}", c.profile) for i, c in enumerate(scenario.carriages)]
     profiles += [(f"floor {axis}", floor.get(axis)) for axis in SIGNALS]
     rows, knots, coefs = _profile_rows(profiles)
-    identifier = _identifier(out)
+    identifier = model_identifier(out.stem)
     casadi_source, casadi_header, sizes = _generated(functions, identifier)
     rest = np.concatenate([start.state, np.zeros(len(functions.lagged))])
 
     nominals = state_nominals(functions, rest)
-    variables, n_outputs, input_starts = _variables(scenario, inputs_mode, tunable, p, nominals)
+    variables, n_outputs, input_starts = _variables(scenario, functions, inputs_mode, tunable, p, nominals)
     entry_at, entries = [0], list[int]()
     for _, matched in tunable:
         entries += list(matched)
@@ -224,7 +224,8 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
         "max_w": max(r["w"] for r in sizes), "knots": knots, "coefs": coefs, "profiles": rows,
         "parameters": [float(v) for v in p], "entry_at": entry_at, "entries": entries,
         "nominals": [float(v) for v in nominals], "rest_guess": [float(v) for v in start.pose],
-        "input_starts": input_starts,
+        "input_starts": input_starts, "input_names": [v.name for v in variables if v.causality == "input"],
+        **parameter_checks(sim.layout, tunable),
     }
     sources = {
         f"{identifier}.c": render("isolator.fmu", "templates/plant.c.j2", **context),

@@ -48,12 +48,25 @@ _LOCK = threading.Lock()
 
 def find_compiler(language: str = "c") -> str | None:
     """The C (``language="c"``) or C++ compiler to use: ``$CC``/``$CXX``, else the first of cc, gcc, clang
-    (c++, g++, clang++) on the path; None when there is none."""
+    (c++, g++, clang++) on the path; None when there is none.
+
+    ``$CC``/``$CXX`` set to a command that is not found is not ignored without a word: a warning naming the
+    variable, its value and the compiler used instead (once per process and value).
+    """
     names = ("CC", "cc", "gcc", "clang") if language == "c" else ("CXX", "c++", "g++", "clang++")
-    for name in (os.environ.get(names[0]), *names[1:]):
-        if name and shutil.which(name):
-            return name
-    return None
+    chosen = os.environ.get(names[0], "").strip()
+    if chosen and shutil.which(chosen):
+        return chosen
+    found = next((name for name in names[1:] if shutil.which(name)), None)
+    if chosen and (names[0], chosen) not in _WARNED:
+        _WARNED.add((names[0], chosen))
+        instead = f"compiling with {found} instead" if found else "and no other compiler is found"
+        warnings.warn(f"{names[0]}: {chosen!r} is not found; {instead}", stacklevel=2)
+    return found
+
+
+#: the compiler variables already warned about, with their values
+_WARNED: set[tuple[str, str]] = set()
 
 
 def compiled_library(name: str, source: str, flags: Sequence[str] = FLAGS, language: str = "c") -> Path:
