@@ -27,13 +27,13 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from isolator.analysis.frequency_response import state_space_response
 from isolator.analysis.elastic_outputs import point_rows, sensor_shapes
+from isolator.analysis.frequency_response import state_space_response
 from isolator.analysis.sensor_outputs import sensor_response, sensor_rows
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
-from isolator.model.flexible.structure import ElasticStructure
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
+from isolator.model.flexible.structure import ElasticStructure
 from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation

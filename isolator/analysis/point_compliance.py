@@ -95,7 +95,7 @@ class PointCompliance:
         lo, hi = self.frequency_hz[0], self.frequency_hz[-1]
         shown = [(f, n) for f, n in zip(self.mode_frequencies_hz, self.mode_names, strict=True) if lo <= f <= hi]
         labelled = 0.0
-        for k, (f, name) in enumerate(shown):
+        for k, (f, _) in enumerate(shown):
             ax.axvline(f, color="0.6", lw=0.7, ls=":", label="modes on the isolators" if k == 0 else None)
             group = [n for g, n in shown if f <= g < 1.15 * f]
             if f >= 1.15 * labelled:  # one label for modes closer than 15 % (the rigid ones crowd)
@@ -122,7 +122,8 @@ def _point(lin: LinearModel, name: str, option: str) -> Any:
             return p
     near = closest(name, names)
     hint = f"; did you mean '{near}'?" if near else ""
-    raise ParameterError(f"{option}: no point named '{name}'{hint} (points: {', '.join(names) or 'none; add [[points]]'})")
+    known = ", ".join(names) or "none; add [[points]]"
+    raise ParameterError(f"{option}: no point named '{name}'{hint} (points: {known})")
 
 
 def point_compliance(lin: LinearModel, point: str, axis: str = "z", response: str | None = None,

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import casadi as ca
 
+from isolator.model.blocks import solve_blocks
 from isolator.model.elements.base import AttachmentMotion, IsolatorElement
 from isolator.model.elements.spring_damper import SPRING_DAMPER, isolator_preloads
-from isolator.model.blocks import solve_blocks
 from isolator.model.flexible.coupling import ElasticState, modal_shapes
 
 __all__ = ["attachment_motion", "carriage_kinematics", "carriage_paths", "newton_euler_residual", "solve_blocks"]
@@ -21,7 +21,7 @@ __all__ = ["attachment_motion", "carriage_kinematics", "carriage_paths", "newton
 
 def attachment_motion(
     pos: ca.SX, rot: ca.SX, vel: ca.SX, w_body: ca.SX, prm: dict[str, ca.SX], ground: ca.SX | None = None,
-    elastic: tuple[list[ca.SX], ca.SX, ca.SX] | None = None,
+    elastic: tuple[list[ca.DM], ca.SX, ca.SX] | None = None,
 ) -> AttachmentMotion:
     """The isolators' attachment points relative to their floor points (world axes) [m], [m/s].
 

@@ -32,7 +32,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.errors import ParameterError
-from isolator.model.flexible.equations import flexible_equations
+from isolator.model.flexible_equations import flexible_equations
 from isolator.model.parameters import ParameterLayout
 from isolator.model.pneumatic_statics import (
     element_of,

@@ -14,8 +14,8 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
 from isolator.scenario.readable import clean_time, without_dust
 from isolator.scenario.sensors import Sensor
-from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.elastic_figure import plot_elastic
+from isolator.simulation.leveling import PneumaticResult, leveling_summary, plot_leveling
 from isolator.simulation.points import PointSet
 from isolator.simulation.response_csv import response_dict, write_response_csv
 from isolator.simulation.settling import Band, SettlingResult
@@ -366,7 +366,7 @@ class Response:
             axes[0, 1].legend(handles=handles, loc="upper left", fontsize=8)
         if zoom is not None:
             self._plot_residual(zoom)
-        if elastic is not None:
+        if elastic is not None and self.point_set is not None:
             plot_elastic(elastic, self.t, self.point_set.names, self.point_set.elastic(self.states), self.stop_time)
         return fig
 

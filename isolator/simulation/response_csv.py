@@ -18,9 +18,10 @@ __all__ = ["response_dict", "write_response_csv"]
 
 def write_response_csv(response: Any, path: str | Path) -> Path:
     """Write a :class:`~isolator.simulation.response.Response`'s samples to ``path``:
-    ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m] (on a bending top then ``<point>:ex,:ey,:ez``), ``s:<sensor>``
-    per sensor (its SI quantity), ``f:<actuator>`` [N] when actuators applied forces, then a pneumatic run's
-    ``p:<isolator>`` [Pa] and ``h:<group>`` [m] columns, to ``path``; returns the path."""
+    ``t,x,y,z,rx,ry,rz,q:<carriage>...`` [s, m, rad], ``<point>:x,:y,:z`` per point [m] (a bending top's
+    ``:ex,:ey,:ez`` after them), ``s:<sensor>`` per sensor (its SI quantity), ``f:<actuator>`` [N] when
+    actuators applied forces, then a pneumatic run's ``p:<isolator>`` [Pa] and ``h:<group>`` [m] columns;
+    returns the path."""
     path = Path(path)
     r = response
     header = ["t", *SIGNALS, *[f"q:{n}" for n in r.carriage_names]]

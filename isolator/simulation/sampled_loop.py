@@ -112,7 +112,8 @@ def readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.S
             out.append(ca.SX(0.0))
             continue
         arm, n = ca.DM(list(s.position)), ca.DM(list(s.direction))
-        lever, lever0, moving, accelerating = arm, arm, ca.SX.zeros(3, 1), ca.SX.zeros(3, 1)
+        lever, lever0 = ca.SX(arm), ca.SX(arm)
+        moving, accelerating = ca.SX.zeros(3, 1), ca.SX.zeros(3, 1)
         if flexible is not None and modal is not None:  # a top that bends: the elastic translation there
             shape = ca.DM(flexible.shape_at(s.position, None, f"sensors ({s.name})"))
             lever, lever0 = arm + shape @ modal[0], arm + shape @ modal[3]

@@ -35,7 +35,7 @@ def _carriage_paths(scenario, r):
         c = scenario.carriages[root]
         step = 1e-5
 
-        def psi(qr):
+        def psi(qr, c=c):
             xy = np.asarray(c.origin)[None, :2] + np.asarray(c.axis)[None, :2] * qr[:, None]
             return data.translation(xy, data.face_for(c.origin[2]), "test")  # (N, n, 3)
 

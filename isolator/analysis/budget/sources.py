@@ -15,7 +15,6 @@ import numpy as np
 
 from isolator.analysis.elastic_outputs import point_force_weights
 from isolator.analysis.linear import LinearModel
-from isolator.model.rotations import pose_rotation
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.random_sources import SpectralDensity
 
