@@ -37,10 +37,10 @@ def point_rows(point: Any, rot0: np.ndarray, ndof: int, table: Table, flexible: 
     return rows
 
 
-def sensor_shapes(scenario: Scenario, flexible: ElasticStructure | None) -> list[np.ndarray | None]:
+def sensor_shapes(scenario: Scenario) -> list[np.ndarray | None]:
     """Each sensor's elastic translation per unit modal coordinate (3, modes) on a bending top (None for a
     floor sensor or a rigid top)."""
-    if flexible is None:
+    if getattr(scenario.table, "flexible", None) is None:
         return [None] * len(scenario.sensors)
     return [None if s.on == "floor" else point_shape(scenario.table, s.position, None, f"sensors ({s.name})")
             for s in scenario.sensors]

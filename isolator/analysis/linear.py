@@ -221,7 +221,7 @@ class LinearModel:
         (:func:`isolator.analysis.sensor_outputs.sensor_response`; from floor inputs an acceleration output
         of :attr:`system` lacks the instantaneous floor-velocity term)."""
         return sensor_response(self.system, self.scenario.sensors, pose_rotation(self.equilibrium.pose[3:6]),
-                               self.feedthrough, frequency_hz, inputs)
+                               self.feedthrough, frequency_hz, inputs, sensor_shapes(self.scenario))
 
     @property
     def feedthrough(self) -> np.ndarray:
@@ -385,8 +385,7 @@ def _state_space(
     inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators),
               *(f"modal:{m}" for m in modes)]
     states = [*DOF_NAMES, *modes, *STATE_NAMES[6:], *(f"d{m}" for m in modes), *(air.names if air is not None else ())]
-    c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1,
-                                       sensor_shapes(scenario, flexible))
+    c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1, sensor_shapes(scenario))
     return control.ss(
         a, a @ b1 + b0, np.vstack([c, c_sensors]), np.vstack([c @ b1, d_sensors]),
         inputs=inputs, outputs=[*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)], states=states,

@@ -87,12 +87,14 @@ def sensor_rows(sensors: Sequence[Sensor], rot0: np.ndarray, a: np.ndarray, b_sh
 
 
 def sensor_response(system: control.StateSpace, sensors: Sequence[Sensor], rot0: np.ndarray, b1: np.ndarray,
-                    frequency_hz: np.ndarray, inputs: Sequence[str] | None = None) -> np.ndarray:
+                    frequency_hz: np.ndarray, inputs: Sequence[str] | None = None,
+                    shapes: Sequence[np.ndarray | None] | None = None) -> np.ndarray:
     """Each sensor's exact frequency response (nf, sensors, inputs) in its quantity per input unit: its
-    displacement response times ``(j 2 pi f)^k`` (k = 0, 1, 2 for displacement, velocity, acceleration)."""
+    displacement response times ``(j 2 pi f)^k`` (k = 0, 1, 2 for displacement, velocity, acceleration);
+    ``shapes`` as :func:`displacement_rows` takes them (a top that bends)."""
     import control  # python-control takes most of a second to import: only when needed
     a, b = np.asarray(system.A), np.asarray(system.B)
-    c, d = displacement_rows(sensors, rot0, a.shape[0], b.shape[1])
+    c, d = displacement_rows(sensors, rot0, a.shape[0], b.shape[1], shapes)
     shifted = control.ss(a, b, c, c @ b1 + d, inputs=list(system.input_labels),
                          outputs=[f"s:{s.name}" for s in sensors])
     h = state_space_response(shifted, frequency_hz, inputs)

@@ -28,8 +28,9 @@ __all__ = ["BUDGET_SCENARIO", "parse_band", "register"]
 BUDGET_SCENARIO = "paper-table-3-2-budget"
 
 #: an error's leading argument name and the option that gave it
-_OPTIONS = {"band": "--band", "points": "--points", "positions": "--position", "controller": "--controller"}
-_OPTION = re.compile(r"^(band|points|positions|controller)(?:\.([^:\s]+))?(?=[:.\[])")
+_OPTIONS = {"band": "--band", "points": "--points", "positions": "--position", "controller": "--controller",
+            "relative": "--relative"}
+_OPTION = re.compile(r"^(band|points|positions|controller|relative)(?:\.([^:\s]+))?(?=[:.\[])")
 
 
 def register(sub: Any) -> None:
@@ -55,6 +56,9 @@ def register(sub: Any) -> None:
                      help="park carriage NAME at Q metres (repeatable; the others at their start)")
     bud.add_argument("--json", action="store_true", help="print JSON instead of text")
     bud.add_argument("--out", type=Path, metavar="FILE.csv", help="write each source's ASD and the cumulative RMS")
+    bud.add_argument("--relative", action="append", default=None, metavar="A:B",
+                     help="also the random elastic translation of point A relative to point B, table axes (a top "
+                     "that bends: the tool against the part; zero on a rigid top); repeatable")
     bud.add_argument("--plot", type=Path, metavar="FILE.png", help="write the figure")
     bud.set_defaults(handler=_budget)
 
@@ -86,7 +90,8 @@ def _budget(args: argparse.Namespace) -> int:
     scenario = load_scenario(args.scenario or BUDGET_SCENARIO)
     controller = None if args.controller is None else read_controller(args.controller, "--controller")
     try:
-        budget = error_budget(scenario, controller, points, args.quantity, band, parse_positions(args.position))
+        budget = error_budget(scenario, controller, points, args.quantity, band, parse_positions(args.position),
+                              args.relative or ())
     except ParameterError as exc:  # the API's argument names as the command's options
         raise ParameterError(_OPTION.sub(lambda m: _OPTIONS[m.group(1)] + (f" {m.group(2)}" if m.group(2) else ""),
                                          str(exc), count=1)) from None

@@ -77,6 +77,7 @@ def error_budget(
     quantity: str = "displacement",
     band: Sequence[float] | None = None,
     positions: Mapping[str, float] | Sequence[float] | None = None,
+    relative: Sequence[str] = (),
 ) -> ErrorBudget:
     """The random motion at the points, per source, as a precision engineer's dynamic error budget.
 
@@ -101,6 +102,9 @@ def error_budget(
     positions : mapping or sequence, optional
         Carriage positions [m] by name or one per carriage (a scenario only), within the carriages' travel
         (:meth:`Scenario.travel() <isolator.scenario.definitions.Scenario.travel>`).
+    relative : sequence of str
+        ``A:B`` pairs of ``[[points]]``: budget also the elastic translation of ``A`` relative to ``B``
+        (table axes; on a top that bends, the tool's motion relative to the part; zero on a rigid top).
 
     Returns
     -------
@@ -154,8 +158,14 @@ def error_budget(
                                " (sensors' noise counts only with --controller)"))
     order = {"displacement": 0, "velocity": 1, "acceleration": 2}[quantity]
     sources = budget_sources(lin, rate)
-    f, psd = _spectra(lin, sources, outputs, controller, limits, order)
+    pairs, extra, combine = _relative_outputs(lin, relative, len(outputs))
+    f, psd = _spectra(lin, sources, outputs + extra, controller, limits, order, combine)
     silent = _silent_sources(sources, f)
+    relative_psd = None
+    if pairs:
+        relative_psd = psd[:, len(outputs):].reshape(f.size, len(pairs), len(AXES), len(sources)).transpose(
+            1, 2, 3, 0)
+        psd = psd[:, :len(outputs)]
     psd = psd.reshape(f.size, len(names), len(AXES), len(sources)).transpose(1, 2, 3, 0)
     _check_finite(psd, f, names, sources)
     passive = None
@@ -167,13 +177,45 @@ def error_budget(
             passive = np.sqrt(np.trapezoid(pp.sum(axis=2), fp, axis=0)).reshape(len(names), len(AXES))
     return ErrorBudget(quantity, limits, None if controller is None else str(controller.method), names,
                        tuple(s.name for s in sources), f, psd, np.asarray(lin.positions, dtype=float),
-                       passive_rms=passive, silent=silent)
+                       passive_rms=passive, silent=silent, relative=pairs,
+                       relative_psd=None if relative_psd is None else np.asarray(relative_psd))
+
+
+def _relative_outputs(lin: LinearModel, relative: Sequence[str], n_outputs: int
+                      ) -> tuple[tuple[str, ...], list[str], np.ndarray | None]:
+    """The ``A:B`` pairs checked, the outputs they read (``A:ex .. B:ez``; none on a rigid top) and the matrix
+    that combines the budget's outputs and those into the budget's rows (differences for the pairs)."""
+    if isinstance(relative, str):
+        relative = (relative,)
+    names = [p.name for p in lin.scenario.points]
+    pairs: list[str] = []
+    for text in relative:
+        a, sep, b = str(text).partition(":")
+        if not sep or a not in names or b not in names or a == b:
+            known = ", ".join(names) or "none"
+            raise ParameterError(f"relative: expected A:B with two different [[points]] names, got {text!r} "
+                                 f"(points: {known})")
+        pairs.append(f"{a}:{b}")
+    if not pairs:
+        return (), [], None
+    bends = f"{names[0]}:ex" in lin.output_names
+    extra = [f"{p}:e{a}" for pair in pairs for p in pair.split(":") for a in AXES] if bends else []
+    rows = n_outputs + 3 * len(pairs)
+    combine = np.zeros((rows, n_outputs + len(extra)))
+    combine[:n_outputs, :n_outputs] = np.eye(n_outputs)
+    if bends:
+        for i in range(len(pairs)):
+            for j in range(3):
+                combine[n_outputs + 3 * i + j, n_outputs + 6 * i + j] = 1.0
+                combine[n_outputs + 3 * i + j, n_outputs + 6 * i + 3 + j] = -1.0
+    return tuple(pairs), extra, combine
 
 
 def _spectra(lin: LinearModel, sources: Sequence[Source], outputs: Sequence[str],
-             controller: SampledController | None, limits: tuple[float, float], order: int
-             ) -> tuple[np.ndarray, np.ndarray]:
-    """The grid [Hz] and each output's PSD per source (nf, outputs, sources), refined until converged."""
+             controller: SampledController | None, limits: tuple[float, float], order: int,
+             combine: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """The grid [Hz] and each output's PSD per source (nf, outputs, sources), refined until converged;
+    ``combine`` (rows, outputs): the PSD of these combinations of the outputs' responses instead."""
     poles = lin.eigenvalues if controller is None else np.concatenate(
         [lin.eigenvalues, closed_loop_poles(lin, controller)])
     corners = np.concatenate([np.asarray(s.corners, dtype=float) for s in sources] + [np.zeros(0)])
@@ -181,6 +223,8 @@ def _spectra(lin: LinearModel, sources: Sequence[Source], outputs: Sequence[str]
 
     def evaluate(f: np.ndarray) -> np.ndarray:
         h = responses(f)  # (nf, outputs, sources)
+        if combine is not None:
+            h = np.einsum("ij,fjs->fis", combine, h)
         gain = np.abs(h) ** 2 * (2 * np.pi * f[:, None, None]) ** (2 * order)
         density = np.stack([np.asarray(s.density(f), dtype=float) for s in sources], axis=1)  # (nf, sources)
         return np.asarray(gain * density[:, None, :])

@@ -23,6 +23,7 @@ from typing import Protocol
 
 import numpy as np
 
+from isolator.analysis.elastic_outputs import sensor_shapes
 from isolator.analysis.linear import LinearModel
 from isolator.analysis.sampling import closed_loop_matrix, sample_held
 from isolator.analysis.sensor_outputs import displacement_rows
@@ -194,7 +195,8 @@ class SourceResponses:
         c_all, d_all = c_p, d_p @ columns
         if controller is not None:
             sensors = lin.scenario.sensors
-            c_d, d_d = displacement_rows(sensors, pose_rotation(lin.equilibrium.pose[3:6]), a.shape[0], n_in)
+            c_d, d_d = displacement_rows(sensors, pose_rotation(lin.equilibrium.pose[3:6]), a.shape[0], n_in,
+                                         sensor_shapes(lin.scenario))
             c_all = np.vstack([c_p, c_d])
             d_all = np.vstack([d_p, c_d @ lin.feedthrough + d_d]) @ columns
             self.orders = np.array([sen.order for sen in sensors])

@@ -44,6 +44,11 @@ class ErrorBudget:
         With a controller: the passive table's total RMS over the same band [SI] (None without one).
     silent : tuple of str
         The sources with nothing inside the band (their density zero over it).
+    relative : tuple of str
+        ``A:B`` pairs of points whose relative elastic motion was budgeted (``--relative``).
+    relative_psd : ndarray (pairs, 3, sources, nf) or None
+        One-sided PSD of each source's part of ``A``'s elastic translation minus ``B``'s, table axes
+        [SI^2/Hz] (zero on a rigid top).
     """
 
     quantity: str
@@ -56,6 +61,15 @@ class ErrorBudget:
     positions: np.ndarray
     passive_rms: np.ndarray | None = None
     silent: tuple[str, ...] = ()
+    relative: tuple[str, ...] = ()
+    relative_psd: np.ndarray | None = None
+
+    @property
+    def relative_rms(self) -> np.ndarray:
+        """(pairs, 3, sources) RMS of each source's part of each pair's relative elastic motion [SI]."""
+        if self.relative_psd is None:
+            return np.zeros((0, 3, len(self.sources)))
+        return np.sqrt(np.trapezoid(self.relative_psd, self.frequency, axis=-1))
 
     @property
     def unit(self) -> str:
@@ -133,8 +147,8 @@ class ErrorBudget:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``isolator budget --json``: ``quantity``, ``band``, ``controller``, ``points``
-        ``{point: {axis: {"rms": total, "sources": {source: rms}}}}`` [SI] and ``worse_than_passive``
-        (:meth:`worse_than_passive`)."""
+        ``{point: {axis: {"rms": total, "sources": {source: rms}}}}`` [SI], ``worse_than_passive``
+        (:meth:`worse_than_passive`) and, with pairs budgeted, ``relative`` (the same form per ``A:B``)."""
         rms, parts = self.rms, self.source_rms
         return {
             "quantity": self.quantity,
@@ -145,11 +159,21 @@ class ErrorBudget:
                            for j, a in enumerate(AXES)}
                        for i, p in enumerate(self.points)},
             "worse_than_passive": self.worse_than_passive(),
+            **({"relative": self._relative_dict()} if self.relative else {}),
         }
+
+    def _relative_dict(self) -> dict[str, Any]:
+        """``{"A:B": {axis: {"rms": total, "sources": {source: rms}}}}`` [SI]."""
+        parts = self.relative_rms
+        return {pair: {a: {"rms": float(np.sqrt(np.sum(parts[i, j] ** 2))),
+                           "sources": {s: float(parts[i, j, k]) for k, s in enumerate(self.sources)}}
+                       for j, a in enumerate(AXES)}
+                for i, pair in enumerate(self.relative)}
 
     def columns(self) -> dict[str, np.ndarray]:
         """The CSV's columns: ``frequency_hz``, then per point and axis ``<point>:<axis>:<source>`` (ASD
-        [SI/sqrt(Hz)]), ``<point>:<axis>:total`` (ASD) and ``<point>:<axis>:cumulative`` (RMS [SI])."""
+        [SI/sqrt(Hz)]), ``<point>:<axis>:total`` (ASD) and ``<point>:<axis>:cumulative`` (RMS [SI]); then
+        ``A:B:<axis>:<source>`` (ASD) per relative pair."""
         out = {"frequency_hz": self.frequency}
         asd, total, cumulative = self.asd, np.sqrt(self.total_psd), self.cumulative
         for i, p in enumerate(self.points):
@@ -158,6 +182,11 @@ class ErrorBudget:
                     out[f"{p}:{a}:{s}"] = asd[i, j, k]
                 out[f"{p}:{a}:total"] = total[i, j]
                 out[f"{p}:{a}:cumulative"] = cumulative[i, j]
+        if self.relative_psd is not None:
+            for i, pair in enumerate(self.relative):
+                for j, a in enumerate(AXES):
+                    for k, s in enumerate(self.sources):
+                        out[f"{pair}:{a}:{s}"] = np.sqrt(self.relative_psd[i, j, k])
         return out
 
     def to_csv(self, path: str | Path) -> Path:
@@ -186,6 +215,13 @@ class ErrorBudget:
                 else:
                     largest = " (no source moves it inside the band)"
                 lines.append(f"{p}:{a}: {rms[i, j] * scale:.4g} {unit} RMS{largest}")
+        relative = self.relative_rms
+        for i, pair in enumerate(self.relative):
+            for j, a in enumerate(AXES):
+                total = float(np.sqrt(np.sum(relative[i, j] ** 2)))
+                k = int(np.argmax(relative[i, j])) if total > 0 else -1
+                largest = f"; largest {self.sources[k]}" if k >= 0 else " (a rigid top: no relative motion)"
+                lines.append(f"{pair}:e{a} (elastic, relative): {total * scale:.4g} {unit} RMS{largest}")
         lines += [f"note: {s} has nothing inside the band" for s in self.silent]
         return lines
 
