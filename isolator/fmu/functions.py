@@ -84,8 +84,19 @@ def plant_functions(scenario: Scenario, positions: bool = False) -> PlantFunctio
     sensors = [ca.dot(ca.DM(list(s.direction)), floor[s.order]) if s.on == "floor" else table[i]
                for i, s in enumerate(scenario.sensors)]
     rot, rot0 = rotation(x, "exact"), rotation(ref, "exact")
-    points = [x[0:3] + rot @ ca.DM(list(pt.position)) - ref[0:3] - rot0 @ ca.DM(list(pt.position))
-              for pt in scenario.points]
+    flexible = layout.flexible
+    points, elastic = [], []
+    for pt in scenario.points:
+        arm = ca.DM(list(pt.position))
+        if flexible is None:
+            points.append(x[0:3] + rot @ arm - ref[0:3] - rot0 @ arm)
+            continue
+        nm = flexible.n_modes  # a top that bends: the point's elastic translation, and its own outputs
+        shape = ca.DM(flexible.shape_at(pt.position, pt.feet, f"points ({pt.name})"))
+        now, then = shape @ x[13:13 + nm], shape @ ref[13:13 + nm]
+        points.append(x[0:3] + rot @ (arm + now) - ref[0:3] - rot0 @ (arm + then))
+        elastic.append(now - then)
+    points += elastic
     carriages = [u[k] for k in range(layout.n_carriages)] if positions else []
     y = ca.vertcat(model.variant.sensed_motion(x[:nx], ref[:nx])[:6], *sensors, *points, *carriages)
     outputs = ca.Function("outputs", [x, u, p, ref, floor_acc], [y], ["x", "u", "p", "ref", "floor_acceleration"],
@@ -106,6 +117,10 @@ def state_nominals(functions: PlantFunctions, rest: np.ndarray) -> np.ndarray:
     nx = functions.model.n_states
     out = np.full(functions.n_states, 1e-6)
     out[3] = 1.0
-    if nx > 13:
+    flexible = functions.model.layout.flexible
+    if flexible is not None:  # modal coordinates and rates: those that move the top's attachments by 1 um
+        largest = max((float(np.max(np.abs(flexible.shape_matrix(s)))) for s in flexible.isolators), default=1.0)
+        out[13:nx] = 1e-6 / max(largest, 1e-12)
+    elif nx > 13:
         out[13:nx] = np.maximum(1e-6 * np.abs(rest[13:nx]), 1e-3)
     return out

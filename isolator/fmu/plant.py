@@ -114,6 +114,9 @@ def _variables(scenario: Scenario, functions: PlantFunctions, inputs_mode: bool,
     outputs += [(f"s:{s.name}", sensor_unit(s), f"sensor reading [{sensor_unit(s)}], noise-free")
                 for s in scenario.sensors]
     outputs += [(f"{pt.name}:{a}", "m", "point displacement [m]") for pt in scenario.points for a in "xyz"]
+    if functions.model.layout.flexible is not None:
+        outputs += [(f"{pt.name}:e{a}", "m", "the top's elastic translation at the point, table axes [m]")
+                    for pt in scenario.points for a in "xyz"]
     if not inputs_mode:
         outputs += [(f"q:{c.name}", "m", "carriage position along its axis [m] (its profile)")
                     for c in scenario.carriages]
