@@ -31,6 +31,7 @@ import numpy as np
 
 from controllers.feedforward.wrench import allocation_matrix
 from isolator.analysis.linear import STATE_NAMES, LinearModel
+from isolator.analysis.sampling import check_sample_rate
 from isolator.errors import ParameterError, ScenarioError
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.arguments import check_public
@@ -80,9 +81,7 @@ class Controller:
     follows_path: bool = False
 
     def __post_init__(self) -> None:
-        rate = check_value("sample_rate", self.sample_rate, "sample_rate", ParameterError)
-        if not rate > 0:
-            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {self.sample_rate}")
+        check_sample_rate(self.sample_rate)
         if not isinstance(self.system, control.StateSpace):
             raise ParameterError(f"system: must be a control.StateSpace, got {type(self.system).__name__}")
 
