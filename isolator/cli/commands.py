@@ -123,7 +123,7 @@ def register(sub: Any) -> None:
 
 def _scenarios(args: argparse.Namespace) -> int:
     for name, path in sorted(bundled_scenarios().items()):
-        print(f"{name}\t{path}")
+        print(f"{name}\t{escaped(path)}")
     return 0
 
 

@@ -45,6 +45,7 @@ __all__ = [
     "scheduler_client",
     "seed",
     "use_agg",
+    "written",
 ]
 
 #: a subcommand's handler: the parsed arguments in, the exit status out
@@ -185,8 +186,14 @@ def report(
     print(text)
     for label, path in files:
         if path is not None:
-            print(f"{label}: {path}")
+            print(written(label, path))
     return 0
+
+
+def written(label: str, path: object) -> str:
+    """The ``label: path`` line of a file written, the path escaped (:func:`escaped`: a name's control
+    characters cannot drive the terminal)."""
+    return f"{label}: {escaped(path)}"
 
 
 def scheduler_arguments(parser: argparse.ArgumentParser, where: Any = None) -> None:

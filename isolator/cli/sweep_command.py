@@ -23,9 +23,11 @@ from isolator.cli.helpers import (
     scheduler_client,
     seed,
     use_agg,
+    written,
 )
 from isolator.errors import ExecutorError, ParameterError
 from isolator.model.variants import MODEL_KINDS
+from isolator.scenario.names import escaped
 from isolator.sweep import METHODS, sweep
 from isolator.sweep.output import SUFFIXES, read_columns, staging_path
 from isolator.sweep.sweep import check_workers
@@ -197,8 +199,8 @@ def _sweep(args: argparse.Namespace) -> int:
         raise type(exc)(_options_named(str(exc))) from None
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (the app's Terminated: exit status 143)
         how = "terminated" if type(stop).__name__ == "Terminated" else "interrupted"
-        print(f"isolator: {how}: {_rows_kept(out)} row(s) kept in {out}; continue with: "
-              f"{_resume_command(args)}", file=sys.stderr)
+        print(f"isolator: {how}: {_rows_kept(out)} row(s) kept in {escaped(out)}; continue with: "
+              f"{escaped(_resume_command(args))}", file=sys.stderr)
         return 143 if how == "terminated" else 130
     print(result.summary())
     if figure is not None:
@@ -206,5 +208,5 @@ def _sweep(args: argparse.Namespace) -> int:
 
         use_agg()
         save_figure(plot_sweep(result), figure)
-        print(f"figure: {figure}")
+        print(written("figure", figure))
     return 0
