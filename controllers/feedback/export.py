@@ -27,6 +27,7 @@ from isolator.analysis.sampling import check_sample_rate
 from isolator.errors import ParameterError
 from isolator.numerics.rendering import escape_name, render
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import write_output_text
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
 
 __all__ = ["DiscreteController", "ScheduleEntry", "c_sources", "from_statespace", "write_c"]
@@ -66,8 +67,8 @@ def write_c(controller: DiscreteController, folder: str | Path) -> tuple[Path, P
         raise ParameterError(f"folder: cannot make '{out}' ({exc.strerror or type(exc).__name__})") from None
     header, source = out / "controller.h", out / "controller.c"
     texts = c_sources(controller)
-    header.write_text(texts["controller.h"], encoding="utf-8")
-    source.write_text(texts["controller.c"], encoding="utf-8")
+    write_output_text(header, texts["controller.h"])
+    write_output_text(source, texts["controller.c"])
     return header, source
 
 

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from isolator.errors import ParameterError
 from isolator.scenario.names import escaped
+from isolator.scenario.output_files import save_figure_file
 from isolator.scenario.reader import DEFAULT_SCENARIO
 from isolator.simulation.resources import available_memory, check_memory, check_run_memory
 
@@ -28,6 +29,7 @@ if TYPE_CHECKING:
 __all__ = [
     "CLI_NAMES",
     "MADE_FOLDERS",
+    "OUTPUT_OPTIONS",
     "Handler",
     "available_memory",
     "check_memory",
@@ -35,6 +37,7 @@ __all__ = [
     "count",
     "default_output",
     "figure_path",
+    "output_failure",
     "output_folder",
     "output_path",
     "remove_made_folders",
@@ -56,6 +59,8 @@ NAME_LENGTH = 100
 QUOTED = 60
 #: the folders :func:`output_folder` made for the command running now, deepest first
 MADE_FOLDERS: list[Path] = []
+#: the option that named each output file of the command running now (:func:`output_path`), by path
+OUTPUT_OPTIONS: dict[str, str] = {}
 
 
 def remove_made_folders() -> None:
@@ -155,7 +160,17 @@ def output_path(path: Path, option: str, suffixes: Sequence[str]) -> Path:
     output_folder(parent, option)
     if path.exists() and not os.access(path, os.W_OK):
         raise ParameterError(f"{option}: cannot write '{path}' (permission denied)")
+    OUTPUT_OPTIONS[str(path)] = option
     return path
+
+
+def output_failure(exc: OSError) -> str:
+    """The one line of an output that could not be written (:mod:`isolator.scenario.output_files` names the
+    file): the option that named it, the file, the reason (``--out out.csv: No space left on device``)."""
+    name = exc.filename
+    option = OUTPUT_OPTIONS.get(str(name), "") if name is not None else ""
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    return f"{option} {name}: {reason}" if option else f"{name or 'output'}: {reason}"  # escaped when printed
 
 
 def figure_path(path: Path | None, option: str) -> Path | None:
@@ -169,11 +184,13 @@ def figure_path(path: Path | None, option: str) -> Path | None:
 
 
 def save_figure(fig: Any, path: Path) -> None:
-    """Write a matplotlib figure at 120 dpi and close it."""
+    """Write a matplotlib figure at 120 dpi (whole or not at all: :func:`save_figure_file`) and close it."""
     import matplotlib.pyplot as plt
 
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        save_figure_file(fig, path, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def report(

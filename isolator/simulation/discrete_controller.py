@@ -38,6 +38,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.files import parse_json, read_input_text
 from isolator.scenario.names import escaped
+from isolator.scenario.output_files import write_output_text
 from isolator.simulation.controller_schema import check_controller_data, warn_if_unstable
 
 __all__ = ["DiscreteController", "ScheduleEntry"]
@@ -282,7 +283,7 @@ class DiscreteController:
     def to_json(self, path: str | Path) -> Path:
         """Write ``controller.json`` (``path`` a file, or a folder to write it in); returns the file."""
         target = Path(path) / "controller.json" if Path(path).is_dir() else Path(path)
-        target.write_text(json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        write_output_text(target, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
         return target
 
     @classmethod
