@@ -24,7 +24,7 @@ from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.names import escaped
 
 __all__ = ["READ_FACTOR", "available_memory", "check_input", "check_memory", "long_integer", "parse_json",
-           "read_input", "read_input_text"]
+           "read_input", "read_input_text", "read_text_table"]
 
 #: memory [bytes] reading a text table takes per byte of the file (the text, its lines, the cells as Python
 #: strings in lists: one- or two-character cells cost some 30 bytes each)
@@ -206,3 +206,34 @@ def long_integer(text: str) -> str:
             return (f"line {number}: the number{whose} has {digits} digits (at most {most} are read; "
                     "no physical value needs more)")
     return f"a whole number longer than {most} digits (no physical value needs more)"
+
+
+#: the control characters no text table holds (all of C0 and C1 but tab, line feed, vertical tab, form feed and
+#: carriage return)
+_CONTROL = re.compile("[\x00-\x08\x0e-\x1f\x7f-\x9f]")
+
+
+def read_text_table(path: str | os.PathLike[str], key: str, expected: str, *,
+                    error: type[IsolatorError] = ScenarioError) -> str:
+    """:func:`read_input_text` of a file that must be a text table (CSV), refused without quoting any of it
+    when it holds a control character (a NUL, an escape: a binary file, ``/proc/self/environ``), naming the
+    line and saying what was ``expected`` (``a CSV record: a header t,<sensor>,... and rows of numbers``).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
+    >>> _ = path.write_bytes(b"SECRET=x\\x00PATH=/bin")
+    >>> read_text_table(path, "", "a CSV table")
+    Traceback (most recent call last):
+    ...
+    isolator.errors.ScenarioError: .../r.csv: line 1 holds the control character 0x00; expected a CSV table (a ...
+    """
+    text = read_input_text(path, key, error=error)
+    found = _CONTROL.search(text)
+    if found is not None:
+        where = f"{key}: '{escaped(path, _PATH)}'" if key else escaped(path, _PATH)
+        line = text.count("\n", 0, found.start()) + 1
+        raise error(f"{where}: line {line} holds the control character 0x{ord(found.group()):02x}; expected "
+                    f"{expected} (a text file)")
+    return text
