@@ -44,9 +44,13 @@ def test_a_link_at_the_target_is_replaced_and_what_it_points_at_is_untouched(tmp
 def test_a_write_that_fails_midway_leaves_the_old_file_and_no_temporary(tmp_path, old, new):
     target = tmp_path / "kept.bin"
     target.write_bytes(old)
-    with pytest.raises(RuntimeError), atomic_output(target, "wb") as handle:
-        handle.write(new)
-        raise RuntimeError("crash")
+    def crash() -> None:
+        with atomic_output(target, "wb") as handle:
+            handle.write(new)
+            raise RuntimeError("crash")
+
+    with pytest.raises(RuntimeError):
+        crash()
     assert target.read_bytes() == old
     assert sorted(p.name for p in tmp_path.iterdir()) == ["kept.bin"]
 
@@ -73,7 +77,7 @@ def test_budget_out_and_plot_replace_links_instead_of_following_them(tmp_path, m
     victim.write_text("precious")
     Path("b.csv").symlink_to(victim)
     Path("b.png").symlink_to(tmp_path / "nowhere" / "made.png")
-    status, out, err = run_command(["budget", BUDGET, "--out", "b.csv", "--plot", "b.png"], capsys)
+    status, _, err = run_command(["budget", BUDGET, "--out", "b.csv", "--plot", "b.png"], capsys)
     assert status == 0, err
     assert victim.read_text() == "precious"
     assert not (tmp_path / "nowhere").exists()
