@@ -39,7 +39,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.files import parse_json, read_input_text
 from isolator.scenario.names import escaped
 from isolator.scenario.output_files import write_output_text
-from isolator.simulation.controller_schema import check_controller_data, warn_if_unstable
+from isolator.simulation.controller_schema import check_controller_data, check_states, warn_if_unstable
 
 __all__ = ["DiscreteController", "ScheduleEntry"]
 _MATRICES = ("A", "B", "C", "D")
@@ -155,6 +155,7 @@ class DiscreteController:
         n = shape[0] if len(shape) == 2 else (0 if np.size(A) == 0 else -1)
         if n < 0:
             raise ParameterError(f"{where}A: must be a square matrix (states x states), got shape {shape}")
+        check_states(n, f"{where}A")
         return (_matrix(A, (n, n), where + "A", "states x states"),
                 _matrix(B, (n, p), where + "B", "states x sensors"),
                 _matrix(C, (m, n), where + "C", "actuators x states"),
