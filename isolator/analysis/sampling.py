@@ -33,7 +33,7 @@ def check_sample_rate(rate: object, key: str = "sample_rate") -> float:
     ...
     isolator.errors.ParameterError: sample_rate: must be a rate > 0 Hz and at most 100000 Hz (the fastest grid ...
     """
-    if isinstance(rate, bool) or not isinstance(rate, numbers.Real) or not 0 < rate <= MAX_SAMPLE_RATE:
+    if isinstance(rate, bool) or not isinstance(rate, numbers.Real) or not 0 < float(rate) <= MAX_SAMPLE_RATE:
         raise ParameterError(f"{key}: must be a rate > 0 Hz and at most {MAX_SAMPLE_RATE:g} Hz (the fastest grid "
                              f"a simulation steps a controller on), got {rate!r}")
     return float(rate)

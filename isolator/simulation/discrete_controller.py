@@ -294,7 +294,7 @@ class DiscreteController:
         text = read_input_text(source, "", error=ParameterError, bom=False)  # errors start with the path
         where = escaped(source, 120)
         data = parse_json(text, where)  # a key given twice, NaN, bad syntax: one line naming the file
-        controller = cls.from_dict(data)
+        controller = cls.from_dict(data)  # type: ignore[arg-type]  # not a mapping: the schema says so
         points = controller.schedule or (controller,)
         warn_if_unstable([e.A for e in points], f"controller '{where}'")  # type: ignore[misc]
         return controller

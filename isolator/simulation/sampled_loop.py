@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -127,7 +128,7 @@ def _tick(shape: tuple[int, int, int, int]) -> ca.Function:
     """``(xc, hold, pending, y, tick, w, M, delay) -> (xc, hold, pending)``: the controller at a tick (SX; MX for a
     large controller, whose scalar code would grow with its ``n^2`` entries)."""
     n, ny, m, k = shape
-    sym = ca.MX.sym if n * (n + ny) > _SCALAR_TICK else ca.SX.sym  # large: dense loops, code of fixed size
+    sym: Any = ca.MX.sym if n * (n + ny) > _SCALAR_TICK else ca.SX.sym  # large: dense loops, code of fixed size
     xc, hold, pending, y, tick, weights, delay = sym("xc", n), sym("hold", m), sym("pending", m), sym("y", ny), \
         sym("tick"), sym("w", k), sym("delay")
     sizes = [(n, n), (n, ny), (m, n), (m, ny)]
