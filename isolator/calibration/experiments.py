@@ -113,6 +113,8 @@ class FloorExperiment:
         start = round(self.warm * record.rate)
         x = np.array([record.channels[s.name] for s in floor])
         y = np.array([record.channels[s.name] for s in table])
+        # the record's channels in their noise's sigma (where a misfit's bad sample is looked for)
+        self.t, self.samples = record.t, np.array([v / noise_estimate(v) for v in (*y, *x)])
         try:
             estimate = h1_estimate(x[:, start:], y[:, start:], record.rate, self.segment)
         except ParameterError as exc:

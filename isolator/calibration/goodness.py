@@ -15,13 +15,14 @@ the noise model the ratio is ``chi2(nu) / nu`` with ``nu`` the experiment's effe
 - floor: the bins' real and imaginary parts over the equivalent noise bandwidth (correlated neighbours).
 
 A fit fails the test where the ratio exceeds the ``1 -`` :data:`SIGNIFICANCE` quantile of ``chi2(nu) / nu``.
-A misfit is then explained where it can be: a move whose residuals jump at one instant (a jump from one sample
-to the next :data:`JUMP` times their typical one, at most :data:`FEW` samples) has a bad sample there (a spike,
-a step): its time and size in sigma are named; a record whose channels are a power of ten (within a factor of 2)
-or ``1 / g`` times the model's in magnitude (RMS, against the nominal model: a fit forced by a record in other
-units is no reference) is in other units; a channel of the model's magnitude (within a factor of 2) but about
-``-1`` times it (least-squares scale on the fitted model) is a sensor whose direction is flipped; the table
-sensor whose channel holds the largest mean square residual is named.
+A misfit is then explained where it can be: a move whose residuals (a floor experiment whose record) jump at one
+instant (a jump from one sample to the next :data:`JUMP` times their typical one, at most :data:`FEW` samples)
+has a bad sample there (a spike, a step): its time and size in sigma (of the channel's noise) are named; a
+record whose channels are a power of ten (within a factor of 2) or ``1 / g`` times the model's in magnitude
+(RMS, against the nominal model: a fit forced by a record in other units is no reference) is in other units; a
+channel of the model's magnitude (within a factor of 2) but about ``-1`` times it (least-squares scale on the
+fitted model) is a sensor whose direction is flipped; the table sensor whose channel holds the largest mean
+square residual is named.
 """
 
 from __future__ import annotations
@@ -131,6 +132,7 @@ def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: 
         per_channel = (r.reshape(2, len(sensors), -1) ** 2).mean(axis=(0, 2))
         measured = experiment.H1.reshape(len(sensors), -1)
         model = np.asarray(fitted).reshape(len(sensors), -1)
+        jump = _jump(experiment.samples, experiment.t, (*sensors, *experiment.floor))
     else:
         jump = _jump(r.reshape(len(sensors), -1), experiment.t, sensors)
         expected = 1.0
@@ -158,9 +160,10 @@ def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: 
 
 
 def _jump(r: np.ndarray, t: np.ndarray, sensors: tuple[Sensor, ...]) -> tuple[str, float, float] | None:
-    """Where a few samples carry a move's misfit: each channel's residual (sigma) jumping from one sample to the
-    next :data:`JUMP` times the typical jump, at no more than :data:`FEW` neighbouring samples (a spike: two
-    jumps, up and down; a step: one). The sensor, the time [s] and the largest jump [sigma]; else None."""
+    """Where a few samples carry a misfit: each channel (a move's residuals, a floor record's samples, in sigma)
+    jumping from one sample to the next :data:`JUMP` times the typical jump, at no more than :data:`FEW`
+    neighbouring samples (a spike: two jumps, up and down; a step: one). The sensor, the time [s] and the largest
+    jump [sigma]; else None."""
     if r.shape[1] < 8:
         return None
     d = np.diff(r, axis=1)

@@ -19,6 +19,7 @@ from isolator.calibration.goodness import goodness_of_fit
 from isolator.calibration.records import Record
 
 SENSORS = load_scenario("paper-table-3-2-geophones").sensors[:4]
+FLOOR = load_scenario("paper-table-3-2-geophones").sensors[4:5]  # any sensor stands for a floor one here
 N = 2000
 T = np.arange(N) / 500.0
 
@@ -73,12 +74,33 @@ def test_noise_and_a_smooth_misfit_have_no_bad_sample(seed):
 def test_a_floor_record_in_other_units_is_not_taken_for_a_flipped_sensor(power, seed):
     rng = np.random.default_rng(seed)
     h = rng.normal(size=(len(SENSORS), 3, 50)) + 1j * rng.normal(size=(len(SENSORS), 3, 50))
-    experiment = object.__new__(FloorExperiment)
-    experiment.name, experiment.table, experiment.H1 = "floor", SENSORS, 10.0**power * h
+    experiment = _floor(10.0**power * h, rng.normal(size=(len(SENSORS) + 1, N)))
     forced = -h  # a fit dragged to the wrong shape by the record: its sign is no clue
     g = goodness_of_fit(experiment, "floor.csv", np.ones(2 * h.size) * 30.0, 6.0, forced, h)
     assert "flipped" not in g.diagnosis
     assert f"about {10.0**power:g} times the model's" in g.diagnosis
+
+
+def _floor(h1: np.ndarray, samples: np.ndarray) -> FloorExperiment:
+    experiment = object.__new__(FloorExperiment)
+    experiment.name, experiment.table, experiment.floor, experiment.H1 = "floor", SENSORS, FLOOR, h1
+    experiment.t, experiment.samples = T, samples
+    return experiment
+
+
+@given(seed=st.integers(0, 2**16), channel=st.integers(0, len(SENSORS)), at=st.integers(10, N - 10),
+       size=st.floats(25.0, 1e6))
+@settings(max_examples=20, deadline=None)
+def test_a_bad_sample_in_a_floor_record_is_named(seed, channel, at, size):
+    rng = np.random.default_rng(seed)
+    h = rng.normal(size=(len(SENSORS), 1, 50)) + 0j
+    samples = rng.normal(size=(len(SENSORS) + 1, N))  # the table's channels, then the floor's, in sigma
+    samples[channel, at] += size
+    g = goodness_of_fit(_floor(1.1 * h, samples), "floor.csv", np.ones(2 * h.size) * 30.0, 6.0, h, h)
+    assert g.jump is not None
+    assert g.jump[0] == (*SENSORS, *FLOOR)[channel].name
+    assert g.jump[1] in (T[at], T[at + 1])
+    assert g.diagnosis.startswith("the misfit sits at t = ")
 
 
 def test_a_flipped_sensor_is_still_named():
