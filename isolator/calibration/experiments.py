@@ -118,7 +118,7 @@ class FloorExperiment:
         try:
             estimate = h1_estimate(x[:, start:], y[:, start:], record.rate, self.segment)
         except ParameterError as exc:
-            raise ScenarioError(f"{key}: {exc}") from None
+            raise ScenarioError(f"{key} ({record.path.name}): {exc}") from None
         low, high = experiment.frequency
         band = (estimate.f >= low) & (estimate.f <= high) & (estimate.f > 0) & np.all(
             np.isfinite(estimate.H), axis=(0, 1)) & np.all(np.isfinite(estimate.variance), axis=(0, 1))

@@ -3,6 +3,7 @@ option (or key) and the count, instead of the machine running out of memory."""
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -53,3 +54,17 @@ def test_a_crossed_grid_is_counted_whole_and_named_by_its_columns(capsys):
 def test_the_api_names_its_keys():
     with pytest.raises(ParameterError, match=r"^samples: \d+ designs need about"):
         sweep("paper-table-3-1", set={"table.mass": [4000.0, 4400.0]}, samples=10**13)
+
+
+def test_a_record_too_long_for_its_spectra_is_refused_naming_the_segment_and_the_count(monkeypatch):
+    from isolator.calibration.spectra import h1_estimate
+    from isolator.scenario import files
+
+    monkeypatch.setattr(files, "available_memory", lambda: 10_000_000)  # a machine of 10 MB
+    rng = np.random.default_rng(0)
+    x, y = rng.normal(size=(3, 20_000)), rng.normal(size=(4, 20_000))
+    with pytest.raises(ParameterError, match=r"^segment: 20000 samples of 7 channels in segments of 2000 need "
+                                             r"about .* GB of memory, more than the 0.01 GB"):
+        h1_estimate(x, y, 100.0, 20.0)
+    monkeypatch.setattr(files, "available_memory", lambda: 10**12)
+    assert h1_estimate(x, y, 100.0, 20.0).H.shape == (4, 3, 1001)
