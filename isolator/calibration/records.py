@@ -280,9 +280,9 @@ def _read_uff(
         sets = handle.read_sets(indices) if indices else []
     except ScenarioError:
         raise
-    except Exception as exc:  # pyuff raises bare Exceptions on malformed files
-        reason = excerpt(" ".join(str(exc).split())) or type(exc).__name__
-        raise ScenarioError(f"{where}: cannot be read as a universal file ({reason})") from None
+    except Exception as exc:  # pyuff raises bare Exceptions on malformed files, their text quoting the file's
+        raise ScenarioError(f"{where}: cannot be read as a universal file ({type(exc).__name__}; expected UFF "
+                            "datasets 58 of the sensors' signals)") from None
     sets = [sets] if isinstance(sets, dict) else list(sets)
     found: dict[str, tuple[np.ndarray, int, float, float, str]] = {}
     held: list[str] = []

@@ -58,3 +58,16 @@ def test_a_link_to_the_environment_quotes_none_of_it(tmp_path, monkeypatch):
         assert environ[:8] not in message
         assert "hunter2" not in message
     assert os.environ["AAAA_SECRET_FIRST"]
+
+
+@given(secret=SECRET)
+@settings(suppress_health_check=FIXTURES, max_examples=10, deadline=None)
+def test_a_universal_file_that_is_not_one_quotes_none_of_it(tmp_path, secret):
+    path = tmp_path / "record.uff"
+    path.write_text(f"    -1\n    58\nAWS_KEY={secret}\n{secret} {secret}\n    -1\n")
+    with pytest.raises(ScenarioError) as error:
+        read_record(path, ["a-z"], uff={"a-z": (1, "Z")})
+    message = str(error.value).replace(str(path), "")
+    assert "expected UFF datasets 58" in message, message
+    for i in range(len(secret) - 4):
+        assert secret[i:i + 5] not in message, message
