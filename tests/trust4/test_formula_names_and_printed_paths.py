@@ -72,3 +72,15 @@ def test_a_figure_path_with_a_terminal_escape_is_printed_escaped(tmp_path, monke
     assert (tmp_path / name).is_file()
     assert "\x1b" not in out
     assert "figure: red\\x1b[31m.png" in out
+
+
+def test_a_sweep_prints_its_rows_path_escaped(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    name = "rows\x1b]0;title\x07.csv"
+    status, out, err = run_command(["sweep", "paper-table-3-1", "--set", "table.mass=4000:4400:2", "--workers", "1",
+                                    "--out", name], capsys)
+    assert status == 0, err
+    assert (tmp_path / name).is_file()
+    assert "\x1b" not in out
+    assert "\x07" not in out
+    assert "rows: rows\\x1b]0;title\\x07.csv" in out
