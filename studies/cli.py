@@ -8,7 +8,15 @@ import math
 from pathlib import Path
 from typing import Any
 
-from isolator.cli.helpers import check_run_memory, output_folder, scheduler_arguments, scheduler_client, seed, use_agg
+from isolator.cli.helpers import (
+    check_run_memory,
+    output_folder,
+    scheduler_arguments,
+    scheduler_client,
+    seed,
+    use_agg,
+    written,
+)
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -134,7 +142,7 @@ def _paper(args: argparse.Namespace) -> int:
 
     output_folder(args.out, "--out")
     use_agg()
-    print(f"report: {run_paper_study(args.out, quick=args.quick, progress=True)}")
+    print(written("report", run_paper_study(args.out, quick=args.quick, progress=True)))
     return 0
 
 
@@ -166,7 +174,7 @@ def _control(args: argparse.Namespace) -> int:
             f"{budget.sensor_rms().max() * 1e9:.3g} nm")
         print(f"{design.method + ' (sensors)':>12}: settling {'n/a' if value is None else f'{value:.3g} s'}, "
               f"peak force {design.peak_force:.3g} N{random}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 
@@ -184,7 +192,7 @@ def _tradeoff(args: argparse.Namespace) -> int:
         best = max(tradeoff.throughput_pareto(), key=lambda p: tradeoff.per_hour[p])
         print(f"most {tradeoff.rate_label}: {tradeoff.per_hour[best]:.1f} with stiffness "
               f"x{tradeoff.stiffness[best[0]]:.3g}, damping x{tradeoff.damping[best[1]]:.3g}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 
@@ -205,7 +213,7 @@ def _pneumatic(args: argparse.Namespace) -> int:
         print(f"N = {o.ratio:.3g}: optimal orifice {o.diameter * 1e3:.4g} mm, heave peak {o.peak:.4g} "
               f"(one-mass closed form {c.peak:.4g} with {c.diameter * 1e3:.4g} mm)")
     print(f"{len(pneumatic.pareto())} Pareto-optimal designs of {pneumatic.diameters.size * pneumatic.ratios.size}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 
@@ -220,7 +228,7 @@ def _calibration(args: argparse.Namespace) -> int:
     for name, m in study.actual.items():
         settled = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3g} s"
         print(f"{name:>10}: settling on the true table {settled}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 
@@ -246,7 +254,7 @@ def _robustness(args: argparse.Namespace) -> int:
     ranked = [(n, rho) for n, rho in study.ranking()[:3] if not math.isnan(rho)]
     top = ", ".join(f"{n} ({rho:+.2f})" for n, rho in ranked) or "too few machines to rank the tolerances"
     print(f"matters most: {top}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 
@@ -262,7 +270,7 @@ def _profiles(args: argparse.Namespace) -> int:
     for name, m in profiles.methods.items():
         settle = "n/a" if m.settling_time_max is None else f"{m.settling_time_max:.3f} s"
         print(f"{name:>22}: move {m.move_time:.3f} s, settling {settle}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 
@@ -275,7 +283,7 @@ def _sequence_profiles(args: argparse.Namespace, scenario: Scenario) -> int:
         total = "did not settle" if run.total_time is None else f"total {run.total_time:.2f} s"
         rate = "" if run.throughput is None else f", {run.throughput:.0f} steps/h"
         print(f"{name:>22}: {total}{rate}")
-    print(f"report: {args.out / 'report.md'}")
+    print(written("report", args.out / "report.md"))
     return 0
 
 

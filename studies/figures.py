@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import save_figure_file
 
 __all__ = ["log_mesh_edges", "nan_if_none", "plain_log_axis", "save_figure"]
 
@@ -19,9 +20,11 @@ _PLAIN = FuncFormatter(lambda v, _: f"{v:g}")
 
 
 def save_figure(fig: Figure, path: Path, dpi: int = 120) -> None:
-    """Write the figure to ``path`` and close it."""
-    fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    """Write the figure to ``path`` (whole or not at all) and close it."""
+    try:
+        save_figure_file(fig, path, dpi=dpi)
+    finally:
+        plt.close(fig)
 
 
 def plain_log_axis(axis: Axis) -> None:

@@ -14,6 +14,7 @@ from matplotlib.ticker import LogLocator
 
 from isolator import Band
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import atomic_output
 
 from .figures import log_mesh_edges, plain_log_axis, save_figure
 from .pneumatic_results import MIN_WINDOW, PneumaticStudy, Transients
@@ -123,7 +124,7 @@ def _write_csv(study: PneumaticStudy) -> None:
     runs = study.runs
     rule = Band.from_settling(study.scenario.settling)
     windows = bool(study.scenario.windows)
-    with open(study.folder / "designs.csv", "w", newline="") as handle:
+    with atomic_output(study.folder / "designs.csv", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["orifice_diameter_m", "volume_ratio", "heave_peak", "heave_peak_hz", "rocking_peak",
                          "rocking_peak_hz", f"transmissibility_at_{study.reference_hz:g}_hz",

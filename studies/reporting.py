@@ -14,6 +14,7 @@ import numpy as np
 
 from isolator import SIGNALS, Band
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import write_output_text
 
 __all__ = [
     "band_cell",
@@ -87,14 +88,14 @@ def table_header(columns: Iterable[object]) -> list[str]:
 def write_report(folder: Path, lines: Iterable[str], name: str = "report.md") -> Path:
     """Write the lines, one per line, to ``folder / name``; return its path."""
     path = folder / name
-    path.write_text("\n".join(lines) + "\n")
+    write_output_text(path, "\n".join(lines) + "\n")
     return path
 
 
 def write_json(folder: Path, data: Any, name: str = "results.json") -> Path:
     """Write ``data`` as indented JSON to ``folder / name``; return its path."""
     path = folder / name
-    path.write_text(json.dumps(_plain(data), indent=2, allow_nan=False) + "\n")
+    write_output_text(path, json.dumps(_plain(data), indent=2, allow_nan=False) + "\n")
     return path
 
 

@@ -34,6 +34,7 @@ import numpy as np
 from controllers.profiles import ProfileSettings, command_time, evaluate_move, optimise_profiles, shaped_scenario
 from isolator import Band, ParameterError, Scenario, ScenarioError, Simulator
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import atomic_output
 from isolator.sweep import sweep
 from isolator.sweep.cluster import connect
 
@@ -166,7 +167,7 @@ def _study(folder: str | Path, scenario: Scenario, varied: list[Varied], values:
 
 def _write_samples(study: RobustnessStudy) -> Path:
     path = study.folder / "samples.csv"
-    with path.open("w", newline="") as handle:
+    with atomic_output(path, newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["machine", *(v.name + (" (factor)" if v.relative else "") for v in study.varied),
                          *(f"settling:{name}" for name in study.methods)])

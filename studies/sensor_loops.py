@@ -23,6 +23,7 @@ import numpy as np
 from controllers.feedback.loop_margins import DiscreteResponse
 from controllers.feedback.sensor_plant import SensorPlant, loop_matrix
 from isolator.analysis.frequency_response import state_space_response
+from isolator.analysis.signal_names import labels
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.discrete_controller import DiscreteController
@@ -76,7 +77,7 @@ def loop_response(plant: SensorPlant, controller: DiscreteController, frequency_
     if controller.delay:
         hold = hold * np.exp(-1j * w * period)
     m = plant.n_actuators
-    actuated = state_space_response(plant.system, f, list(plant.system.input_labels)[:m])
+    actuated = state_space_response(plant.system, f, labels(plant.system.input_labels)[:m])
     sensors = plant.lin.scenario.sensors
     # the floor's path to the sensors, exact in each sensor's quantity (an accelerometer's improper term too)
     floor_path = plant.lin.sensor_response(f, [f"ground:{axis}" for axis in ("x", "y", "z")])
@@ -151,7 +152,7 @@ def noise_motion(plant: SensorPlant, controller: DiscreteController, q: np.ndarr
     bn = np.vstack([bp @ e @ dc, bc + bc @ dp @ e @ dc])
     sigma = np.diag([s.noise_rms(controller.sample_rate) ** 2 for s in plant.lin.scenario.sensors])
     cov = _stationary_covariance(big, bn @ sigma @ bn.T)
-    outputs = list(plant.lin.system.output_labels)
+    outputs = labels(plant.lin.system.output_labels)
     rows = np.asarray(plant.lin.system.C)[[outputs.index(s) for s in SIGNALS]]
     table = np.hstack([rows, np.zeros((6, big.shape[0] - rows.shape[1]))])
     table_rms = {s: float(math.sqrt(max(v, 0.0))) for s, v in zip(SIGNALS, np.diag(table @ cov @ table.T),

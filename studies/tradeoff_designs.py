@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import atomic_output
 
 from .reporting import band_cell
 from .tradeoff_results import TradeoffStudy
@@ -24,7 +25,7 @@ def write_designs_csv(study: TradeoffStudy) -> None:
     """
     throughput = study.has_throughput
     rate = ["steps_per_hour"] if study.sequence else ["window_settling_time_max_s", "moves_per_hour"]
-    with open(study.folder / "designs.csv", "w", newline="") as handle:
+    with atomic_output(study.folder / "designs.csv", newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(["stiffness_scale", "damping_scale", "total_time_s" if study.sequence else
                          "settling_time_max_s", "band", *(rate if throughput else []),

@@ -31,6 +31,8 @@ import numpy as np
 
 from controllers.feedforward.wrench import allocation_matrix
 from isolator.analysis.linear import STATE_NAMES, LinearModel
+from isolator.analysis.sampling import check_sample_rate
+from isolator.analysis.signal_names import labels, signals, to_control
 from isolator.errors import ParameterError, ScenarioError
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.arguments import check_public
@@ -80,9 +82,7 @@ class Controller:
     follows_path: bool = False
 
     def __post_init__(self) -> None:
-        rate = check_value("sample_rate", self.sample_rate, "sample_rate", ParameterError)
-        if not rate > 0:
-            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {self.sample_rate}")
+        check_sample_rate(self.sample_rate)
         if not isinstance(self.system, control.StateSpace):
             raise ParameterError(f"system: must be a control.StateSpace, got {type(self.system).__name__}")
 
@@ -161,7 +161,7 @@ def decentralised(
     eye = np.eye(n_a)
     system = control.ss(
         np.kron(eye, a), np.kron(eye, b) @ pick, -np.kron(eye, c), -np.kron(eye, d) @ pick,
-        inputs=list(MEASUREMENTS), outputs=actuator_labels(lin.scenario), name=name,
+        inputs=list(MEASUREMENTS), outputs=signals(actuator_labels(lin.scenario)), name=to_control(name),
     )
     return Controller(name, system, sample_rate, description)
 
@@ -285,7 +285,7 @@ def pid(
     system = control.ss(
         np.block([[a, np.zeros((n, rank))], [np.zeros((rank, n)), np.zeros((rank, rank))]]),
         np.vstack([b, to_dirs @ pick]), np.hstack([c, -ki * j @ basis]), d,
-        inputs=list(MEASUREMENTS), outputs=actuator_labels(lin.scenario), name="pid",
+        inputs=list(MEASUREMENTS), outputs=signals(actuator_labels(lin.scenario)), name="pid",
     )
     return Controller("pid", system, sample_rate, description)
 
@@ -330,8 +330,8 @@ def lead(
 def actuated(lin: LinearModel) -> tuple[np.ndarray, np.ndarray]:
     """``A`` (12, 12) and ``B`` (12, n_a) of the table driven by its actuators."""
     sys = lin.system
-    labels = list(sys.input_labels)
-    cols = [labels.index(n) for n in actuator_labels(lin.scenario)]
+    names = labels(sys.input_labels)
+    cols = [names.index(n) for n in actuator_labels(lin.scenario)]
     return np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)[:, cols]
 
 

@@ -16,7 +16,6 @@ literal holds the name's UTF-8 bytes exactly. The C comes from template files (`
 from __future__ import annotations
 
 import math
-import numbers
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -24,9 +23,11 @@ from typing import Any
 import control
 import numpy as np
 
+from isolator.analysis.sampling import check_sample_rate
 from isolator.errors import ParameterError
 from isolator.numerics.rendering import escape_name, render
 from isolator.scenario.arguments import check_public
+from isolator.scenario.output_files import write_output_text
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
 
 __all__ = ["DiscreteController", "ScheduleEntry", "c_sources", "from_statespace", "write_c"]
@@ -66,8 +67,8 @@ def write_c(controller: DiscreteController, folder: str | Path) -> tuple[Path, P
         raise ParameterError(f"folder: cannot make '{out}' ({exc.strerror or type(exc).__name__})") from None
     header, source = out / "controller.h", out / "controller.c"
     texts = c_sources(controller)
-    header.write_text(texts["controller.h"], encoding="utf-8")
-    source.write_text(texts["controller.c"], encoding="utf-8")
+    write_output_text(header, texts["controller.h"])
+    write_output_text(source, texts["controller.c"])
     return header, source
 
 
@@ -130,8 +131,7 @@ def from_statespace(system: control.StateSpace, sample_rate: float, sensors: Seq
     """
     if not isinstance(system, control.StateSpace):
         raise ParameterError(f"system: must be a control.StateSpace, got {type(system).__name__}")
-    if not (isinstance(sample_rate, numbers.Real) and math.isfinite(sample_rate) and sample_rate > 0):
-        raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {sample_rate!r}")
+    check_sample_rate(sample_rate)
     if discretisation not in ("tustin", "zoh"):
         raise ParameterError(f"discretisation: must be 'tustin' or 'zoh', got {discretisation!r}")
     if (system.ninputs, system.noutputs) != (len(sensors), len(actuators)):

@@ -19,6 +19,7 @@ import numpy as np
 from scipy.linalg import expm
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel, is_stable, state_space_response
+from isolator.analysis.signal_names import labels, signals, to_control
 from isolator.errors import ParameterError, UnstableClosedLoopError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
@@ -57,10 +58,10 @@ def lagged_plant(lin: LinearModel) -> _Plant:
     sys = lin.system
     a, b = np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)
     c, d = np.asarray(sys.C, dtype=float), np.asarray(sys.D, dtype=float)
-    labels = list(sys.input_labels)
+    names = labels(sys.input_labels)
     w_names = [*GROUND_INPUTS, *FORCE_INPUTS]
-    iw = [labels.index(x) for x in w_names]
-    iu = [labels.index(x) for x in actuator_labels(lin.scenario)]
+    iw = [names.index(x) for x in w_names]
+    iu = [names.index(x) for x in actuator_labels(lin.scenario)]
     acts = lin.scenario.actuators
     lagged = [k for k, act in enumerate(acts) if act.bandwidth is not None]
     nl, n_a = len(lagged), len(acts)
@@ -82,7 +83,7 @@ def lagged_plant(lin: LinearModel) -> _Plant:
     # feedthrough, x = xi + B1 g
     cm = np.hstack([np.eye(12), np.zeros((12, n - 12 + nl))])
     dmw = lin.feedthrough[:12, iw]
-    return _Plant(a_full, bw, bu, cy, d[:, iw], cm, dmw, w_names, list(sys.output_labels))
+    return _Plant(a_full, bw, bu, cy, d[:, iw], cm, dmw, w_names, labels(sys.output_labels))
 
 
 @dataclass(frozen=True)
@@ -148,7 +149,7 @@ def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) ->
     """
     p = lagged_plant(lin)
     k = controller.system
-    if list(k.output_labels) != actuator_labels(lin.scenario) or list(k.input_labels) != list(MEASUREMENTS):
+    if labels(k.output_labels) != actuator_labels(lin.scenario) or labels(k.input_labels) != list(MEASUREMENTS):
         raise ParameterError("controller: was designed for other actuators or measurements than this plant's")
     _, bk, _, dk = (np.asarray(m, dtype=float) for m in (k.A, k.B, k.C, k.D))
     nk = bk.shape[0]
@@ -158,8 +159,8 @@ def closed_loop(lin: LinearModel, controller: Controller, check: bool = True) ->
     b = np.block([[p.bw + p.bu @ dk @ p.dmw, -p.bu @ dk @ ref], [bk @ p.dmw, -bk @ ref]])
     c = np.hstack([p.cy, np.zeros((p.cy.shape[0], nk))])
     d = np.hstack([p.dyw, np.zeros((p.cy.shape[0], 6))])
-    system = control.ss(a, b, c, d, inputs=[*p.inputs, *REFERENCE_INPUTS], outputs=p.outputs,
-                        name=f"{lin.scenario.name} with {controller.name}")
+    system = control.ss(a, b, c, d, inputs=signals([*p.inputs, *REFERENCE_INPUTS]), outputs=signals(p.outputs),
+                        name=to_control(f"{lin.scenario.name} with {controller.name}"))
     loop = ClosedLoop(lin, controller, system)
     if check:
         _stability(lin, p, controller, a).raise_if_unstable()

@@ -16,7 +16,6 @@ their middle; the controller interpolates between the points at the scheduling c
 from __future__ import annotations
 
 import inspect
-import math
 import numbers
 from collections.abc import Callable, Mapping
 from dataclasses import replace
@@ -26,6 +25,7 @@ import numpy as np
 
 from isolator.analysis.linear import linearise
 from isolator.analysis.modes import modes
+from isolator.analysis.sampling import check_sample_rate
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -111,11 +111,9 @@ def _check_rate(plant: SensorPlant, sample_rate: float, where: str) -> None:
 
 def checked_sample_rate(sample_rate: float) -> float:
     """A controller's rate [Hz] as a float, or a one-line :class:`ParameterError` naming ``--sample-rate``
-    unless it is a finite number > 0."""
-    if isinstance(sample_rate, bool) or not isinstance(sample_rate, numbers.Real) or not (
-            math.isfinite(sample_rate) and sample_rate > 0):
-        raise ParameterError(f"sample_rate (--sample-rate): must be a finite rate > 0 Hz, got {sample_rate!r}")
-    return float(sample_rate)
+    unless it follows the one rule of
+    :func:`~isolator.analysis.sampling.check_sample_rate`."""
+    return check_sample_rate(sample_rate, "sample_rate (--sample-rate)")
 
 
 def design_controller(scenario: Scenario, method: str, sample_rate: float, delay: bool = False,

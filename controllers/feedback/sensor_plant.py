@@ -23,6 +23,7 @@ import numpy as np
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
 from isolator.analysis.sampling import closed_loop_matrix, sample_held
+from isolator.analysis.signal_names import labels, signals
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.arguments import check_public
 
@@ -148,7 +149,7 @@ def sensor_plant(lin: LinearModel) -> SensorPlant:
         raise ScenarioError("sensors: the scenario has no [[sensors]] to feed back (add [[sensors]] entries)")
     plant = lagged_plant(lin)  # the table with each lagged actuator's lag state, commands in
     rows = [plant.outputs.index(f"s:{s.name}") for s in scenario.sensors]
-    in_labels = list(lin.system.input_labels)
+    in_labels = labels(lin.system.input_labels)
     iu = [in_labels.index(f"actuator:{act.name}") for act in scenario.actuators]
     acts = scenario.actuators
     lagged = [k for k, act in enumerate(acts) if act.bandwidth is not None]
@@ -161,8 +162,8 @@ def sensor_plant(lin: LinearModel) -> SensorPlant:
     d_full[:, direct] = du[:, direct]
     a_full, b_full = plant.a, np.hstack([plant.bu, plant.bw])
     system = control.ss(a_full, b_full, c_full, d_full,
-                        inputs=[f"actuator:{act.name}" for act in acts] + list(DISTURBANCES),
-                        outputs=[f"s:{s.name}" for s in scenario.sensors], name="sensor-plant")
+                        inputs=signals([*(f"actuator:{act.name}" for act in acts), *DISTURBANCES]),
+                        outputs=signals(f"s:{s.name}" for s in scenario.sensors), name="sensor-plant")
     return SensorPlant(lin, system)
 
 

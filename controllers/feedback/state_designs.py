@@ -20,6 +20,7 @@ import control
 import numpy as np
 
 from isolator.analysis.linear import FORCE_INPUTS, LinearModel
+from isolator.analysis.signal_names import labels, signals
 from isolator.errors import OptimisationError, ParameterError
 from isolator.scenario.arguments import check_public
 
@@ -87,7 +88,7 @@ def lqr(
                                     np.eye(sx.size), np.eye(su.size))
     gain = su[:, None] * np.asarray(gain_scaled, dtype=float) / sx[None, :]
     system = control.ss(np.zeros((0, 0)), np.zeros((0, 12)), np.zeros((b.shape[1], 0)), -gain,
-                        inputs=list(MEASUREMENTS), outputs=actuator_labels(lin.scenario), name="lqr")
+                        inputs=list(MEASUREMENTS), outputs=signals(actuator_labels(lin.scenario)), name="lqr")
     return Controller("lqr", system, sample_rate,
                       f"LQR, Bryson weights: {max_displacement:.3g} m, {max_rotation:.3g} rad, "
                       f"{max_velocity:.3g} m/s, {max_rate:.3g} rad/s, max_force per actuator; "
@@ -147,8 +148,8 @@ def hinf(
     slycot = import_slycot()
     _measured_state(lin, "hinf")
     a, b2 = actuated(lin)
-    labels = list(lin.system.input_labels)
-    bw = np.asarray(lin.system.B, dtype=float)[:, [labels.index(n) for n in FORCE_INPUTS]]
+    names = labels(lin.system.input_labels)
+    bw = np.asarray(lin.system.B, dtype=float)[:, [names.index(n) for n in FORCE_INPUTS]]
     d = positive(disturbance, "disturbance")
     eps = positive(noise, "noise")
     sx, su = _scales(lin, max_displacement, max_rotation, max_velocity, max_rate)
@@ -175,7 +176,7 @@ def hinf(
     # scaled measurement x / sx in, scaled force u / su out
     system = control.ss(k.A, np.asarray(k.B) / sx[None, :], su[:, None] * np.asarray(k.C),
                         su[:, None] * np.asarray(k.D) / sx[None, :], inputs=list(MEASUREMENTS),
-                        outputs=actuator_labels(lin.scenario), name="hinf")
+                        outputs=signals(actuator_labels(lin.scenario)), name="hinf")
     return Controller("hinf", system, sample_rate,
                       f"H-infinity, gamma {float(gamma):.3g}: Bryson weights {max_displacement:.3g} m, "
                       f"{max_rotation:.3g} rad, {max_velocity:.3g} m/s, {max_rate:.3g} rad/s; "

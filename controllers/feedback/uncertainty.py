@@ -10,7 +10,6 @@ to check (the scheme is in its description).
 from __future__ import annotations
 
 import itertools
-import json
 import math
 import re
 from collections.abc import Mapping, Sequence
@@ -25,7 +24,8 @@ from isolator.errors import ParameterError
 from isolator.model.names import expand_changes
 from isolator.model.parameters import ParameterLayout
 from isolator.scenario.arguments import check_public
-from isolator.scenario.files import read_input_text
+from isolator.scenario.files import parse_json, read_input_text
+from isolator.scenario.names import escaped
 from isolator.scenario.rules import closest
 from isolator.simulation.scaling import scaled_parameter_sets
 
@@ -223,11 +223,7 @@ def uncertainty_from_calibration(path: str | Path, unidentified: bool = False) -
         ``unidentified``) none with a finite ``std``.
     """
     text = read_input_text(path, "calibration JSON", error=ParameterError, bom=False)
-    try:
-        data = json.loads(text)
-    except json.JSONDecodeError as error:  # its position only: the message of the decoder quotes no content
-        raise ParameterError(f"{path}: not a calibration JSON (line {error.lineno}, column {error.colno}: "
-                             f"{error.msg})") from None
+    data = parse_json(text, escaped(path, 120))
     parameters = data.get("parameters") if isinstance(data, dict) else None
     if not isinstance(parameters, dict) or not parameters:
         raise ParameterError(f"{path}: no 'parameters' in the calibration JSON (as isolator calibrate --json "

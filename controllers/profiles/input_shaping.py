@@ -19,6 +19,7 @@ import numpy as np
 
 from controllers.feedforward.wrench import carriage_inertia_wrench
 from isolator.analysis.linear import linearise
+from isolator.analysis.signal_names import labels
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -92,7 +93,7 @@ def dominant_modes(scenario: Scenario, carriage: int, peaks: Sequence[float] | N
     lin = linearise(scenario, positions=finals)
     sys = lin.system
     a, b, c = np.asarray(sys.A), np.asarray(sys.B), np.asarray(sys.C)[:6]
-    wrench_cols = [list(sys.input_labels).index(n) for n in ("force:x", "force:y", "force:z",
+    wrench_cols = [labels(sys.input_labels).index(n) for n in ("force:x", "force:y", "force:z",
                                                             "torque:x", "torque:y", "torque:z")]
     unit = np.zeros((finals.size, 1))
     unit[carriage] = 1.0

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from scipy.linalg import matrix_balance
 
+from isolator.analysis.signal_names import labels
 from isolator.errors import ParameterError
 from isolator.scenario.files import check_memory
 
@@ -53,8 +54,8 @@ def state_space_response(
     f = f.ravel()
     if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f < 0):
         raise ParameterError("frequency_hz: must be finite frequencies >= 0 Hz")
-    iu = _index(inputs, list(system.input_labels), "inputs")
-    iy = _index(outputs, list(system.output_labels), "outputs")
+    iu = _index(inputs, labels(system.input_labels), "inputs")
+    iy = _index(outputs, labels(system.output_labels), "outputs")
     n_states = np.asarray(system.A).shape[0]  # each frequency's resolvent, states and response (complex)
     check_memory(16.0 * f.size * (2 * n_states * n_states + n_states * len(iu) + len(iy) * len(iu)),
                  f"frequency_hz: {f.size} frequencies", "ask for fewer frequencies")

@@ -30,6 +30,7 @@ import numpy as np
 from isolator.analysis.elastic_outputs import point_rows, sensor_shapes
 from isolator.analysis.frequency_response import state_space_response
 from isolator.analysis.sensor_outputs import sensor_response, sensor_rows
+from isolator.analysis.signal_names import labels, signals, to_control
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
@@ -186,11 +187,11 @@ class LinearModel:
     # -- names -------------------------------------------------------------------
     @property
     def input_names(self) -> list[str]:
-        return list(self.system.input_labels)
+        return labels(self.system.input_labels)
 
     @property
     def output_names(self) -> list[str]:
-        return list(self.system.output_labels)
+        return labels(self.system.output_labels)
 
     # -- analyses ----------------------------------------------------------------
     def frequency_response(
@@ -388,8 +389,8 @@ def _state_space(
     c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1, sensor_shapes(scenario))
     return control.ss(
         a, a @ b1 + b0, np.vstack([c, c_sensors]), np.vstack([c @ b1, d_sensors]),
-        inputs=inputs, outputs=[*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)], states=states,
-        name=scenario.name,
+        inputs=signals(inputs), outputs=signals([*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)]),
+        states=signals(states), name=to_control(scenario.name),
     )
 
 

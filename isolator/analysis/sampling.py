@@ -6,14 +6,37 @@ and checks of :mod:`controllers.feedback` (``SensorPlant.discrete``, the robustn
 
 from __future__ import annotations
 
-import math
+import numbers
 
 import numpy as np
 from scipy.linalg import expm
 
 from isolator.errors import ParameterError
 
-__all__ = ["closed_loop_matrix", "sample_held"]
+__all__ = ["MAX_SAMPLE_RATE", "check_sample_rate", "closed_loop_matrix", "sample_held"]
+
+#: the fastest rate [Hz] a digital controller may have, whichever command designs, reads or runs it: the
+#: fastest grid a simulation steps a controller on
+MAX_SAMPLE_RATE = 100e3
+
+
+def check_sample_rate(rate: object, key: str = "sample_rate") -> float:
+    """A controller's sample rate [Hz] as a float, by the one rule every command follows: a number > 0 and at
+    most :data:`MAX_SAMPLE_RATE`; else one :class:`ParameterError` naming ``key``.
+
+    Examples
+    --------
+    >>> check_sample_rate(2000)
+    2000.0
+    >>> check_sample_rate(1e300)
+    Traceback (most recent call last):
+    ...
+    isolator.errors.ParameterError: sample_rate: must be a rate > 0 Hz and at most 100000 Hz (the fastest grid ...
+    """
+    if isinstance(rate, bool) or not isinstance(rate, numbers.Real) or not 0 < float(rate) <= MAX_SAMPLE_RATE:
+        raise ParameterError(f"{key}: must be a rate > 0 Hz and at most {MAX_SAMPLE_RATE:g} Hz (the fastest grid "
+                             f"a simulation steps a controller on), got {rate!r}")
+    return float(rate)
 
 
 def sample_held(matrices: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray], m: int, sample_rate: float,
@@ -44,8 +67,7 @@ def sample_held(matrices: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
         The discrete ``(A, B, C, D)``: states the continuous plant's, then the delayed command (with
         ``delay``), then the command applied before the sample (with a direct feedthrough).
     """
-    if not (isinstance(sample_rate, int | float) and math.isfinite(sample_rate) and sample_rate > 0):
-        raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {sample_rate!r}")
+    check_sample_rate(sample_rate)
     a, b, c, d = (np.asarray(x, dtype=float) for x in matrices)
     n, nu = a.shape[0], b.shape[1]
     block = np.zeros((n + nu, n + nu))

@@ -25,6 +25,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from isolator.analysis.frequency_response import state_space_response
+from isolator.analysis.signal_names import signals
 from isolator.scenario.sensors import Sensor
 
 if TYPE_CHECKING:  # python-control takes most of a second to import: imported where used
@@ -96,7 +97,7 @@ def sensor_response(system: control.StateSpace, sensors: Sequence[Sensor], rot0:
     a, b = np.asarray(system.A), np.asarray(system.B)
     c, d = displacement_rows(sensors, rot0, a.shape[0], b.shape[1], shapes)
     shifted = control.ss(a, b, c, c @ b1 + d, inputs=list(system.input_labels),
-                         outputs=[f"s:{s.name}" for s in sensors])
+                         outputs=signals(f"s:{s.name}" for s in sensors))
     h = state_space_response(shifted, frequency_hz, inputs)
     jw = 2j * np.pi * np.asarray(frequency_hz, dtype=float).ravel()
     orders = np.array([s.order for s in sensors])

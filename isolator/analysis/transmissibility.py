@@ -10,6 +10,7 @@ import numpy as np
 from scipy.optimize import brentq, minimize_scalar
 
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS
+from isolator.analysis.signal_names import signals, to_control
 from isolator.model.equilibrium import DOF_NAMES
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
@@ -125,8 +126,8 @@ class FrequencyResponse:
         import control  # python-control takes most of a second to import: only when needed
         data = np.moveaxis(self.response, 0, -1)
         return control.frd(
-            data, 2 * np.pi * self.frequency_hz, inputs=list(self.inputs), outputs=list(DOF_NAMES),
-            name=f"{self.kind} of {self.lin.scenario.name}",
+            data, 2 * np.pi * self.frequency_hz, inputs=signals(self.inputs), outputs=list(DOF_NAMES),
+            name=to_control(f"{self.kind} of {self.lin.scenario.name}"),
         )
 
     def to_dict(self) -> dict[str, Any]:

@@ -175,7 +175,7 @@ def _goodness(calibration: Calibration, experiments: list[FloorExperiment | Move
     files = {e.name: e.file.name for e in calibration.experiments}
     return {e.name: goodness_of_fit(e, files[e.name], outcome.residuals[e.name],
                                     len(calibration.parameters) * outcome.residuals[e.name].size / total,
-                                    curves[e.name].fitted)
+                                    curves[e.name].fitted, curves[e.name].nominal)
             for e in experiments}
 
 

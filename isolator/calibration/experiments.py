@@ -32,7 +32,7 @@ from isolator.calibration.spectra import FrfEstimate, h1_estimate
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.sensors import Sensor
 
-__all__ = ["FloorExperiment", "MoveExperiment", "Residuals", "noise_estimate", "prepare"]
+__all__ = ["FloorExperiment", "MoveExperiment", "Residuals", "check_time_columns", "noise_estimate", "prepare"]
 
 #: forward-difference step in a parameter's logarithm (move experiments)
 LOG_STEP = 1e-6
@@ -113,10 +113,12 @@ class FloorExperiment:
         start = round(self.warm * record.rate)
         x = np.array([record.channels[s.name] for s in floor])
         y = np.array([record.channels[s.name] for s in table])
+        # the record's channels in their noise's sigma (where a misfit's bad sample is looked for)
+        self.t, self.samples = record.t, np.array([v / noise_estimate(v) for v in (*y, *x)])
         try:
             estimate = h1_estimate(x[:, start:], y[:, start:], record.rate, self.segment)
         except ParameterError as exc:
-            raise ScenarioError(f"{key}: {exc}") from None
+            raise ScenarioError(f"{key} ({record.path.name}): {exc}") from None
         low, high = experiment.frequency
         band = (estimate.f >= low) & (estimate.f <= high) & (estimate.f > 0) & np.all(
             np.isfinite(estimate.H), axis=(0, 1)) & np.all(np.isfinite(estimate.variance), axis=(0, 1))
@@ -216,8 +218,38 @@ def _warn_input_noise(key: str, floor: tuple[Sensor, ...], x: np.ndarray, rate: 
                           "floor excitation removes it)", stacklevel=3)
 
 
+def check_time_columns(calibration: Calibration, records: dict[str, Record]) -> None:
+    """Refuse, before any spectrum or simulation, a record sampled too slowly for its experiment: a floor
+    experiment's band, a move's table modes (the highest at rest) need a rate above twice their frequency. A
+    record whose rate would do a thousand times faster most likely has its ``t`` in milliseconds: said so.
+
+    Raises
+    ------
+    ScenarioError
+        Naming the experiment, its file, its rate and what it needs.
+    """
+    highest: float | None = None
+    for e in calibration.experiments:
+        record = records[e.name]
+        if e.kind == "floor":
+            need, what = e.frequency[1], f"its band's top, {e.frequency[1]:.4g} Hz"
+        else:
+            if highest is None:
+                highest = float(np.max(modes(linearise(calibration.scenario)).frequencies_hz))
+            need, what = highest, f"the table's highest mode, {highest:.4g} Hz"
+        rate = record.rate
+        if rate > 2.0 * need:
+            continue
+        unit = ("; is its t column in milliseconds? (t is in seconds)" if rate * 1e3 > 2.0 * need else "")
+        raise ScenarioError(f"{e.key}: the record {record.path.name} is sampled at {rate:.4g} Hz (samples "
+                            f"{1.0 / rate:.4g} s apart), too slow for {what}: it needs more than "
+                            f"{2.0 * need:.4g} Hz{unit}")
+
+
 def prepare(calibration: Calibration, records: dict[str, Record]) -> list[FloorExperiment | MoveExperiment]:
-    """Each experiment with its record (by experiment name)."""
+    """Each experiment with its record (by experiment name), the records' time columns checked first
+    (:func:`check_time_columns`)."""
+    check_time_columns(calibration, records)
     out: list[FloorExperiment | MoveExperiment] = []
     for e in calibration.experiments:
         kind = FloorExperiment if e.kind == "floor" else MoveExperiment

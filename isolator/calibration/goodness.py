@@ -15,10 +15,14 @@ the noise model the ratio is ``chi2(nu) / nu`` with ``nu`` the experiment's effe
 - floor: the bins' real and imaginary parts over the equivalent noise bandwidth (correlated neighbours).
 
 A fit fails the test where the ratio exceeds the ``1 -`` :data:`SIGNIFICANCE` quantile of ``chi2(nu) / nu``.
-A misfit is then explained where it can be: a record whose channels are a power of ten (within a factor of 2)
-or ``1 / g`` times the model's (least-squares scale of the record on the fitted model) is in other units; a
-channel about ``-1`` times the model's (within a factor of 2) is a sensor whose direction is flipped; the table
-sensor whose channel holds the largest mean square residual is named.
+A misfit is then explained where it can be: a move whose residuals (a floor experiment whose record) jump at one
+instant (a jump from one sample to the next :data:`JUMP` times their typical one, at most :data:`FEW` samples)
+has a bad sample there (a spike, a step): its time and size in sigma (of the channel's noise) are named; a
+record whose channels are a power of ten (within a factor of 2) or ``1 / g`` times the model's in magnitude
+(RMS, against the nominal model: a fit forced by a record in other units is no reference) is in other units; a
+channel of the model's magnitude (within a factor of 2) but about ``-1`` times it (least-squares scale on the
+fitted model) is a sensor whose direction is flipped; the table sensor whose channel holds the largest mean
+square residual is named.
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import numpy as np
 from isolator.calibration.experiments import ENBW_HANN, FloorExperiment, MoveExperiment
 from isolator.scenario.sensors import Sensor
 
-__all__ = ["NOISE_ESTIMATE_SPREAD", "SIGNIFICANCE", "Goodness", "goodness_of_fit", "misfit_message"]
+__all__ = ["FEW", "JUMP", "NOISE_ESTIMATE_SPREAD", "SIGNIFICANCE", "Goodness", "goodness_of_fit", "misfit_message"]
 
 #: the test's false-alarm probability for one experiment at a fit within the noise
 SIGNIFICANCE = 1e-3
@@ -40,6 +44,11 @@ SIGNIFICANCE = 1e-3
 NOISE_ESTIMATE_SPREAD = 1.42
 #: standard gravity [m/s^2]: a record in g is 1/g times the model's
 GRAVITY = 9.80665
+#: a jump of the residuals from one sample to the next this many times their typical one (robust spread) is a
+#: bad sample (white noise: the largest of a million is about 5)
+JUMP = 12.0
+#: the most samples such jumps may touch for the misfit to be named as sitting there
+FEW = 3
 #: units a record in another unit most likely used, by quantity and power of ten of its scale on the model's
 _UNITS = {"acceleration": {3: "mm/s^2", 6: "um/s^2", 9: "nm/s^2"},
           "velocity": {3: "mm/s", 6: "um/s", 9: "nm/s"},
@@ -69,6 +78,9 @@ class Goodness:
         Each table sensor's least-squares scale of its record on the fitted model (1 when they agree).
     diagnosis : str
         What the misfit most likely means ("" when nothing stands out).
+    jump : tuple of (str, float, float) or None
+        Where a move's misfit sits when a few samples carry it: the sensor, the time [s] and the jump's size
+        [sigma of the channel's noise].
     """
 
     experiment: str
@@ -79,6 +91,7 @@ class Goodness:
     worst: str
     scales: dict[str, float]
     diagnosis: str
+    jump: tuple[str, float, float] | None = None
 
     @property
     def ok(self) -> bool:
@@ -87,7 +100,7 @@ class Goodness:
 
 
 def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: np.ndarray, n_params: float,
-                    fitted: np.ndarray) -> Goodness:
+                    fitted: np.ndarray, nominal: np.ndarray | None = None) -> Goodness:
     """The goodness of one experiment's fit.
 
     Parameters
@@ -102,6 +115,9 @@ def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: 
     fitted : ndarray
         The fitted model's prediction: the H1 (table sensors, floor sensors, bins) of a floor experiment, the
         signals (table sensors, samples) of a move.
+    nominal : ndarray, optional
+        The same at the scenario's values (the magnitudes a record in other units is judged by; default
+        ``fitted``).
 
     Returns
     -------
@@ -109,12 +125,16 @@ def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: 
     """
     sensors = experiment.table
     m = r.size
+    reference = np.asarray(fitted if nominal is None else nominal).reshape(len(sensors), -1)
+    jump = None
     if isinstance(experiment, FloorExperiment):
         expected, nu = 1.0 / ENBW_HANN, max((m - n_params) / ENBW_HANN, 1.0)
         per_channel = (r.reshape(2, len(sensors), -1) ** 2).mean(axis=(0, 2))
         measured = experiment.H1.reshape(len(sensors), -1)
         model = np.asarray(fitted).reshape(len(sensors), -1)
+        jump = _jump(experiment.samples, experiment.t, (*sensors, *experiment.floor))
     else:
+        jump = _jump(r.reshape(len(sensors), -1), experiment.t, sensors)
         expected = 1.0
         per_channel = (r.reshape(len(sensors), -1) ** 2).mean(axis=1)
         measured, model = experiment.y, np.asarray(fitted)
@@ -127,9 +147,41 @@ def goodness_of_fit(experiment: FloorExperiment | MoveExperiment, file: str, r: 
 
     limit = float(stats.chi2.ppf(1.0 - SIGNIFICANCE, nu) / nu)
     scales = {s.name: _scale(a, b) for s, a, b in zip(sensors, measured, model, strict=True)}
+    sizes = {s.name: _magnitude(a, b) for s, a, b in zip(sensors, measured, reference, strict=True)}
     worst = sensors[int(np.argmax(per_channel))].name
     kind = "floor" if isinstance(experiment, FloorExperiment) else "move"
-    return Goodness(experiment.name, file, ratio, limit, nu, worst, scales, _diagnosis(kind, file, sensors, scales))
+    judged = {name: (math.nan if jump is not None and name == jump[0] else k) for name, k in sizes.items()}
+    diagnosis = _diagnosis(kind, file, sensors, scales, judged)  # a channel with a bad sample: no unit judged
+    if jump is not None:
+        where = (f"the misfit sits at t = {jump[1]:.6g} s in {jump[0]}: a jump of {jump[2]:.3g} sigma from one "
+                 f"sample to the next (a spike or a step in the record?)")
+        diagnosis = f"{where}; {diagnosis}" if diagnosis else where
+    return Goodness(experiment.name, file, ratio, limit, nu, worst, scales, diagnosis, jump)
+
+
+def _jump(r: np.ndarray, t: np.ndarray, sensors: tuple[Sensor, ...]) -> tuple[str, float, float] | None:
+    """Where a few samples carry a misfit: each channel (a move's residuals, a floor record's samples, in sigma)
+    jumping from one sample to the next :data:`JUMP` times the typical jump, at no more than :data:`FEW`
+    neighbouring samples (a spike: two jumps, up and down; a step: one). The sensor, the time [s] and the largest
+    jump [sigma]; else None."""
+    if r.shape[1] < 8:
+        return None
+    d = np.diff(r, axis=1)
+    centre = np.median(d, axis=1, keepdims=True)
+    spread = 1.4826 * np.median(np.abs(d - centre), axis=1, keepdims=True)
+    z = np.abs(d - centre) / np.maximum(spread, 1e-300)
+    channels, at = np.nonzero(z > JUMP)
+    if at.size == 0 or at.max() - at.min() >= FEW:
+        return None
+    k = int(np.argmax(np.abs(d[channels, at])))
+    c, i = int(channels[k]), int(at[k])
+    return sensors[c].name, float(t[i + 1]), float(abs(d[c, i]))
+
+
+def _magnitude(measured: np.ndarray, model: np.ndarray) -> float:
+    """The RMS of ``measured`` over the RMS of ``model`` (NaN without a model signal)."""
+    den = float(np.sqrt(np.mean(np.abs(model) ** 2)))
+    return float(np.sqrt(np.mean(np.abs(measured) ** 2))) / den if den > 0 else math.nan
 
 
 def _scale(measured: np.ndarray, model: np.ndarray) -> float:
@@ -146,12 +198,14 @@ def _power_of_ten(k: float) -> int | None:
     return j if j != 0 and abs(math.log10(k) - j) < math.log10(2.0) else None
 
 
-def _diagnosis(kind: str, file: str, sensors: tuple[Sensor, ...], scales: dict[str, float]) -> str:
-    """A record in other units, or flipped sensors, from each channel's scale on the model."""
+def _diagnosis(kind: str, file: str, sensors: tuple[Sensor, ...], scales: dict[str, float],
+               sizes: dict[str, float]) -> str:
+    """A record in other units (each channel's magnitude on the nominal model), or flipped sensors (of the
+    model's magnitude, their scale on the fitted model about -1)."""
     by_unit: dict[tuple[str, str], list[str]] = {}
-    flipped = [s.name for s in sensors if -2.0 < scales[s.name] < -0.5]  # -1 within a factor of 2
+    flipped = [s.name for s in sensors if -2.0 < scales[s.name] < -0.5 and 0.5 < sizes[s.name] < 2.0]
     for s in sensors:
-        k = scales[s.name]
+        k = sizes[s.name]
         if s.quantity == "acceleration" and kind == "move" and abs(k * GRAVITY - 1) < 0.1:
             by_unit.setdefault(("1/g", "g"), []).append(s.name)
             continue
@@ -185,6 +239,8 @@ def misfit_message(failed: list[Goodness], accepted: bool = False) -> str:
         text = (f"experiment '{g.experiment}' ({g.file}): weighted residual variance {g.ratio:.3g} times the "
                 f"noise's (at most {g.limit:.3g} for a fit within the noise); {g.worst} misfits most")
         parts.append(text + (f"; {g.diagnosis}" if g.diagnosis else ""))
-    advice = "check the records' units and the sensors' directions, or fit more parameters"
+    advice = ("check the records at the instants named (a bad sample is no model's to explain)"
+              if all(g.jump is not None for g in failed) else
+              "check the records' units and the sensors' directions, or fit more parameters")
     tail = f" (given anyway: {advice})" if accepted else f" ({advice}; --accept-misfit gives the fit anyway)"
     return "calibrate: the fit does not explain the records: " + "; ".join(parts) + tail

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
-from isolator.scenario.files import check_input, read_input_text
+from isolator.scenario.files import check_input, read_text_table
 from isolator.scenario.names import escaped, excerpt
 from isolator.scenario.rules import closest
 
@@ -35,6 +35,8 @@ DIRECTIONS = {"+X": 1, "X": 1, "-X": -1, "+Y": 2, "Y": 2, "-Y": -2, "+Z": 3, "Z"
 #: memory reading a UFF file takes per byte of it (pyuff holds its text and the values)
 _UFF_FACTOR = 8.0
 _AXES = {1: "X", 2: "Y", 3: "Z", 4: "RX", 5: "RY", 6: "RZ"}
+#: what a CSV record is, as messages say it
+_EXPECTED = "a CSV record: a header line t,<sensor>,... (the time [s], one column per sensor) and rows of numbers"
 
 
 @dataclass(frozen=True)
@@ -124,7 +126,7 @@ def _read_csv(file: Path, where: str, sensors: Sequence[str]) -> tuple[np.ndarra
     ``numpy.loadtxt``; anything else, and any file that fails a check, is read again row by row
     with :mod:`csv` so that the error names its line and column.
     """
-    text = read_input_text(file, "")
+    text = read_text_table(file, "", _EXPECTED)
     lines = text.splitlines()
     head = next((i for i, line in enumerate(lines) if line.strip()), None)
     if head is None:
@@ -184,13 +186,15 @@ def _columns(
 
 
 def _check_header(where: str, header: list[str], sensors: Sequence[str]) -> None:
-    """Refuse a header without ``t``, with a column naming no sensor, repeated or without a sensor column."""
-    got = excerpt(",".join(header))
+    """Refuse a header without ``t``, with a column naming no sensor, repeated or without a sensor column.
+
+    Until the header has its ``t`` column the file is not known to be a record: nothing of it is quoted (it
+    may be any file, a secret's first line)."""
     if "t" not in header:
-        raise ScenarioError(f"{where}: no column 't' (the time [s]); header: '{got}'")
+        raise ScenarioError(f"{where}: no column 't' (the time [s]); expected {_EXPECTED}")
     for j, name in enumerate(header):
         if not name:
-            raise ScenarioError(f"{where}: column {j + 1} has no name (header: '{got}')")
+            raise ScenarioError(f"{where}: column {j + 1} has no name (the header: t and one sensor per column)")
         if header.count(name) > 1:
             raise ScenarioError(f"{where}: column '{excerpt(name)}' appears {header.count(name)} times")
         if name != "t" and name not in sensors:
@@ -276,9 +280,9 @@ def _read_uff(
         sets = handle.read_sets(indices) if indices else []
     except ScenarioError:
         raise
-    except Exception as exc:  # pyuff raises bare Exceptions on malformed files
-        reason = excerpt(" ".join(str(exc).split())) or type(exc).__name__
-        raise ScenarioError(f"{where}: cannot be read as a universal file ({reason})") from None
+    except Exception as exc:  # pyuff raises bare Exceptions on malformed files, their text quoting the file's
+        raise ScenarioError(f"{where}: cannot be read as a universal file ({type(exc).__name__}; expected UFF "
+                            "datasets 58 of the sensors' signals)") from None
     sets = [sets] if isinstance(sets, dict) else list(sets)
     found: dict[str, tuple[np.ndarray, int, float, float, str]] = {}
     held: list[str] = []

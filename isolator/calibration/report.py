@@ -6,6 +6,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from isolator.calibration.result import CalibrationResult
+from isolator.scenario.output_files import write_output_text
 
 __all__ = ["write_report"]
 
@@ -47,5 +48,5 @@ def write_report(result: CalibrationResult, folder: str | Path) -> Path:
         lines.append(f"| {i + 1} | {a:.4g} | {b:.4g} | {za:.3f} | {zb:.3f} |")
     lines += ["", "![calibration](calibration.png)", ""]
     path = folder / "report.md"
-    path.write_text("\n".join(lines))
+    write_output_text(path, "\n".join(lines))
     return path

@@ -14,6 +14,7 @@ from isolator.calibration.definition import Calibration
 from isolator.calibration.fit import Fit
 from isolator.calibration.goodness import Goodness
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.output_files import save_figure_file
 from isolator.scenario.writing import write_toml
 
 if TYPE_CHECKING:
@@ -170,5 +171,5 @@ class CalibrationResult:
 
         fig = calibration_figure(self)
         if path is not None:
-            fig.savefig(path, dpi=110)
+            save_figure_file(fig, path, dpi=110)
         return fig

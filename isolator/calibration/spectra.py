@@ -20,6 +20,7 @@ import numpy as np
 from scipy import fft
 
 from isolator.errors import ParameterError
+from isolator.scenario.files import check_memory
 
 __all__ = ["COND_LIMIT", "MIN_SEGMENT_SAMPLES", "POWER_FLOOR", "FrfEstimate", "effective_averages", "h1_estimate"]
 
@@ -160,6 +161,10 @@ def h1_estimate(inputs: np.ndarray, outputs: np.ndarray, rate: float, segment: f
     if n_d <= q:
         raise ParameterError(f"segment: {count} segments ({n_d:.3g} independent averages) for {q} inputs; the "
                              f"estimate needs more averages than inputs: give a shorter segment or a longer record")
+    channels = q + y.shape[0]  # the segments' spectra and the spectral matrix, a few copies each, checked first
+    check_memory(64.0 * (n * channels + (nperseg // 2 + 1) * channels**2),
+                 f"segment: {n} samples of {channels} channels in segments of {nperseg}",
+                 "give a shorter segment or a shorter record")
     _check_constant(x, "inputs")
     _check_constant(y, "outputs")
     f, G = _spectral_matrix(np.vstack([x, y]), rate, nperseg)

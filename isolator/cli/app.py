@@ -28,7 +28,7 @@ from typing import NoReturn
 import numpy as np
 
 from isolator.cli import commands, fmu_command, sweep_command
-from isolator.cli.helpers import MADE_FOLDERS, command_words, remove_made_folders
+from isolator.cli.helpers import MADE_FOLDERS, OUTPUT_OPTIONS, command_words, output_failure, remove_made_folders
 from isolator.errors import IsolatorError
 from isolator.scenario.names import escaped
 
@@ -72,6 +72,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.exit(2, f"isolator: error: unrecognized arguments for '{prog}': {escaped(' '.join(extra))} "
                     f"(see '{prog} --help')\n")
     MADE_FOLDERS.clear()
+    OUTPUT_OPTIONS.clear()
     with warnings.catch_warnings(record=True) as caught, _terminated_as_interrupted():  # the filters as they
         warnings.simplefilter("always", RuntimeWarning)  # are (deprecations stay hidden)
         status = _run(args)
@@ -99,7 +100,7 @@ def _run(args: argparse.Namespace) -> int:
         sys.stderr.close()
         return 0
     except OSError as exc:  # writing an output (the paths were checked before any work)
-        return _error(f"{exc.filename or 'output'}: {exc.strerror or exc}")
+        return _error(output_failure(exc))
     except Terminated:
         print("isolator: terminated", file=sys.stderr)
         return 128 + signal.SIGTERM

@@ -30,7 +30,7 @@ from isolator.cli.sequence_command import register as register_sequence
 from isolator.errors import ParameterError
 from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
-from isolator.scenario.files import read_input_text
+from isolator.scenario.files import parse_json, read_input_text
 from isolator.scenario.names import escaped
 from isolator.scenario.reader import bundled_scenarios, load_scenario
 from isolator.simulation.band import Band, parse_half_widths
@@ -127,7 +127,7 @@ def register(sub: Any) -> None:
 
 def _scenarios(args: argparse.Namespace) -> int:
     for name, path in sorted(bundled_scenarios().items()):
-        print(f"{name}\t{path}")
+        print(f"{name}\t{escaped(path)}")
     return 0
 
 
@@ -212,11 +212,7 @@ def _band_option(args: argparse.Namespace) -> Band | None:
     if args.band_json is None:
         return None
     text = read_input_text(args.band_json, "--band-json", error=ParameterError)
-    try:
-        data = json.loads(text)
-    except ValueError as exc:
-        raise ParameterError(f"--band-json: '{escaped(args.band_json, 120)}' is not JSON "
-                             f"({type(exc).__name__})") from None
+    data = parse_json(text, f"--band-json: '{escaped(args.band_json, 120)}'")
     if isinstance(data, dict) and isinstance(data.get("band"), dict):
         data = data["band"]
     return Band.from_dict(data, "--band-json")

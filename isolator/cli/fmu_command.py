@@ -10,6 +10,7 @@ from typing import Any
 
 from isolator.cli.helpers import output_path, scenario_argument
 from isolator.errors import ParameterError
+from isolator.scenario.names import escaped
 from isolator.scenario.reader import load_scenario
 
 __all__ = ["parse_sets", "register"]
@@ -60,5 +61,5 @@ def _fmu(args: argparse.Namespace) -> int:
     names = [n.strip() for n in args.parameters.split(",") if n.strip()]
     written = write_fmu(scenario, out, args.carriages, names, parse_sets(args.sets),
                         keys={"out": "--out", "parameters": "--parameters", "changes": "--set"})
-    print(f"wrote {written}")
+    print(f"wrote {escaped(written)}")
     return 0

@@ -19,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from isolator.errors import ParameterError
 from isolator.scenario.names import escaped
+from isolator.scenario.output_files import save_figure_file
 from isolator.scenario.reader import DEFAULT_SCENARIO
 from isolator.simulation.resources import available_memory, check_memory, check_run_memory
 
@@ -29,6 +30,7 @@ __all__ = [
     "API_WORDS",
     "CLI_NAMES",
     "MADE_FOLDERS",
+    "OUTPUT_OPTIONS",
     "Handler",
     "available_memory",
     "check_memory",
@@ -37,6 +39,7 @@ __all__ = [
     "count",
     "default_output",
     "figure_path",
+    "output_failure",
     "output_folder",
     "output_path",
     "remove_made_folders",
@@ -47,6 +50,7 @@ __all__ = [
     "scheduler_client",
     "seed",
     "use_agg",
+    "written",
 ]
 
 #: a subcommand's handler: the parsed arguments in, the exit status out
@@ -57,6 +61,8 @@ NAME_LENGTH = 100
 QUOTED = 60
 #: the folders :func:`output_folder` made for the command running now, deepest first
 MADE_FOLDERS: list[Path] = []
+#: the option that named each output file of the command running now (:func:`output_path`), by path
+OUTPUT_OPTIONS: dict[str, str] = {}
 
 
 def remove_made_folders() -> None:
@@ -168,7 +174,17 @@ def output_path(path: Path, option: str, suffixes: Sequence[str]) -> Path:
     output_folder(parent, option)
     if path.exists() and not os.access(path, os.W_OK):
         raise ParameterError(f"{option}: cannot write '{path}' (permission denied)")
+    OUTPUT_OPTIONS[str(path)] = option
     return path
+
+
+def output_failure(exc: OSError) -> str:
+    """The one line of an output that could not be written (:mod:`isolator.scenario.output_files` names the
+    file): the option that named it, the file, the reason (``--out out.csv: No space left on device``)."""
+    name = exc.filename
+    option = OUTPUT_OPTIONS.get(str(name), "") if name is not None else ""
+    reason = exc.strerror or str(exc) or type(exc).__name__
+    return f"{option} {name}: {reason}" if option else f"{name or 'output'}: {reason}"  # escaped when printed
 
 
 def figure_path(path: Path | None, option: str) -> Path | None:
@@ -182,11 +198,13 @@ def figure_path(path: Path | None, option: str) -> Path | None:
 
 
 def save_figure(fig: Any, path: Path) -> None:
-    """Write a matplotlib figure at 120 dpi and close it."""
+    """Write a matplotlib figure at 120 dpi (whole or not at all: :func:`save_figure_file`) and close it."""
     import matplotlib.pyplot as plt
 
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
+    try:
+        save_figure_file(fig, path, dpi=120)
+    finally:
+        plt.close(fig)
 
 
 def report(
@@ -199,8 +217,14 @@ def report(
     print(text)
     for label, path in files:
         if path is not None:
-            print(f"{label}: {path}")
+            print(written(label, path))
     return 0
+
+
+def written(label: str, path: object) -> str:
+    """The ``label: path`` line of a file written, the path escaped (:func:`escaped`: a name's control
+    characters cannot drive the terminal)."""
+    return f"{label}: {escaped(path)}"
 
 
 def scheduler_arguments(parser: argparse.ArgumentParser, where: Any = None) -> None:

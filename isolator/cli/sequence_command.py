@@ -10,7 +10,7 @@ from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
-from isolator.cli.helpers import figure_path, output_path, save_figure, scenario_argument, use_agg
+from isolator.cli.helpers import figure_path, output_path, save_figure, scenario_argument, use_agg, written
 from isolator.errors import ParameterError, ScenarioError
 from isolator.model.variants import MODEL_KINDS
 from isolator.scenario.definitions import Scenario
@@ -94,7 +94,7 @@ def _sequence(args: argparse.Namespace) -> int:
         print(result.summary())
         for label, path in (("steps", out), ("response", response), ("figure", plot)):
             if path is not None:
-                print(f"{label}: {path}")
+                print(written(label, path))
     if result.unsettled is not None:
         print(f"isolator: error: step {result.unsettled} did not settle within the run's "
               f"{result.duration:g} s ([simulation] duration); later steps did not run", file=sys.stderr)

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import re
 import shlex
 import sys
 from concurrent.futures import Executor
@@ -23,10 +24,13 @@ from isolator.cli.helpers import (
     scheduler_client,
     seed,
     use_agg,
+    written,
 )
 from isolator.errors import ExecutorError, ParameterError
 from isolator.model.variants import MODEL_KINDS
+from isolator.scenario.names import escaped
 from isolator.sweep import METHODS, sweep
+from isolator.sweep.designs import check_design_count
 from isolator.sweep.output import SUFFIXES, read_columns, staging_path
 from isolator.sweep.sweep import check_workers
 
@@ -129,6 +133,7 @@ def parse_values(text: str, option: str, sampled: bool) -> list[float]:
         n = 0
     if n < 1:
         raise ParameterError(f"{option}: COUNT must be a whole number >= 1, got '{parts[2]}'")
+    check_design_count(n, 1, option)
     if len(parts) == 4:
         if start <= 0 or stop <= 0:
             raise ParameterError(f"{option}: a geometric range (:log) needs START and STOP > 0, got '{text}'")
@@ -152,14 +157,17 @@ def _swept(args: argparse.Namespace) -> dict[str, dict[str, list[float]]]:
 
 
 #: how :func:`isolator.sweep.sweep`'s messages name its arguments, and the options this command names them by
-_WORDS = {"out: ": "--out: ", "force=True": "--force", "resume=True": "--resume", "the same sweep": "the same command"}
+_WORDS = {"out: ": "--out: ", "samples: ": "--samples: ", "force=True": "--force", "resume=True": "--resume",
+          "the same sweep": "the same command"}
+#: a swept column as the API names it (``set['table.mass']``), as this command's option (``--set table.mass``)
+_COLUMN = re.compile(r"\b(set|scale)\[(['\"])(.*?)\2\]")
 
 
 def _options_named(message: str) -> str:
     """A message of :func:`isolator.sweep.sweep` in this command's words (``--force``, not ``force=True``)."""
     for api, cli in _WORDS.items():
         message = message.replace(api, cli)
-    return message
+    return _COLUMN.sub(lambda m: f"--{m.group(1)} {m.group(3)}", message)
 
 
 def _rows_kept(out: Path) -> int:
@@ -213,8 +221,8 @@ def _sweep(args: argparse.Namespace) -> int:
         raise type(exc)(_options_named(str(exc))) from None
     except KeyboardInterrupt as stop:  # Ctrl-C, or SIGTERM (the app's Terminated: exit status 143)
         how = "terminated" if type(stop).__name__ == "Terminated" else "interrupted"
-        print(f"isolator: {how}: {_rows_kept(out)} row(s) kept in {out}; continue with: "
-              f"{_resume_command(args)}", file=sys.stderr)
+        print(f"isolator: {how}: {_rows_kept(out)} row(s) kept in {escaped(out)}; continue with: "
+              f"{escaped(_resume_command(args))}", file=sys.stderr)
         return 143 if how == "terminated" else 130
     print(result.summary())
     if figure is not None:
@@ -222,5 +230,5 @@ def _sweep(args: argparse.Namespace) -> int:
 
         use_agg()
         save_figure(plot_sweep(result), figure)
-        print(f"figure: {figure}")
+        print(written("figure", figure))
     return 0

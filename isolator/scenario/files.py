@@ -12,15 +12,19 @@ an arbitrary file.
 from __future__ import annotations
 
 import contextlib
+import json
 import os
+import re
 import stat
+import sys
 from collections.abc import Iterator
 from typing import BinaryIO
 
 from isolator.errors import IsolatorError, ParameterError, ScenarioError
 from isolator.scenario.names import escaped
 
-__all__ = ["READ_FACTOR", "available_memory", "check_input", "check_memory", "read_input", "read_input_text"]
+__all__ = ["READ_FACTOR", "available_memory", "check_input", "check_memory", "long_integer", "parse_json",
+           "read_input", "read_input_text", "read_text_table"]
 
 #: memory [bytes] reading a text table takes per byte of the file (the text, its lines, the cells as Python
 #: strings in lists: one- or two-character cells cost some 30 bytes each)
@@ -142,3 +146,94 @@ def read_input_text(path: str | os.PathLike[str], key: str, *, error: type[Isola
         where = f"{key}: '{escaped(path, _PATH)}'" if key else escaped(path, _PATH)
         raise error(f"{where}: not UTF-8 text (byte 0x{raw[exc.start]:02x} at offset "
                     f"{exc.start}); save it as UTF-8") from None
+
+
+def parse_json(text: str, where: str, *, error: type[IsolatorError] = ParameterError) -> object:
+    """JSON read strictly, every problem one ``error`` starting with ``where`` (a file, an option and its file).
+
+    Stricter than :func:`json.loads` where it silently picks an answer: a key given twice in one object
+    is refused naming the key (Python's decoder keeps the last one), and ``NaN``/``Infinity`` (no JSON
+    numbers) are refused; a syntax error names its line and column, never the content around it.
+
+    Examples
+    --------
+    >>> parse_json('{"a": 1}', "f.json")
+    {'a': 1}
+    >>> parse_json('{"a": 1, "a": 2}', "f.json")
+    Traceback (most recent call last):
+    ...
+    isolator.errors.ParameterError: f.json: the key 'a' is given twice in one JSON object (keep one)
+    """
+    def pairs(items: list[tuple[str, object]]) -> dict[str, object]:
+        out: dict[str, object] = {}
+        for key, value in items:
+            if key in out:
+                raise error(f"{where}: the key '{escaped(key, 40)}' is given twice in one JSON object (keep one)")
+            out[key] = value
+        return out
+
+    def constant(name: str) -> float:
+        raise error(f"{where}: {name} is not a JSON number (every number must be finite)")
+
+    try:
+        return json.loads(text, object_pairs_hook=pairs, parse_constant=constant)
+    except IsolatorError:
+        raise
+    except json.JSONDecodeError as exc:  # where, and the decoder's reason: no content quoted
+        raise error(f"{where}: cannot read as JSON (line {exc.lineno}, column {exc.colno}: {exc.msg})") from None
+    except RecursionError:
+        raise error(f"{where}: cannot read as JSON (nested too deeply)") from None
+    except ValueError:  # an integer of more digits than Python converts
+        raise error(f"{where}: {long_integer(text)}") from None
+
+
+def long_integer(text: str) -> str:
+    """Where ``text`` holds a whole number too long for Python to read (``sys.get_int_max_str_digits``), as a
+    message's reason: its line, the key before it on that line (if any) and its digits, never the number.
+
+    Examples
+    --------
+    >>> long_integer("[table]\\nmass = " + "1" * 5000)
+    "line 2: the number of 'mass' has 5000 digits (at most 4300 are read; no physical value needs more)"
+    """
+    most = sys.get_int_max_str_digits() or 4300
+    for number, line in enumerate(text.splitlines(), 1):
+        found = re.search(rf"\d(?:_?\d){{{most},}}", line)
+        if found:
+            keys = re.findall(r"([A-Za-z_][\w.-]*)[\"']?\s*[=:]", line[:found.start()])
+            whose = f" of '{escaped(keys[-1], 40)}'" if keys else ""
+            digits = sum(c.isdigit() for c in found.group())
+            return (f"line {number}: the number{whose} has {digits} digits (at most {most} are read; "
+                    "no physical value needs more)")
+    return f"a whole number longer than {most} digits (no physical value needs more)"
+
+
+#: the control characters no text table holds (all of C0 and C1 but tab, line feed, vertical tab, form feed and
+#: carriage return)
+_CONTROL = re.compile("[\x00-\x08\x0e-\x1f\x7f-\x9f]")
+
+
+def read_text_table(path: str | os.PathLike[str], key: str, expected: str, *,
+                    error: type[IsolatorError] = ScenarioError) -> str:
+    """:func:`read_input_text` of a file that must be a text table (CSV), refused without quoting any of it
+    when it holds a control character (a NUL, an escape: a binary file, ``/proc/self/environ``), naming the
+    line and saying what was ``expected`` (``a CSV record: a header t,<sensor>,... and rows of numbers``).
+
+    Examples
+    --------
+    >>> import tempfile, pathlib
+    >>> path = pathlib.Path(tempfile.mkdtemp()) / "r.csv"
+    >>> _ = path.write_bytes(b"SECRET=x\\x00PATH=/bin")
+    >>> read_text_table(path, "", "a CSV table")
+    Traceback (most recent call last):
+    ...
+    isolator.errors.ScenarioError: .../r.csv: line 1 holds the control character 0x00; expected a CSV table (a ...
+    """
+    text = read_input_text(path, key, error=error)
+    found = _CONTROL.search(text)
+    if found is not None:
+        where = f"{key}: '{escaped(path, _PATH)}'" if key else escaped(path, _PATH)
+        line = text.count("\n", 0, found.start()) + 1
+        raise error(f"{where}: line {line} holds the control character 0x{ord(found.group()):02x}; expected "
+                    f"{expected} (a text file)")
+    return text

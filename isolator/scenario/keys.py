@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any
 
 from isolator.errors import IsolatorError, ScenarioError
-from isolator.scenario.files import read_input
+from isolator.scenario.files import long_integer, read_input
 from isolator.scenario.names import escaped
 
 __all__ = ["TOP_LEVEL_KEYS", "KeyReader", "check_placement", "load_toml", "number", "number_list", "table_of_tables"]
@@ -33,27 +33,30 @@ def load_toml(path: Path, what: str = "scenario file") -> dict[str, Any]:
     """A TOML file's keys; a file that is not a regular one (:func:`~isolator.scenario.files.read_input`, named
     as ``what``), is not UTF-8, has a byte-order mark, is empty, is not valid TOML or nests too deeply is a
     :class:`ScenarioError` naming the file (and the line)."""
+    shown = escaped(path, 120)
     if path.is_dir():
-        raise ScenarioError(f"{path}: is a folder, not a {what}")
+        raise ScenarioError(f"{shown}: is a folder, not a {what}")
     raw = read_input(path, what)
     if raw.startswith(b"\xef\xbb\xbf"):
-        raise ScenarioError(f"{path}: starts with a byte-order mark (BOM), which TOML does not allow; "
+        raise ScenarioError(f"{shown}: starts with a byte-order mark (BOM), which TOML does not allow; "
                             "save it as UTF-8 without BOM")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         line = raw[: exc.start].count(b"\n") + 1
-        raise ScenarioError(f"{path} line {line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); "
+        raise ScenarioError(f"{shown} line {line}: not UTF-8 text (byte 0x{raw[exc.start]:02x}); "
                             "save the file as UTF-8") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: not valid TOML ({exc})") from None
+        raise ScenarioError(f"{shown}: not valid TOML ({exc})") from None
     except RecursionError:
-        raise ScenarioError(f"{path}: nested too deeply (arrays or tables inside each other hundreds of "
+        raise ScenarioError(f"{shown}: nested too deeply (arrays or tables inside each other hundreds of "
                             "levels deep)") from None
+    except ValueError:  # a whole number past Python's digit limit (tomllib's own errors are TOMLDecodeError)
+        raise ScenarioError(f"{shown} {long_integer(text)}") from None
     if not data:
-        raise ScenarioError(f"{path}: is empty (a scenario needs at least [table] and [[isolators]])")
+        raise ScenarioError(f"{shown}: is empty (a scenario needs at least [table] and [[isolators]])")
     return data
 
 

@@ -5,7 +5,9 @@ headers, column names of a sweep, messages on a terminal. So each name a scenari
 own, sensors, carriages, actuators, isolators, points, leveling groups, disturbances) follows one rule,
 :func:`check_name`: a string of at most :data:`MAX_NAME` printable characters (no control characters, no
 NUL, no line breaks, no invisible formatting characters such as bidirectional overrides), without leading
-or trailing spaces. :func:`check_names` adds that each name is used once in its section.
+or trailing spaces, and not beginning with ``=``, ``+``, ``-`` or ``@`` (:data:`FORMULA_STARTS`: a
+spreadsheet opening a CSV whose header holds such a name runs it as a formula). :func:`check_names` adds
+that each name is used once in its section.
 
 Text that is printed from an input and cannot be refused (a message quoting a file's header, a path)
 goes through :func:`escaped` first: every character that is not printable is written as its Python
@@ -19,12 +21,16 @@ from typing import Any
 
 from isolator.errors import ScenarioError
 
-__all__ = ["EXCERPT", "MAX_NAME", "check_name", "check_names", "check_scenario_names", "escaped", "excerpt"]
+__all__ = ["EXCERPT", "FORMULA_STARTS", "MAX_NAME", "check_name", "check_names", "check_scenario_names", "escaped",
+           "excerpt"]
 
 #: the longest name [characters]
 MAX_NAME = 100
 #: the most of a file's text (a header, a cell) a message quotes [characters]
 EXCERPT = 24
+#: the characters no name begins with: a spreadsheet reads a CSV cell beginning with one as a formula
+#: (``=HYPERLINK(...)`` in a column's header becomes a live link)
+FORMULA_STARTS = "=+-@"
 
 
 def escaped(text: object, limit: int | None = None) -> str:
@@ -76,7 +82,8 @@ def check_name(name: object, key: str, *, optional: bool = False, longest: int |
     ------
     ScenarioError
         Not a string, empty (unless ``optional``), longer than ``longest``, with a character that is
-        not printable, or with leading or trailing spaces; the name quoted escaped.
+        not printable, with leading or trailing spaces, or beginning with one of :data:`FORMULA_STARTS`;
+        the name quoted escaped.
 
     Examples
     --------
@@ -98,6 +105,9 @@ def check_name(name: object, key: str, *, optional: bool = False, longest: int |
         most = "" if longest is None else f"at most {longest} "
         raise ScenarioError(f"{key}: must be {most}printable characters (no control characters, line breaks or "
                             f"invisible formatting), got '{escaped(name, 40)}'")
+    if name[0] in FORMULA_STARTS:
+        raise ScenarioError(f"{key}: must not begin with '{name[0]}' (a spreadsheet opening a CSV with this name "
+                            f"in its header would run it as a formula), got '{escaped(name, 40)}'")
     return name
 
 

@@ -32,7 +32,7 @@ from isolator.scenario.flexible import read_feet, read_flexible
 from isolator.scenario.flexible_checks import check_flexible
 from isolator.scenario.ground_reader import read_spectrum
 from isolator.scenario.keys import KeyReader, load_toml, number, table_of_tables
-from isolator.scenario.names import MAX_NAME, escaped
+from isolator.scenario.names import FORMULA_STARTS, MAX_NAME, escaped
 from isolator.scenario.pneumatic import PneumaticIsolator
 from isolator.scenario.pneumatic_reader import read_pneumatic_isolator, read_pneumatics
 from isolator.scenario.profile_shapes import samples, scurve, trapezoid
@@ -94,7 +94,8 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
     ['x-stage', 'y-stage']
     """
     path = resolve_scenario_path(spec)
-    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=escaped(path.stem)[:MAX_NAME].strip())
+    stem = escaped(path.stem)[:MAX_NAME].strip().lstrip(FORMULA_STARTS).strip()  # '-x.toml' is named 'x'
+    return scenario_from_dict(load_toml(path), base_dir=path.parent, default_name=stem)
 
 
 def scenario_from_dict(

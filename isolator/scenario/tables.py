@@ -10,7 +10,7 @@ import numpy as np
 
 from isolator.errors import ScenarioError
 from isolator.scenario.arguments import check_public
-from isolator.scenario.files import read_input_text
+from isolator.scenario.files import read_text_table
 from isolator.scenario.ground import FloorSpectrum
 from isolator.scenario.keys import KeyReader
 from isolator.scenario.names import escaped, excerpt
@@ -67,7 +67,7 @@ def read_csv_columns(
         wrong length; a cell that is not a finite number; too few rows; values not increasing.
     """
     where = f"{key}: '{escaped(path, 120)}'"
-    text = read_input_text(path, key)
+    text = read_text_table(path, key, f"a CSV table with the header {','.join(required)},... and rows of numbers")
     try:
         reader = csv.reader(io.StringIO(text, newline=""))
         rows = [(reader.line_num, row) for row in reader if any(cell.strip() for cell in row)]
@@ -109,13 +109,17 @@ def read_csv_columns(
 def _check_header(
     where: str, header: list[str], required: tuple[str, ...], optional: tuple[str, ...], exact: bool
 ) -> str:
-    """The header as text, after checking its columns."""
+    """The header as text, after checking its columns; nothing of it is quoted before the required columns
+    show the file is such a table (it may be any file, a secret's first line)."""
     got = excerpt(",".join(header))
     if exact and header != list(required):
-        raise ScenarioError(f"{where}: the header must be '{','.join(required)}', got '{got}'")
+        order = ", its columns in another order" if sorted(header) == sorted(required) else ""
+        raise ScenarioError(f"{where}: the header must be '{','.join(required)}' (this file's first line is "
+                            f"another{order})")
     for name in required:
         if name not in header:
-            raise ScenarioError(f"{where}: column '{name}' missing (header: '{got}')")
+            raise ScenarioError(f"{where}: column '{name}' missing (expected a header with "
+                                f"{', '.join(required)} and rows of numbers)")
     allowed = required + optional
     for name in header:
         if name not in allowed:

@@ -10,6 +10,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from isolator.scenario.output_files import atomic_output
 from isolator.scenario.reader import resolve_scenario_path
 
 __all__ = ["absolute_files", "scenario_data", "set_parameter", "write_toml"]
@@ -48,7 +49,7 @@ def write_toml(data: Mapping[str, Any], path: str | Path) -> Path:
 
     target = Path(path)
     target.parent.mkdir(parents=True, exist_ok=True)
-    with open(target, "wb") as handle:
+    with atomic_output(target, "wb") as handle:
         tomli_w.dump(data, handle)
     return target
 

@@ -22,6 +22,7 @@ import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.definitions import Scenario
+from isolator.scenario.output_files import atomic_output
 from isolator.scenario.tables import read_csv_columns
 from isolator.simulation.time_grid import TimeGrid, stage_times
 
@@ -92,7 +93,7 @@ class ForceHistory:
         """Write the forces file (``t`` and one column per actuator) [s, N]."""
         path = Path(path)
         data = np.column_stack([self.t, self.forces.T])
-        with open(path, "w") as handle:
+        with atomic_output(path) as handle:
             handle.write(",".join(["t", *self.names]) + "\n")
             for row in data:
                 handle.write(",".join(f"{v:.10g}" for v in row) + "\n")

@@ -20,6 +20,7 @@ from typing import Protocol
 
 import numpy as np
 
+from isolator.analysis.sampling import MAX_SAMPLE_RATE
 from isolator.errors import ParameterError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.variants import Model
@@ -47,7 +48,7 @@ __all__ = ["MAX_STEPPING_RATE", "FeedbackLaw", "LoopGrids", "closed_loop_run", "
 #: a simulator's closed-loop grids and their inputs, by (output rate's factor, substeps)
 LoopGrids = dict[tuple[int, int], tuple[TimeGrid, np.ndarray]]
 #: the fastest grid [Hz] a controller's run steps on (a grid for its rate is searched up to it)
-MAX_STEPPING_RATE = 100e3
+MAX_STEPPING_RATE = MAX_SAMPLE_RATE
 
 
 class FeedbackLaw(Protocol):

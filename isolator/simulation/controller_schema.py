@@ -26,7 +26,13 @@ import numpy as np
 from isolator.errors import ParameterError, ScenarioError
 from isolator.scenario.names import check_name, escaped
 
-__all__ = ["CONTROLLER_KEYS", "check_controller_data", "spectral_radius", "warn_if_unstable"]
+__all__ = ["CONTROLLER_KEYS", "MAX_STATES", "check_controller_data", "check_states", "spectral_radius",
+           "warn_if_unstable"]
+
+#: the most states a controller may have, whichever command reads it: each sample costs ``n^2`` operations in a
+#: simulation, the budget and the FMU diagonalise ``A`` (``n^3``), the C export writes ``n^2`` numbers; the
+#: designs of ``isolator controller`` have tens (a 2,000-state one would run for many minutes, or not fit)
+MAX_STATES = 500
 
 #: the keys of ``controller.json`` (docs/scenario-format.md, "exported controllers"); ``robustness`` is the
 #: report ``isolator controller`` records (an object, not read)
@@ -80,6 +86,14 @@ def _not_a_name(value: object, key: str) -> str:
     raise ParameterError(f"{key}: must be a name (a string), got {_kind(value)}")
 
 
+def check_states(n: int, key: str) -> None:
+    """Refuse a controller of more than :data:`MAX_STATES` states (one :class:`ParameterError` naming ``key``,
+    the count and the limit), before any work on its matrices."""
+    if n > MAX_STATES:
+        raise ParameterError(f"{key}: {n} states, more than the {MAX_STATES} a controller may have (each sample "
+                             f"costs states^2 operations; reduce the design, e.g. by balanced truncation)")
+
+
 def check_controller_data(data: object) -> dict[str, Any]:
     """The keyword arguments of :class:`DiscreteController` from ``controller.json``'s data, checked by the
     schema (see the module's description).
@@ -115,12 +129,17 @@ def check_controller_data(data: object) -> dict[str, Any]:
     if schedule:
         if not isinstance(schedule, list):
             raise ParameterError(f"controller.schedule: must be a list of design points, got {_kind(schedule)}")
+        for i, e in enumerate(schedule):  # the state count first: no work on a matrix too large to run
+            if isinstance(e, Mapping) and isinstance(e.get("A"), list):
+                check_states(len(e["A"]), f"controller.schedule[{i}].A")
         out["schedule"] = [_entry(e, f"controller.schedule[{i}]") for i, e in enumerate(schedule)]
         carriage = data.get("schedule_carriage", 0)
         if isinstance(carriage, bool) or not isinstance(carriage, int):
             raise ParameterError(f"controller.schedule_carriage: must be a whole number, got {_kind(carriage)}")
         out["schedule_carriage"] = carriage
         return out
+    if isinstance(data.get("A"), list):  # the state count first: no work on a matrix too large to run
+        check_states(len(data["A"]), "controller.A")
     for key in _MATRICES:
         if key not in data:
             raise ParameterError(f"controller.{key}: missing (the matrices A, B, C, D, or a schedule)")

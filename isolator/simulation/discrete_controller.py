@@ -25,7 +25,6 @@ from __future__ import annotations
 import itertools
 import json
 import math
-import numbers
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -33,15 +32,16 @@ from typing import Any
 
 import numpy as np
 
+from isolator.analysis.sampling import check_sample_rate
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
-from isolator.scenario.files import read_input_text
+from isolator.scenario.files import parse_json, read_input_text
 from isolator.scenario.names import escaped
-from isolator.simulation.controller_schema import check_controller_data, warn_if_unstable
+from isolator.scenario.output_files import write_output_text
+from isolator.simulation.controller_schema import check_controller_data, check_states, warn_if_unstable
 
 __all__ = ["DiscreteController", "ScheduleEntry"]
-
 _MATRICES = ("A", "B", "C", "D")
 
 
@@ -124,9 +124,7 @@ class DiscreteController:
 
     def __post_init__(self) -> None:
         put = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731
-        if not (isinstance(rate := self.sample_rate, numbers.Real) and math.isfinite(rate) and rate > 0):
-            raise ParameterError(f"sample_rate: must be a finite rate > 0 Hz, got {rate!r}")
-        put("sample_rate", float(rate))
+        put("sample_rate", check_sample_rate(self.sample_rate))
         for key in ("sensors", "actuators", "carriages"):
             names = getattr(self, key)
             if isinstance(names, str) or not all(isinstance(n, str) for n in names):
@@ -157,6 +155,7 @@ class DiscreteController:
         n = shape[0] if len(shape) == 2 else (0 if np.size(A) == 0 else -1)
         if n < 0:
             raise ParameterError(f"{where}A: must be a square matrix (states x states), got shape {shape}")
+        check_states(n, f"{where}A")
         return (_matrix(A, (n, n), where + "A", "states x states"),
                 _matrix(B, (n, p), where + "B", "states x sensors"),
                 _matrix(C, (m, n), where + "C", "actuators x states"),
@@ -290,7 +289,7 @@ class DiscreteController:
     def to_json(self, path: str | Path) -> Path:
         """Write ``controller.json`` (``path`` a file, or a folder to write it in); returns the file."""
         target = Path(path) / "controller.json" if Path(path).is_dir() else Path(path)
-        target.write_text(json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n", encoding="utf-8")
+        write_output_text(target, json.dumps(self.to_dict(), indent=1, allow_nan=False) + "\n")
         return target
 
     @classmethod
@@ -299,22 +298,11 @@ class DiscreteController:
         source = Path(path) / "controller.json" if Path(path).is_dir() else Path(path)
         text = read_input_text(source, "", error=ParameterError, bom=False)  # errors start with the path
         where = escaped(source, 120)
-        try:
-            data = json.loads(text, parse_constant=_no_constant)
-        except json.JSONDecodeError as error:  # where, and the decoder's reason: no content quoted
-            raise ParameterError(f"{where}: cannot read as JSON (JSONDecodeError at line {error.lineno}, column "
-                                 f"{error.colno}: {error.msg})") from None
-        except RecursionError:
-            raise ParameterError(f"{where}: cannot read as JSON (nested too deeply)") from None
-        controller = cls.from_dict(data)
+        data = parse_json(text, where)  # a key given twice, NaN, bad syntax: one line naming the file
+        controller = cls.from_dict(data)  # type: ignore[arg-type]  # not a mapping: the schema says so
         points = controller.schedule or (controller,)
         warn_if_unstable([e.A for e in points], f"controller '{where}'")  # type: ignore[misc]
         return controller
-
-
-def _no_constant(name: str) -> float:
-    """JSON has no NaN or Infinity: refused where Python's decoder would take them."""
-    raise ParameterError(f"controller: {name} is not a JSON number (every entry must be finite)")
 
 
 check_public(globals())

@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from isolator.scenario.definitions import SIGNALS
+from isolator.scenario.output_files import atomic_output
 from isolator.scenario.readable import clean_time
 
 __all__ = ["response_dict", "write_response_csv"]
@@ -43,7 +44,7 @@ def write_response_csv(response: Any, path: str | Path) -> Path:
         header += list(extra)
         columns.append(np.array(list(extra.values())).T)
     data = np.column_stack(columns)
-    with open(path, "w", newline="") as handle:
+    with atomic_output(path, newline="") as handle:
         writer = csv.writer(handle)
         writer.writerow(header)
         for row in data:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -39,6 +40,9 @@ __all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "readings", "rotatio
 
 #: grid intervals per compiled call
 CHUNK = 256
+#: the most entries of a controller's ``A`` and ``B`` whose tick is written out as scalar operations (more: as
+#: dense matrix products, whose code does not grow with the controller)
+_SCALAR_TICK = 8192
 
 Matrices = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]
 
@@ -132,15 +136,17 @@ def readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.S
 
 
 def _tick(shape: tuple[int, int, int, int]) -> ca.Function:
-    """``(xc, hold, pending, y, tick, w, M, delay) -> (xc, hold, pending)``: the controller at a tick (SX)."""
+    """``(xc, hold, pending, y, tick, w, M, delay) -> (xc, hold, pending)``: the controller at a tick (SX; MX for a
+    large controller, whose scalar code would grow with its ``n^2`` entries)."""
     n, ny, m, k = shape
-    sym = ca.SX.sym
+    sym: Any = ca.MX.sym if n * (n + ny) > _SCALAR_TICK else ca.SX.sym  # large: dense loops, code of fixed size
     xc, hold, pending, y, tick, weights, delay = sym("xc", n), sym("hold", m), sym("pending", m), sym("y", ny), \
         sym("tick"), sym("w", k), sym("delay")
     sizes = [(n, n), (n, ny), (m, n), (m, ny)]
     per = sum(r * c for r, c in sizes)
     packed = sym("M", k * per)
-    mixed = packed if k == 1 else sum((weights[j] * packed[j * per:(j + 1) * per] for j in range(k)), ca.SX(per, 1))
+    mixed = packed if k == 1 else sum((weights[j] * packed[j * per:(j + 1) * per] for j in range(k)),
+                                      ca.DM.zeros(per, 1))
     mats, at = [], 0
     for r, c in sizes:
         mats.append(ca.reshape(mixed[at:at + r * c], r, c))

@@ -17,6 +17,7 @@ import numpy as np
 from isolator.errors import ParameterError
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
+from isolator.scenario.output_files import atomic_output
 from isolator.scenario.profiles import PiecewisePolynomialProfile, Profile
 from isolator.scenario.readable import length_text
 from isolator.simulation.points import point_positions
@@ -245,7 +246,7 @@ class SequenceResult:
     def write_steps(self, path: str | Path) -> Path:
         """Write ``step,start,stop,settled,end,move,settle`` [s] per step (empty where not settled)."""
         path = Path(path)
-        with open(path, "w", newline="") as handle:
+        with atomic_output(path, newline="") as handle:
             writer = csv.writer(handle)
             writer.writerow(STEP_COLUMNS)
             for s in self.steps:
@@ -260,7 +261,7 @@ class SequenceResult:
         header = ["t", *SIGNALS, *[f"q:{n}" for n in self.carriage_names],
                   *[f"{n}:{a}" for n in self.point_names for a in "xyz"], "step"]
         data = np.column_stack([self.t, self.signals.T, self.q.T, self.point_signals.reshape(-1, self.t.size).T])
-        with open(path, "w", newline="") as handle:
+        with atomic_output(path, newline="") as handle:
             writer = csv.writer(handle)
             writer.writerow(header)
             for row, step in zip(data, self.step_of_sample, strict=True):

@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import itertools
+import math
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
@@ -13,13 +14,17 @@ import numpy as np
 
 from isolator.errors import ParameterError
 from isolator.model.parameters import ParameterLayout
+from isolator.scenario.files import check_memory
 from isolator.scenario.rules import check_value
 from isolator.sweep.names import Column, resolve
 
-__all__ = ["METHODS", "Designs", "Values", "build_designs"]
+__all__ = ["DESIGN_BYTES", "METHODS", "Designs", "Values", "build_designs", "check_design_count"]
 
 #: sampling methods of ``samples=``
 METHODS = ("sobol", "lhs")
+#: memory [bytes] a design takes besides its swept values (16 bytes each): the grid's tuple while it is built,
+#: its row of values and parameters, its row of the result's columns
+DESIGN_BYTES = 512.0
 
 #: a swept name's values: a list (grid, zip), or a range ``(low, high)`` with ``samples``
 Values = Sequence[float] | np.ndarray
@@ -130,6 +135,9 @@ def build_designs(
                                      f"'{owner[i]}' drives already")
             owner[i] = c.name
     lists = [_numbers(values, f"{c.mode}[{c.name!r}]") for c, (_, _, values) in zip_(columns, given)]
+    if samples is None:
+        count = lists[0].size if zip else math.prod(v.size for v in lists)
+        check_design_count(count, len(columns), ", ".join(f"{c.mode}[{c.name!r}]" for c in columns))
     if samples is not None:
         values = _sampled(columns, lists, samples, method, seed, zip)
     elif zip:
@@ -149,6 +157,22 @@ def build_designs(
 
 
 zip_, set_ = zip, set  # the builtins, under the arguments' names
+
+
+def check_design_count(count: int, columns: int, what: str) -> None:
+    """Refuse, before a byte of them is made, more designs than this machine's memory holds (:data:`DESIGN_BYTES`
+    each and 16 per swept column): one :class:`ParameterError` starting with ``what`` (the key or option that
+    asks for them), with the count.
+
+    Examples
+    --------
+    >>> check_design_count(10**15, 1, "samples")
+    Traceback (most recent call last):
+    ...
+    isolator.errors.ParameterError: samples: 1000000000000000 designs need about ... of memory, more than ...
+    """
+    check_memory(count * (DESIGN_BYTES + 16.0 * columns), f"{what}: {count} designs",
+                 "sweep fewer designs (a coarser grid, fewer samples)")
 
 
 def _numbers(values: object, key: str) -> np.ndarray:
@@ -175,6 +199,7 @@ def _sampled(columns: tuple[Column, ...], ranges: list[np.ndarray], samples: obj
         raise ParameterError("zip: not with samples (sampled designs draw every name's value together)")
     if isinstance(samples, bool) or not isinstance(samples, int | np.integer) or samples < 1:
         raise ParameterError(f"samples: must be a whole number >= 1, got {samples!r}")
+    check_design_count(int(samples), len(columns), "samples")
     if method not in METHODS:
         raise ParameterError(f"method: must be one of {', '.join(METHODS)}, got {method!r}")
     if isinstance(seed, bool) or not isinstance(seed, int | np.integer) or seed < 0:

@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from isolator.errors import ParameterError
+from isolator.scenario.names import escaped
 from isolator.sweep.output import TEXT_COLUMNS, read_columns
 from isolator.sweep.worker import ChunkResult
 
@@ -172,5 +173,5 @@ class SweepResult:
         else:
             lines.append(f"best design: none (no design is ok with a {t.column}; {kinds or 'no designs'})")
         if self.path is not None:
-            lines.append(f"rows: {self.path}")
+            lines.append(f"rows: {escaped(self.path)}")  # printed: a name's control characters escaped
         return "\n".join(lines)

@@ -17,6 +17,7 @@ from typing import Any
 
 import numpy as np
 
+from isolator.scenario.output_files import write_output_text
 from isolator.scenario.reader import resolve_scenario_path, scenario_from_dict
 from isolator.scenario.writing import write_toml
 from isolator.validation.synthetic_records import FloorMotion, SyntheticRecord, floor_record, move_record
@@ -105,14 +106,14 @@ def make_example(folder: str | Path, noise_free: tuple[SyntheticRecord, Syntheti
         floor.noisy(NOISE, seed).write_csv(folder / "floor.csv")
     if "move" in experiments:
         move.noisy(NOISE, seed + 1).write_csv(folder / "move.csv")
-    (folder / "README.md").write_text(
+    write_output_text(folder / "README.md",
         "# Calibration example (SYNTHETIC records)\n\nThe records here were made by isolator's independent MuJoCo "
         "check of `true.toml` (the paper's Table 3.2 table with isolators 15-30 % off the datasheet values of "
         f"`table.toml`), read by the sensors of `table.toml` with {NOISE:.0%} white noise of each channel's RMS. "
         "They are not measurements. `isolator calibrate calibration.toml --out fitted.toml` should recover the "
         "isolators of `true.toml` within its intervals.\n")
     path = folder / "calibration.toml"
-    path.write_text(calibration_text(experiments))
+    write_output_text(path, calibration_text(experiments))
     return path
 
 

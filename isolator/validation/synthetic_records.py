@@ -22,6 +22,7 @@ import numpy as np
 from scipy.interpolate import CubicSpline
 
 from isolator.scenario.definitions import Scenario, SimulationSettings
+from isolator.scenario.output_files import atomic_output
 from isolator.scenario.sensors import Sensor
 from isolator.validation.multibody import MujocoTable
 from isolator.validation.piecewise import solve_piecewise
@@ -53,7 +54,7 @@ class SyntheticRecord:
         path = Path(path)
         names = list(self.channels)
         data = np.column_stack([self.t, *[self.channels[n] for n in names]])
-        with open(path, "w") as handle:
+        with atomic_output(path) as handle:
             handle.write(",".join(["t", *names]) + "\n")
             np.savetxt(handle, data, delimiter=",", fmt="%.10g")
         return path

@@ -70,4 +70,6 @@ def test_the_command_writes_the_pairs_in_json_and_csv(tmp_path):
     assert "probe:lens:z:floor:z" in header
     bad = subprocess.run([sys.executable, "-m", "isolator.cli", "budget", "paper-table-3-2-budget", "--relative",
                           "probe"], capture_output=True, text=True, check=False)
-    assert bad.returncode == 2 and bad.stderr.count("\n") == 1 and "--relative" in bad.stderr
+    assert bad.returncode == 2
+    assert bad.stderr.count("\n") == 1
+    assert "--relative" in bad.stderr

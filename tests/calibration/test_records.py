@@ -77,7 +77,7 @@ def test_csv_plain_and_quoted_files_agree(tmp_path):
 
 
 def test_csv_missing_t(tmp_path):
-    _refused(_write(tmp_path, "time,a-z\n0,1\n0.1,2\n"), "line 1", "no column 't'", "time,a-z")
+    _refused(_write(tmp_path, "time,a-z\n0,1\n0.1,2\n"), "line 1", "no column 't'", "expected a CSV record")
 
 
 def test_csv_unknown_column_suggests_the_closest_sensor(tmp_path):

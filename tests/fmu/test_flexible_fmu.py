@@ -17,6 +17,7 @@ from isolator.scenario.definitions import Point
 
 fmpy = pytest.importorskip("fmpy")
 from fmpy import read_model_description  # noqa: E402
+
 from fmu_master import relative_error, run  # noqa: E402
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")

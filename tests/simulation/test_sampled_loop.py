@@ -194,7 +194,7 @@ def test_command_line(tmp_path, capsys, parked):
     ]
     (tmp_path / "broken").mkdir()
     (tmp_path / "broken" / "controller.json").write_text("{not json")
-    cases.append((["--controller", str(tmp_path / "broken")], ("--controller", "cannot read", "JSONDecodeError")))
+    cases.append((["--controller", str(tmp_path / "broken")], ("--controller", "cannot read as JSON", "line 1")))
     for extra, words in cases:
         out_csv, plot = tmp_path / "r.csv", tmp_path / "r.png"
         status, _, lines = run_command(["simulate", str(scenario), "--out", str(out_csv), "--plot", str(plot),

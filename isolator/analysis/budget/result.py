@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from isolator.scenario.output_files import atomic_output
+
 from .units import AXES, QUANTITY_UNITS, display_unit
 
 __all__ = ["AXES", "QUANTITY_UNITS", "ErrorBudget"]
@@ -193,7 +195,7 @@ class ErrorBudget:
         """Write :meth:`columns` to ``path`` (numbers at full precision); returns the path."""
         columns = self.columns()
         target = Path(path)
-        with open(target, "w", newline="") as handle:
+        with atomic_output(target, newline="") as handle:
             writer = csv.writer(handle)
             writer.writerow(list(columns))
             for row in np.column_stack(list(columns.values())):
