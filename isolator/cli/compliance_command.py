@@ -21,6 +21,7 @@ from isolator.cli.helpers import (
     use_agg,
 )
 from isolator.errors import ParameterError
+from isolator.scenario.output_files import atomic_output
 
 __all__ = ["register"]
 
@@ -66,7 +67,7 @@ def _compliance(args: argparse.Namespace) -> int:
     result = point_compliance(lin, args.point, args.axis, args.response, np.geomspace(*band, args.count))
     if out is not None:
         header, rows = result.table()
-        with open(out, "w", newline="") as handle:
+        with atomic_output(out, newline="") as handle:
             writer = csv.writer(handle)
             writer.writerow(header)
             writer.writerows([[repr(float(v)) for v in row] for row in rows])
