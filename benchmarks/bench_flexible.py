@@ -56,8 +56,9 @@ def main() -> None:
     print("3 s transient of Table 3.2's table (0.2 m move), median of warm runs; the first run compiles")
     for modes, first, warm, settling in rows:
         label = "rigid top (baseline)" if modes is None else f"{modes} elastic modes"
+        settled = "unsettled" if settling is None else f"{settling:.4g} s"
         print(f"{label:24s} first {first:8.2f} s   warm {warm * 1e3:10.2f} ms   ratio {warm / rigid:8.1f}x   "
-              f"settling {settling:.4g} s")
+              f"settling {settled}")
 
 
 if __name__ == "__main__":

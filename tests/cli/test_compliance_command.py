@@ -25,9 +25,11 @@ def test_json_csv_and_the_default_frequencies(tmp_path, capsys):
     data = json.loads(stdout)
     assert set(data) == {"frequency_hz", "magnitude", "phase_deg"}
     assert len(data["frequency_hz"]) == 2000
-    assert data["frequency_hz"][0] == pytest.approx(1.0) and data["frequency_hz"][-1] == pytest.approx(2000.0)
+    assert data["frequency_hz"][0] == pytest.approx(1.0)
+    assert data["frequency_hz"][-1] == pytest.approx(2000.0)
     rows = list(csv.reader(out.open()))
-    assert rows[0] == ["frequency_hz", "magnitude", "phase_deg"] and len(rows) == 2001
+    assert rows[0] == ["frequency_hz", "magnitude", "phase_deg"]
+    assert len(rows) == 2001
     assert float(rows[5][1]) == pytest.approx(data["magnitude"][4], rel=1e-15)
 
 
