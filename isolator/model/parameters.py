@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -18,6 +19,8 @@ from isolator.scenario.validation import check_carriage_tree, check_isolator_lay
 
 __all__ = ["AIR_KEYS", "ParameterLayout", "PneumaticStructure"]
 
+#: parameters that place things on the top (a bending top's shapes are taken there when the model is built)
+_GEOMETRY = re.compile(r"^(isolators\[\d+\]\.position|actuators\[\d+\]\.position|carriages\[\d+\]\.(origin|axis))\.")
 #: the ``[air]`` keys, in the parameter vector's order
 AIR_KEYS = ("atmosphere", "temperature", "gas_constant", "viscosity", "polytropic")
 _VALVE_KEYS = ("gain", "deadband", "max_flow")
@@ -301,6 +304,9 @@ class ParameterLayout:
                 raise ParameterError(f"{argument}[{name!r}]: not a parameter of this scenario{hint} "
                                      "(Simulator.layout.names lists them)")
             i = index[name]
+            if self.flexible is not None and _GEOMETRY.match(name):
+                raise ParameterError(f"{argument}[{name!r}]: the top bends ([table.flexible]): its modes' shapes "
+                                     "were taken where the scenario puts things on it; change the scenario instead")
             out[i] = check_value(name, value, f"{argument}[{name!r}]", ParameterError)
             changed.append(i)
         self.check(out, lambda i: f"{argument}[{self.names[i]!r}]", changed)
