@@ -269,7 +269,7 @@ def test_the_calibration_reader_and_a_check_over_its_intervals(scenario, tmp_pat
 
 
 @pytest.mark.parametrize(("content", "reason"), [
-    (None, "cannot read"), ("{", "not a calibration JSON"), ("[]", "no 'parameters'"),
+    (None, "cannot read"), ("{", "cannot read as JSON"), ("[]", "no 'parameters'"),
     ('{"parameters": {"a": {"value": 1, "std": 1}}}', "ci95"),
     ('{"parameters": {"a": {"value": 1, "std": 1, "ci95": [2, 1]}}}', "ci95"),
     ('{"parameters": {"a": {"value": 1, "std": null, "ci95": [1, 2]}}}', "no parameter the records fix")])
