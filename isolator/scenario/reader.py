@@ -70,6 +70,8 @@ def load_scenario(spec: str | Path | None = None) -> Scenario:
         - ``paper-table-3-2-geophones``: the active table with a geophone at each actuator;
         - ``paper-table-3-2-budget``: the geophone table on a VC-D floor with random forces and noise (the
           error budget's example);
+        - ``paper-table-3-2-flexible``: its granite top bending, with six elastic modes from
+          ``paper-table-3-2-top-modes.csv`` (a tool on a bridge, a part, a VC-D floor);
         - ``paper-table-3-2-pneumatic``: on four air springs in three leveling groups;
         - ``paper-table-3-2-pneumatic-3``: on three air springs, one leveling valve each;
         - ``paper-table-3-2-pneumatic-active``: the pneumatic table with the active one's actuators;
