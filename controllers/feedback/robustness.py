@@ -27,7 +27,7 @@ from typing import Any
 
 import numpy as np
 
-from isolator.analysis.closed_loop import sampled_loop
+from isolator.analysis.closed_loop import SampledLoop, sampled_loop
 from isolator.analysis.linear import linearise, rest_positions
 from isolator.errors import ParameterError, UnstableClosedLoopError, UnstableTableError
 from isolator.model.parameters import ParameterLayout
@@ -76,6 +76,10 @@ class RobustnessCase:
     margins : LoopMargins or None
         At the plant's input; None when the loop is unstable (margins mean nothing there) or the margins
         were not asked for.
+    growing : str
+        An unstable case's growing oscillation: ``an oscillation at 441 Hz grows, from the open-loop mode
+        'plate 1' (442.3 Hz)`` (:meth:`~isolator.analysis.closed_loop.SampledLoop.growing_mode`); empty when
+        stable.
     """
 
     carriages: tuple[str, ...]
@@ -83,6 +87,7 @@ class RobustnessCase:
     values: tuple[tuple[str, float], ...]
     spectral_radius: float
     margins: LoopMargins | None
+    growing: str = ""
 
     @property
     def stable(self) -> bool:
@@ -218,7 +223,15 @@ class RobustnessReport:
         raise UnstableClosedLoopError(
             f"the closed loop with {self.controller} is unstable with {w.where}: spectral radius "
             f"{w.spectral_radius:.4g} at {self.sample_rate:.4g} Hz sampling"
-            f"{' with one sample of delay' if self.delay else ''} ({n_bad} of {len(self.cases)} cases unstable)")
+            f"{' with one sample of delay' if self.delay else ''}{', ' + w.growing if w.growing else ''} "
+            f"({n_bad} of {len(self.cases)} cases unstable)")
+
+
+def _growing(loop: SampledLoop) -> str:
+    """``an oscillation at 441 Hz grows, from the open-loop mode 'plate 1' (442.3 Hz)``."""
+    name, f_mode = loop.growing_mode()
+    where = f"from the open-loop mode '{name}' ({f_mode:.4g} Hz)" if name != "none" else "from the controller's states"
+    return f"an oscillation at {loop.frequency_hz:.4g} Hz grows, {where}"
 
 
 def _configurations(scenario: Scenario, positions: Sequence[Mapping[str, float] | Sequence[float]] | None,
@@ -302,7 +315,8 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
             loop = sampled_loop(lin, controller)
             radius = loop.spectral_radius
             found = None if radius >= 1.0 or not margins else sampled_margins(loop)
-            cases.append(RobustnessCase(names, tuple(float(v) for v in q), tuple(values), radius, found))
+            cases.append(RobustnessCase(names, tuple(float(v) for v in q), tuple(values), radius, found,
+                                        "" if loop.stable else _growing(loop)))
             done += 1
             if progress is not None:
                 progress(done, total)
