@@ -295,3 +295,26 @@ def test_the_check_is_the_robustness_checks_loop() -> None:
     assert report["spectral_radius"] == case.spectral_radius
     assert report["disk_margin"] == case.margins.disk_margin  # type: ignore[union-attr]
     assert report["positions"] == q
+
+
+@settings(max_examples=4, deadline=None)
+@given(st.floats(-0.7, 0.7))
+def test_a_scheduled_controller_is_checked_at_the_positions_given(x: float) -> None:
+    from controllers.feedback.output_feedback import design_controller
+    from controllers.feedback.robustness import check_robustness
+
+    sc = load_scenario("paper-table-3-2-geophones")
+    if not _SCHEDULED:  # one design for every example
+        _SCHEDULED.append(design_controller(sc, "lqg", 2000.0, schedule=3, options={"max_velocity": 0.01},
+                                            search=False))
+    controller = _SCHEDULED[0]
+    assert len(controller.schedule) == 3
+    loop = check_controller(sc, controller, {"x-stage": x})
+    q = np.array([x, sc.carriages[1].profile.position(0.0)])
+    for got, expected in zip(loop.controller, controller.matrices(q), strict=True):
+        assert np.array_equal(got, expected)
+    case = check_robustness(sc, controller, positions=[{"x-stage": x}], margins=False).cases[0]
+    assert loop.spectral_radius == case.spectral_radius
+
+
+_SCHEDULED: list[DiscreteController] = []
