@@ -71,7 +71,7 @@ def loop_report(loop: SampledLoop, actuators: tuple[str, ...]) -> dict[str, Any]
 def _check_controller(args: argparse.Namespace) -> int:
     controller = read_controller(args.controller, "controller")
     scenario = load_scenario(args.scenario)
-    loop = check_controller(scenario, controller, parse_positions(args.position))
+    loop = check_controller(scenario, controller, parse_positions(args.position), key="--position")
     data = loop_report(loop, tuple(a.name for a in scenario.actuators))
     status = 0 if loop.stable else 3
     if args.json:

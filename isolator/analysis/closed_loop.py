@@ -230,7 +230,7 @@ def sampled_loop(lin: LinearModel, controller: SampledController) -> SampledLoop
 
 def check_controller(scenario: Scenario, controller: SampledController,
                      positions: Mapping[str, float] | Sequence[float] | None = None,
-                     key: str = "--position") -> SampledLoop:
+                     key: str = "positions") -> SampledLoop:
     """The sampled loop of ``controller`` on ``scenario``'s linear model, the carriages at their start or at
     ``positions`` (within their travel): what ``isolator check-controller`` reports and ``isolator simulate
     --controller`` checks first.
