@@ -318,3 +318,16 @@ def test_a_scheduled_controller_is_checked_at_the_positions_given(x: float) -> N
 
 
 _SCHEDULED: list[DiscreteController] = []
+
+
+def test_the_budget_refuses_the_unstable_loop_with_the_checks_line(tmp_path: Path) -> None:
+    from isolator.analysis.budget import error_budget
+    from isolator.errors import UnstableClosedLoopError
+
+    bending = load_scenario(_geophones_toml(tmp_path, True))
+    controller = DiscreteController.from_json(_static_velocity_feedback(tmp_path / "ctl", 6e4) / "controller.json")
+    line = check_controller(bending, controller).describe()
+    with pytest.raises(UnstableClosedLoopError) as error:
+        error_budget(bending, controller)
+    assert line in str(error.value)
+    assert "'plate 1'" in str(error.value)
