@@ -84,3 +84,20 @@ def test_the_filtered_controller_is_the_controller_then_the_filter() -> None:
     for f in (1.0, 30.0, 300.0):
         expected = response(lowpass(50.0, 2000.0, len(sc.actuators)), f) @ response(ctl.matrices(), f)
         assert response(filtered.matrices(), f) == pytest.approx(expected, rel=1e-6, abs=1e-9)
+
+
+def test_the_robustness_check_judges_the_full_plant_and_names_the_growing_mode(tmp_path: Path) -> None:
+    from controllers.feedback.robustness import check_robustness
+    from isolator.errors import UnstableClosedLoopError
+
+    bending = _bending(tmp_path)
+    rigid = design_controller(load_scenario("paper-table-3-2-geophones"), "skyhook", 2000.0, delay=True,
+                              options={"gain": 6e4})
+    report = check_robustness(bending, rigid, positions=[{}], margins=False)
+    loop = check_controller(bending, rigid)
+    assert report.worst.spectral_radius == loop.spectral_radius
+    with pytest.raises(UnstableClosedLoopError) as error:
+        report.raise_if_unstable()
+    name, f_mode = loop.growing_mode()
+    assert f"an oscillation at {loop.frequency_hz:.4g} Hz grows, from the open-loop mode '{name}'" in str(error.value)
+    assert f_mode > 150.0  # an elastic mode, not a rigid-body one
