@@ -1,4 +1,5 @@
-"""The controllers' subcommands: feedforward, optimise-profile and controller (for the ``isolator`` command)."""
+"""The controllers' subcommands: feedforward, optimise-profile, controller and check-controller (for the
+``isolator`` command)."""
 
 from __future__ import annotations
 
@@ -7,7 +8,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from controllers import controller_command
+from controllers import check_command, controller_command
 from isolator.cli.helpers import check_run_memory, output_path, report, scenario_argument, use_agg
 from isolator.errors import OptimisationError, ParameterError
 from isolator.scenario.definitions import Scenario
@@ -20,7 +21,8 @@ __all__ = ["register"]
 
 
 def register(sub: Any) -> None:
-    """Add ``feedforward``, ``optimise-profile`` and ``controller`` to the ``isolator`` command's subparsers."""
+    """Add ``feedforward``, ``optimise-profile``, ``controller`` and ``check-controller`` to the ``isolator``
+    command's subparsers."""
     ff = sub.add_parser(
         "feedforward", help="actuator forces that cancel the carriages' reaction, and what they buy",
         description="Compute feedforward actuator forces from the planned carriage motion and compare "
@@ -63,6 +65,7 @@ def register(sub: Any) -> None:
 
     ff.set_defaults(handler=_feedforward)
     controller_command.register(sub)
+    check_command.register(sub)
     opt.set_defaults(handler=_optimise_profile,  # the parser's own defaults: a sequence refuses anything else
                      single_move_defaults={name: opt.get_default(name) for name in _SINGLE_MOVE_OPTIONS})
 

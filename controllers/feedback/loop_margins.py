@@ -36,10 +36,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.analysis.closed_loop import SampledLoop
 from isolator.analysis.sampling import closed_loop_matrix
 from isolator.scenario.arguments import check_public
 
-__all__ = ["LoopMargins", "closed_loop_matrix", "loop_margins"]
+__all__ = ["LoopMargins", "closed_loop_matrix", "loop_margins", "sampled_margins"]
 
 _POINTS = 400
 #: bisections of a grid interval where a margin is reached
@@ -309,6 +310,13 @@ def loop_margins(plant: tuple[np.ndarray, ...], controller: tuple[np.ndarray, ..
         gain_frequency=np.array([g[0][1] if near else g[1][1] for g, near in zip(gains, nearer, strict=True)]),
         phase_margin=np.array([p[0] for p in phases]), phase_frequency=np.array([p[1] for p in phases]),
         loop_disk_margin=1.0 / np.max(np.abs(diag - 0.5), axis=0), disk_margin=1.0 / peak, disk_frequency=at)
+
+
+def sampled_margins(loop: SampledLoop) -> LoopMargins:
+    """The margins at the actuators of a stable :class:`~isolator.analysis.closed_loop.SampledLoop` (the
+    held air's poles at ``z = 1`` left out): what the robustness check and ``isolator check-controller``
+    report."""
+    return loop_margins(loop.plant, loop.controller, loop.sample_rate, poles=loop.poles, skip_dc=loop.held > 0)
 
 
 check_public(globals())

@@ -4,7 +4,10 @@
 scenario at the design positions, designs there (:func:`~controllers.feedback.output_designs.skyhook_design`,
 :func:`~controllers.feedback.output_designs.lqg_design`, :func:`~controllers.feedback.hinf_output.hinf_design`)
 and returns a :class:`~isolator.simulation.discrete_controller.DiscreteController` ready for
-``controller.json`` and the C export.
+``controller.json`` and the C export. On a bending top the design is judged on the full plant (the top's
+elastic modes included) at the design positions and the start, and rolled off above the isolation band where
+it would be unstable or short of its disk margin there (:func:`~controllers.feedback.rolloff.roll_off`,
+recorded in ``settings["rolloff"]``).
 
 Design positions: without a schedule, every carriage at the middle of its travel (the configuration
 that is closest to all others; the robustness check then covers the travel's ends). With ``schedule=N``
@@ -35,6 +38,7 @@ from isolator.simulation.discrete_controller import DiscreteController, Schedule
 from .hinf_output import hinf_design
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
 from .output_tuning import TUNED, travel, tune
+from .rolloff import roll_off
 from .sensor_plant import SensorPlant, sensor_plant
 
 __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positions", "travel"]
@@ -197,11 +201,12 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
                              "designs have no common coordinates to interpolate; use --method lqg or skyhook to "
                              "schedule, or one hinf design")
     names = [c.name for c in scenario.carriages]
-    designs = []
+    designs, lins = [], []
     for q in points:
         where = ", ".join(f"{n} at {v:.4g} m" for n, v in zip(names, q, strict=True)) or "at rest"
         plant = sensor_plant(linearise(scenario, positions=q, parameters=parameters))
         _check_rate(plant, sample_rate, f"with {where}")
+        lins.append(plant.lin)
         designs.append(METHODS[method](plant, sample_rate, delay, **settings))
     record: dict[str, Any] = {**settings, "design_positions": points.tolist(),
                               "points": [d.settings for d in designs]}
@@ -209,9 +214,13 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
               "actuators": [a.name for a in scenario.actuators], "carriages": names, "method": method,
               "settings": record, "delay": bool(delay)}
     if len(designs) == 1:
-        return DiscreteController(**common, A=designs[0].A, B=designs[0].B, C=designs[0].C, D=designs[0].D)
-    entries = [ScheduleEntry(tuple(q), *d.matrices) for q, d in zip(points, designs, strict=True)]
-    return DiscreteController(**common, schedule=entries, schedule_carriage=index)
+        made = DiscreteController(**common, A=designs[0].A, B=designs[0].B, C=designs[0].C, D=designs[0].D)
+    else:
+        entries = [ScheduleEntry(tuple(q), *d.matrices) for q, d in zip(points, designs, strict=True)]
+        made = DiscreteController(**common, schedule=entries, schedule_carriage=index)
+    if getattr(scenario.table, "flexible", None) is not None:  # judged on the full plant, at the start too
+        lins.append(linearise(scenario, parameters=parameters))
+    return roll_off(made, lins)
 
 
 def _with_settings(controller: DiscreteController, settings: dict[str, Any]) -> DiscreteController:

@@ -1,9 +1,10 @@
 """Robustness of an output-feedback controller over the carriages' travel and the isolators' uncertainty.
 
 :func:`check_robustness` closes the loop of a :class:`DiscreteController` (sensors in, commands out, as
-the simulation and the exported C run it) around the sampled sensor plant
-(:meth:`~controllers.feedback.sensor_plant.SensorPlant.discrete`: zero-order hold, the actuators' lag,
-one sample of delay when the controller's ``delay`` says so) in every combination of
+the simulation and the exported C run it) around the sampled sensor plant by
+:func:`isolator.analysis.closed_loop.sampled_loop` (zero-order hold, the actuators' lag, one sample of
+delay when the controller's ``delay`` says so, a bending top's elastic modes; the same loop ``isolator
+check-controller`` and ``isolator simulate --controller`` check) in every combination of
 
 * the carriages' positions: for each carriage the smallest, the largest and the middle of the positions
   its profile (or the ``[sequence]``) visits, and the start and end positions
@@ -26,6 +27,7 @@ from typing import Any
 
 import numpy as np
 
+from isolator.analysis.closed_loop import SampledLoop, sampled_loop
 from isolator.analysis.linear import linearise, rest_positions
 from isolator.errors import ParameterError, UnstableClosedLoopError, UnstableTableError
 from isolator.model.parameters import ParameterLayout
@@ -34,8 +36,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.discrete_controller import DiscreteController
 
-from .loop_margins import LoopMargins, closed_loop_matrix, loop_margins
-from .sensor_plant import held_air, sensor_plant
+from .loop_margins import LoopMargins, sampled_margins
 from .uncertainty import SCALED, Uncertainty
 
 __all__ = ["RobustnessCase", "RobustnessReport", "check_robustness"]
@@ -75,6 +76,10 @@ class RobustnessCase:
     margins : LoopMargins or None
         At the plant's input; None when the loop is unstable (margins mean nothing there) or the margins
         were not asked for.
+    growing : str
+        An unstable case's growing oscillation: ``an oscillation at 441 Hz grows, from the open-loop mode
+        'plate 1' (442.3 Hz)`` (:meth:`~isolator.analysis.closed_loop.SampledLoop.growing_mode`); empty when
+        stable.
     """
 
     carriages: tuple[str, ...]
@@ -82,6 +87,7 @@ class RobustnessCase:
     values: tuple[tuple[str, float], ...]
     spectral_radius: float
     margins: LoopMargins | None
+    growing: str = ""
 
     @property
     def stable(self) -> bool:
@@ -217,7 +223,15 @@ class RobustnessReport:
         raise UnstableClosedLoopError(
             f"the closed loop with {self.controller} is unstable with {w.where}: spectral radius "
             f"{w.spectral_radius:.4g} at {self.sample_rate:.4g} Hz sampling"
-            f"{' with one sample of delay' if self.delay else ''} ({n_bad} of {len(self.cases)} cases unstable)")
+            f"{' with one sample of delay' if self.delay else ''}{', ' + w.growing if w.growing else ''} "
+            f"({n_bad} of {len(self.cases)} cases unstable)")
+
+
+def _growing(loop: SampledLoop) -> str:
+    """``an oscillation at 441 Hz grows, from the open-loop mode 'plate 1' (442.3 Hz)``."""
+    name, f_mode = loop.growing_mode()
+    where = f"from the open-loop mode '{name}' ({f_mode:.4g} Hz)" if name != "none" else "from the controller's states"
+    return f"an oscillation at {loop.frequency_hz:.4g} Hz grows, {where}"
 
 
 def _configurations(scenario: Scenario, positions: Sequence[Mapping[str, float] | Sequence[float]] | None,
@@ -288,10 +302,8 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
     samples = uncertainty.samples()
     vectors = [uncertainty.parameters(layout, nominal, s) for s in samples]
     names = tuple(c.name for c in scenario.carriages)
-    m = len(scenario.actuators)
     total, done, cases = len(configs) * len(samples), 0, []
     for q in configs:
-        kd = controller.matrices(q)
         for values, p in zip(samples, vectors, strict=True):
             try:
                 lin = linearise(scenario, positions=q, parameters=p)
@@ -300,17 +312,11 @@ def check_robustness(scenario: Scenario, controller: DiscreteController, uncerta
                 raise ParameterError(
                     f"{key}: {_describe_values(values)} tips the passive table with {_describe_positions(names, q)} "
                     f"(no stable equilibrium: {error})".replace("\n", " ")) from None
-            sys = sensor_plant(lin).discrete(controller.sample_rate, controller.delay)
-            a, b, c, d = (np.asarray(x, dtype=float) for x in (sys.A, sys.B, sys.C, sys.D))
-            plant = (a, b[:, :m], c, d[:, :m])
-            eig = np.linalg.eigvals(closed_loop_matrix(plant, kd))
-            neutral = held_air(lin)
-            if neutral:  # the air each leveling group holds: no input or sensor reaches it
-                eig = np.delete(eig, np.argsort(np.abs(eig - 1.0))[:neutral])
-            radius = float(np.max(np.abs(eig), initial=0.0))
-            found = None if radius >= 1.0 or not margins else loop_margins(
-                plant, kd, controller.sample_rate, poles=eig, skip_dc=neutral > 0)
-            cases.append(RobustnessCase(names, tuple(float(v) for v in q), tuple(values), radius, found))
+            loop = sampled_loop(lin, controller)
+            radius = loop.spectral_radius
+            found = None if radius >= 1.0 or not margins else sampled_margins(loop)
+            cases.append(RobustnessCase(names, tuple(float(v) for v in q), tuple(values), radius, found,
+                                        "" if loop.stable else _growing(loop)))
             done += 1
             if progress is not None:
                 progress(done, total)

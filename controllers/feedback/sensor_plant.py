@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import control
 import numpy as np
 
+from isolator.analysis.closed_loop import held_air
 from isolator.analysis.linear import FORCE_INPUTS, GROUND_INPUTS, LinearModel
 from isolator.analysis.sampling import closed_loop_matrix, sample_held
 from isolator.analysis.signal_names import labels, signals
@@ -93,15 +94,6 @@ class SensorPlant:
         az, bz, cz, dz = sample_held(self.matrices(), self.n_actuators, sample_rate, delay)
         inputs, outputs = list(self.system.input_labels), list(self.system.output_labels)
         return control.ss(az, bz, cz, dz, 1.0 / sample_rate, inputs=inputs, outputs=outputs)
-
-
-def held_air(lin: LinearModel) -> int:
-    """The poles at zero of a pneumatic table's linear model (one per leveling group holding its air); 0 for
-    a table without air springs."""
-    if lin.air is None:
-        return 0
-    eig = lin.eigenvalues
-    return int(np.sum(np.abs(eig) <= 1e-9 * max(1.0, float(np.abs(eig).max()))))
 
 
 def loop_matrix(plant: control.StateSpace, controller: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -59,6 +60,10 @@ def register(sub: Any) -> None:
     sim.add_argument("--controller", type=Path, metavar="DIR",
                      help="run the discrete controller of DIR/controller.json (isolator controller's output) on the "
                      "scenario's sensors and actuators")
+    sim.add_argument("--allow-unstable", action="store_true",
+                     help="with --controller: run a controller whose sampled loop on the scenario's linear model is "
+                     "unstable (checked first as 'isolator check-controller' does; refused with exit status 3 "
+                     "without this option)")
     sim.add_argument("--noise", action="store_true",
                      help="with --controller: add each sensor's noise to its readings (white of its 'noise' RMS "
                           "per sample, or with its 'noise_psd' spectrum [SI^2/Hz] below half the controller's rate)")
@@ -219,10 +224,13 @@ def _band_option(args: argparse.Namespace) -> Band | None:
 
 
 def _controller_option(args: argparse.Namespace) -> DiscreteController | None:
-    """The controller of ``--controller DIR`` (None without it); ``--noise`` only with one."""
+    """The controller of ``--controller DIR`` (None without it); ``--noise`` and ``--allow-unstable`` only with
+    one."""
     if args.controller is None:
         if args.noise:
             raise ParameterError("--noise: adds sensor noise to a controller's readings; give --controller DIR")
+        if args.allow_unstable:
+            raise ParameterError("--allow-unstable: runs an unstable controller's loop; give --controller DIR")
         return None
     return read_controller(args.controller, "--controller")
 
@@ -247,6 +255,14 @@ def _simulate(args: argparse.Namespace) -> int:
         if scenario.windows:
             windows = figure_path(plot.with_name(f"{plot.stem}-windows{plot.suffix}"), "--plot")
     controller = _controller_option(args)
+    if controller is not None:  # the sampled loop at the carriages' start, as isolator check-controller checks it
+        from isolator.analysis.closed_loop import check_controller
+
+        loop = check_controller(scenario, controller)
+        if not loop.stable and not args.allow_unstable:
+            print(f"isolator: error: --controller: {escaped(loop.describe())} (give --allow-unstable to run it "
+                  "anyway)", file=sys.stderr)
+            return 3
     response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args), controller=controller,
                                                    noise=args.noise, seed=args.seed)
     if out:

@@ -19,40 +19,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Protocol
 
 import numpy as np
 
+from isolator.analysis.closed_loop import SampledController, sampled_loop
 from isolator.analysis.elastic_outputs import sensor_shapes
 from isolator.analysis.linear import LinearModel
-from isolator.analysis.sampling import closed_loop_matrix, sample_held
 from isolator.analysis.sensor_outputs import displacement_rows
 from isolator.errors import ParameterError, UnstableClosedLoopError
 from isolator.model.rotations import pose_rotation
-from isolator.scenario.definitions import Scenario
 
 from .sources import Source
 
 __all__ = ["Resolvent", "SampledController", "SourceResponses", "closed_loop_poles"]
-
-
-class SampledController(Protocol):
-    """What the budget reads of an exported controller
-    (:class:`~isolator.simulation.discrete_controller.DiscreteController`)."""
-
-    @property
-    def sample_rate(self) -> float: ...  # [Hz]
-
-    @property
-    def delay(self) -> bool: ...  # one sample of computation delay
-
-    @property
-    def method(self) -> str: ...  # the design's name
-
-    def matrices(self, q: Sequence[float] | np.ndarray | None = None
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]: ...
-
-    def check_names(self, scenario: Scenario) -> None: ...
 
 
 #: largest condition number of an eigenvector basis the responses are evaluated in (else: one solve each)
@@ -100,50 +79,21 @@ def _indices(lin: LinearModel) -> tuple[list[int], list[int]]:
             [outputs.index(f"s:{s.name}") for s in lin.scenario.sensors])
 
 
-def _command_plant(lin: LinearModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """``(A, B, C, D)`` from the actuators' commands [N] to the sensors' readings, each lagged actuator's
-    force a state (what the sampled loop's stability and resonances are computed on)."""
-    iu, ys = _indices(lin)
-    sys = lin.system
-    a, b = np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)[:, iu]
-    c, d = np.asarray(sys.C, dtype=float)[ys], np.asarray(sys.D, dtype=float)[np.ix_(ys, iu)]
-    acts = lin.scenario.actuators
-    lagged = [k for k, act in enumerate(acts) if act.bandwidth is not None]
-    n, nl, m = a.shape[0], len(lagged), len(acts)
-    omega = np.array([2 * math.pi * acts[k].bandwidth for k in lagged])  # type: ignore[operator]
-    a_full = np.zeros((n + nl, n + nl))
-    a_full[:n, :n], a_full[:n, n:], a_full[n:, n:] = a, b[:, lagged], -np.diag(omega)
-    b_full = np.zeros((n + nl, m))
-    direct = [k for k in range(m) if k not in lagged]
-    b_full[:n, direct] = b[:, direct]
-    b_full[n + np.arange(nl), lagged] = omega
-    c_full = np.hstack([c, d[:, lagged]])  # an accelerometer reads a lagged force through its state
-    d_full = np.zeros_like(d)
-    d_full[:, direct] = d[:, direct]
-    return a_full, b_full, c_full, d_full
-
-
 def closed_loop_poles(lin: LinearModel, controller: SampledController) -> np.ndarray:
     """The exactly sampled loop's poles as continuous ones, ``s = fs ln z`` [1/s].
 
     Raises
     ------
     UnstableClosedLoopError
-        A pole outside the unit circle (naming the largest and its frequency).
+        A pole outside the unit circle (naming the growing frequency and the open-loop mode it comes from).
     """
-    fs = float(controller.sample_rate)
-    plant = sample_held(_command_plant(lin), len(lin.scenario.actuators), fs, bool(controller.delay))
-    kd = tuple(np.asarray(x, dtype=float) for x in controller.matrices(lin.positions))
-    m = len(lin.scenario.actuators)
-    z = np.linalg.eigvals(closed_loop_matrix((plant[0], plant[1][:, :m], plant[2], plant[3][:, :m]), kd))
-    worst = int(np.argmax(np.abs(z))) if z.size else -1
-    if z.size and abs(z[worst]) > 1.0 + 1e-9:
-        f = abs(np.angle(z[worst])) * fs / (2 * math.pi)
-        raise UnstableClosedLoopError(
-            f"controller: the sampled loop is unstable at this rest configuration (a pole at |z| = "
-            f"{abs(z[worst]):.6g}, {f:.4g} Hz): no random motion has a finite RMS")
+    loop = sampled_loop(lin, controller)
+    z = loop.eigenvalues
+    if loop.spectral_radius > 1.0 + 1e-9:  # the one check (isolator check-controller's), its line
+        raise UnstableClosedLoopError(f"controller: {loop.describe()}, at this rest configuration: no random "
+                                      "motion has a finite RMS")
     z = z[np.abs(z) > 1e-12]
-    return np.log(z) * fs
+    return np.log(z) * loop.sample_rate
 
 
 def _hold_and_lag(lin: LinearModel, f: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
