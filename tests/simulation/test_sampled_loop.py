@@ -185,7 +185,7 @@ def test_command_line(tmp_path, capsys, parked):
         (["--controller", str(_write(tmp_path / "shape", dict(good, actuators=good["actuators"][:-1])))],
          ("--controller", "C: must be 11 x 12")),
         (["--controller", str(_write(tmp_path / "carriages", dict(good, carriages=["x-stage"])))],
-         ("carriages[1]", "None", "'y-stage'")),
+         ("controller.carriages", "has 1 where", "'y-stage'")),  # counts, never "has None" (issue 42, 15)
         (["--controller", str(tmp_path / "missing")], ("--controller", "missing/controller.json")),
         (["--controller", str(_write(tmp_path / "corrupt", {}))], ("--controller", "sample_rate: missing")),
         (["--controller", str(_write(tmp_path / "rate", dict(good, sample_rate=1234.567)))],
