@@ -19,6 +19,7 @@ from isolator.errors import ParameterError
 from isolator.plates.kirchhoff import bending_modes
 from isolator.plates.solid import solid_modes
 from isolator.scenario.arguments import check_public
+from isolator.scenario.flexible.synthetic import box_rigid_modes
 
 __all__ = ["CSV_HEADER", "MODELS", "RIGID_LIMIT_HZ", "PlateModes", "check_plate_arguments", "plate_modes",
            "rigid_modes"]
@@ -239,15 +240,7 @@ def rigid_modes(nodes: np.ndarray, mass: float, size: Sequence[float]) -> tuple[
     """
     lx, ly, t = size
     inertia = mass / 12.0 * np.array([ly**2 + t**2, lx**2 + t**2, lx**2 + ly**2])
-    n = len(nodes)
-    translations = np.zeros((6, n, 3))
-    rotations = np.zeros((6, n, 3))
-    for k in range(3):
-        translations[k, :, k] = 1.0 / math.sqrt(mass)
-        w = np.eye(3)[k] / math.sqrt(inertia[k])
-        rotations[3 + k] = w
-        translations[3 + k] = np.cross(w, nodes)
-    return translations, rotations
+    return box_rigid_modes(np.asarray(nodes, dtype=float), mass, inertia, np.zeros(3))
 
 
 def plate_modes(size: Sequence[float], mass: float, young: float, poisson: float, count: int = 20,
