@@ -84,6 +84,13 @@ def roll_off(controller: DiscreteController, lins: Sequence[LinearModel]) -> Dis
     """``controller`` judged on the full plant at each of ``lins`` (the design positions and the start), rolled
     off when unstable or short of :data:`MIN_DISK_MARGIN` there (see the module's description).
 
+    Parameters
+    ----------
+    controller : DiscreteController
+        The design, as made on its (possibly reduced) plant.
+    lins : sequence of LinearModel
+        The full plant, with the top's elastic modes, at the positions it is judged at.
+
     Returns
     -------
     DiscreteController
