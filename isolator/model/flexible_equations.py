@@ -20,7 +20,7 @@ from isolator.model.flexible.structure import ElasticStructure
 from isolator.model.residual import carriage_paths, newton_euler_residual
 from isolator.model.rotations import cardan_matrix, cardan_to_quaternion, quaternion_rate, quaternion_to_matrix
 
-__all__ = ["FlexibleEquations", "flexible_equations"]
+__all__ = ["FlexibleEquations", "elastic_state", "flexible_equations"]
 
 @dataclass(frozen=True)
 class FlexibleEquations:
@@ -37,6 +37,20 @@ def _root_masses(structure: ElasticStructure, masses: ca.SX) -> dict[int, ca.SX]
     for i, shape in enumerate(structure.carriages):
         out[shape.root] = out.get(shape.root, ca.SX(0)) + masses[i]
     return out
+
+
+def elastic_state(structure: ElasticStructure, parents: tuple[int, ...], c: ca.SX, prm: dict[str, ca.SX],
+                  eta: ca.SX, rate: ca.SX, accel: ca.SX, acc_body: ca.SX, alpha_body: ca.SX, w_body: ca.SX,
+                  rot: ca.SX, shapes: dict[int, tuple[ca.SX, ca.SX, ca.SX]] | None = None) -> ElasticState:
+    """The elastic coordinates of a residual with the carriages' terms (:func:`carriage_terms`) for the carriages'
+    inputs ``c`` (q, q', q''), the table's orientation ``rot`` and its motion (table frame); ``shapes``: the
+    carriages' :func:`carriage_shapes` when already built."""
+    n = len(parents)
+    g_world = ca.vertcat(0, 0, -prm["gravity"])
+    shapes = carriage_shapes(structure, c, n) if shapes is None else shapes
+    terms = carriage_terms(structure, carriage_paths(c[: 3 * n], prm, parents), prm["masses"], shapes, eta, rate,
+                           accel, acc_body, alpha_body, w_body, rot.T @ g_world, g_world)
+    return ElasticState(structure, eta, rate, accel, terms)
 
 
 def _state(x: ca.SX, nm: int) -> tuple[ca.SX, ...]:
@@ -75,15 +89,8 @@ def flexible_equations(
     pos, qt, vel, w, eta, rate = _state(x, nm)
     rot = quaternion_to_matrix(qt)
     acc = ca.SX.sym("a", 6 + nm)
-    g_world = ca.vertcat(0, 0, -prm["gravity"])
     shapes = carriage_shapes(structure, c, n)
-    paths = carriage_paths(c[: 3 * n], prm, parents)
-
-    def terms(eta_: ca.SX, rate_: ca.SX, acc_: ca.SX, w_: ca.SX, g_body: ca.SX) -> tuple[ca.SX, ca.SX, ca.SX]:
-        return carriage_terms(structure, paths, prm["masses"], shapes, eta_, rate_, acc_[6:], acc_[:3], acc_[3:6],
-                              w_, g_body, g_world)
-
-    elastic = ElasticState(structure, eta, rate, acc[6:], terms(eta, rate, acc, w, rot.T @ g_world))
+    elastic = elastic_state(structure, parents, c, prm, eta, rate, acc[6:], acc[:3], acc[3:6], w, rot, shapes)
     res = newton_euler_residual(pos, rot, vel, w, acc[:3], acc[3:6], c[: 3 * n], prm, parents,
                                 ground=extra["ground"], actuator_forces=extra["actuator_forces"], elastic=elastic)
     mass = ca.jacobian(res, acc)
@@ -92,15 +99,11 @@ def flexible_equations(
     xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:6], rate, accel[6:])
 
     # the static residual: the same residual at rest in pose z[:6] with the modes at z[6:]
-    rest_paths = carriage_paths(rest[: 3 * n], prm, parents)
-    rest_shapes = carriage_shapes(structure, rest, n)
     rot0 = cardan_matrix(z[3:6])
     zero3, zero_m = ca.SX.zeros(3, 1), ca.SX.zeros(nm, 1)
-    rest_terms = carriage_terms(structure, rest_paths, prm["masses"], rest_shapes, z[6:], zero_m, zero_m, zero3,
-                                zero3, zero3, rot0.T @ g_world, g_world)
     static = newton_euler_residual(
         z[:3], rot0, zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents,
         ground=rest_extra["ground"], actuator_forces=rest_extra["actuator_forces"],
-        elastic=ElasticState(structure, z[6:], zero_m, zero_m, rest_terms))
+        elastic=elastic_state(structure, parents, rest, prm, z[6:], zero_m, zero_m, zero3, zero3, zero3, rot0))
     pose = ca.vertcat(z[:3], cardan_to_quaternion(z[3:6]), ca.SX.zeros(6, 1), z[6:], zero_m)
     return FlexibleEquations(x, xdot, static, pose)

@@ -8,10 +8,10 @@ import casadi as ca
 
 from isolator.model.elements.base import AttachmentMotion
 from isolator.model.elements.pneumatic import PNEUMATIC
-from isolator.model.flexible.coupling import ElasticState, carriage_shapes, carriage_terms
+from isolator.model.flexible_equations import elastic_state
 from isolator.model.parameters import ParameterLayout, PneumaticStructure
 from isolator.model.pneumatic_statics import element_of, rest_element_states
-from isolator.model.residual import attachment_motion, carriage_paths, newton_euler_residual
+from isolator.model.residual import attachment_motion, newton_euler_residual
 from isolator.model.rotations import cardan_matrix
 
 __all__ = ["build_linearisation"]
@@ -71,12 +71,8 @@ def build_linearisation(layout: ParameterLayout) -> ca.Function:
     pos, w_body = z0[:3] + d[:3], rot.T @ v[3:6]
     elastic = None
     if flexible is not None:
-        eta = z0[z0.shape[0] - nm:] + d[6:]
-        g_world = ca.vertcat(0, 0, -prm["gravity"])
-        terms = carriage_terms(flexible, carriage_paths(c, prm, layout.parents), prm["masses"],
-                               carriage_shapes(flexible, c, n), eta, v[6:], a[6:], rot.T @ a[:3], rot.T @ a[3:6],
-                               w_body, rot.T @ g_world, g_world)
-        elastic = ElasticState(flexible, eta, v[6:], a[6:], terms)
+        elastic = elastic_state(flexible, layout.parents, c, prm, z0[z0.shape[0] - nm:] + d[6:], v[6:], a[6:],
+                                rot.T @ a[:3], rot.T @ a[3:6], w_body, rot)
     body = newton_euler_residual(
         pos, rot, v[:3], w_body, rot.T @ a[:3], rot.T @ a[3:6], c, prm, layout.parents,
         ground=g, actuator_forces=f if layout.n_actuators else None, wrench=w,

@@ -34,13 +34,10 @@ def attachment_motion(
     stretches, rates = [], []
     for k in range(prm["positions"].shape[1]):
         s = prm["positions"][:, k]
-        if elastic is None:
-            arm = rot @ s
-            stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
-        else:
-            shape, eta, eta_rate = elastic[0][k], elastic[1], elastic[2]
-            arm = rot @ (s + shape @ eta)
-            stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm) + rot @ (shape @ eta_rate)
+        arm = rot @ (s if elastic is None else s + elastic[0][k] @ elastic[1])
+        stretch, rate = pos + arm - s, vel + ca.cross(w_world, arm)
+        if elastic is not None:  # the point's elastic velocity
+            rate = rate + rot @ (elastic[0][k] @ elastic[2])
         if ground is not None:
             stretch = stretch - ground[0:3] - ca.cross(ground[3:6], s)
             rate = rate - ground[6:9] - ca.cross(ground[9:12], s)
@@ -55,16 +52,11 @@ def carriage_paths(c: ca.SX, prm: dict[str, ca.SX], parents: tuple[int, ...]) ->
     n = len(parents)
     zero = ca.SX.zeros(3, 1)
     d: dict[int, tuple[ca.SX, ca.SX, ca.SX]] = {}
-    remaining = list(range(n))
-    while remaining:
-        for i in list(remaining):
-            if parents[i] != -1 and parents[i] not in d:
-                continue
-            remaining.remove(i)
-            base = d[parents[i]] if parents[i] != -1 else (zero, zero, zero)
-            axis = prm["axes"][:, i]
-            d[i] = (base[0] + prm["origins"][:, i] + axis * c[i], base[1] + axis * c[n + i],
-                    base[2] + axis * c[2 * n + i])
+    for i in _carriage_order(parents):
+        base = d[parents[i]] if parents[i] != -1 else (zero, zero, zero)
+        axis = prm["axes"][:, i]
+        d[i] = (base[0] + prm["origins"][:, i] + axis * c[i], base[1] + axis * c[n + i],
+                base[2] + axis * c[2 * n + i])
     return [d[i] for i in range(n)]
 
 
@@ -205,23 +197,24 @@ def newton_euler_residual(
     motion = attachment_motion(pos, rot, vel, w, prm, ground,
                                None if elastic is None else (shapes, elastic.eta, elastic.rate))
     modal_force = ca.SX.zeros(structure.n_modes if structure is not None else 0, 1)
-    for k, f in enumerate(element.forces(prm, motion, element_states, load)):
+
+    def act(point: ca.SX, shape: ca.DM | None, f: ca.SX) -> None:
+        """A force ``f`` (world) at a table point; on a bending top at its displaced point, loading the modes."""
+        nonlocal force, moment, modal_force
         force += f
-        if elastic is None:
-            moment += ca.cross(rot @ prm["positions"][:, k], f)
+        if elastic is None or shape is None:
+            moment += ca.cross(rot @ point, f)
         else:
-            moment += ca.cross(rot @ (prm["positions"][:, k] + shapes[k] @ elastic.eta), f)
-            modal_force += shapes[k].T @ (rot.T @ f)
+            moment += ca.cross(rot @ (point + shape @ elastic.eta), f)
+            modal_force += shape.T @ (rot.T @ f)
+
+    for k, f in enumerate(element.forces(prm, motion, element_states, load)):
+        act(prm["positions"][:, k], shapes[k] if shapes else None, f)
     if actuator_forces is not None:
         at = modal_shapes(structure.actuators, structure) if structure is not None else []
         for k in range(actuator_forces.shape[0]):
-            f = prm["actuator_directions"][:, k] * actuator_forces[k]
-            force += f
-            if elastic is None:
-                moment += ca.cross(rot @ prm["actuator_positions"][:, k], f)
-            else:
-                moment += ca.cross(rot @ (prm["actuator_positions"][:, k] + at[k] @ elastic.eta), f)
-                modal_force += at[k].T @ (rot.T @ f)
+            act(prm["actuator_positions"][:, k], at[k] if at else None,
+                prm["actuator_directions"][:, k] * actuator_forces[k])
     if wrench is not None:
         force += wrench[0:3]
         moment += wrench[3:6]

@@ -8,7 +8,6 @@ Run by the file reader and :func:`isolator.scenario.validation.validate_scenario
 
 from __future__ import annotations
 
-import math
 from collections.abc import Iterator
 from typing import Any
 
@@ -19,23 +18,7 @@ from isolator.scenario.definitions import Scenario
 from isolator.scenario.flexible import ModalData, check_top
 from isolator.scenario.flexible.faces import is_single_layer
 
-__all__ = ["carriage_travel", "check_flexible", "standing"]
-
-
-def carriage_travel(scenario: Scenario) -> np.ndarray:
-    """Each carriage's least and largest coordinate over its motion [m], (carriages, 2): its profile over the run
-    (sampled as :func:`~isolator.scenario.validation.check_strokes` samples it), or the configurations of the
-    ``[sequence]``."""
-    names = [c.name for c in scenario.carriages]
-    if scenario.sequence is not None and names:
-        q = scenario.sequence.configurations(names).T
-    else:
-        t_end = scenario.simulation.duration
-        if math.isfinite(scenario.stop_time):
-            t_end = max(t_end, scenario.stop_time)
-        times = np.union1d(np.linspace(0.0, t_end, 4001), [b for b in scenario.breakpoints if 0.0 <= b <= t_end])
-        q = np.array([c.profile.evaluate(times)[0] for c in scenario.carriages]).reshape(len(names), -1)
-    return np.column_stack([q.min(axis=1), q.max(axis=1)]) if names else np.zeros((0, 2))
+__all__ = ["check_flexible", "standing"]
 
 
 def standing(scenario: Scenario) -> Iterator[tuple[str, np.ndarray, np.ndarray]]:
@@ -52,7 +35,7 @@ def standing(scenario: Scenario) -> Iterator[tuple[str, np.ndarray, np.ndarray]]
             yield f"sensors[{i}] ({sensor.name}).position", np.asarray(sensor.position, dtype=float), one
     for i, point in enumerate(scenario.points):
         yield from _feet(f"points[{i}] ({point.name})", "", np.asarray(point.position, dtype=float), point.feet)
-    travel = carriage_travel(scenario)
+    travel = scenario.travel()  # (carriages, 2): the profiles' range over the run, or the sequence's
     positions = scenario.carriage_positions(travel) if scenario.carriages else np.zeros((0, 3, 2))
     for i, carriage in enumerate(scenario.carriages):
         if carriage.parent != "table":

@@ -34,7 +34,7 @@ from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.controller_schema import spectral_radius
-from isolator.simulation.sensors import _motion_function
+from isolator.simulation.sensors import _motion_function, modal_count
 
 __all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "readings", "rotation", "sampled_loop"]
 
@@ -104,12 +104,12 @@ def readings(model: Model, sensors: tuple[Sensor, ...] | None, x: ca.SX, c: ca.S
     """The inputs' noise-free readings at a state (floor sensors: zero, their signal is an offset)."""
     if sensors is None:
         return model.variant.sensed_motion(x, ref)
-    motion, rates = _motion_function(model)(x, c, p, ref)
+    sensed = _motion_function(model)(x, c, p, ref)
+    motion, rates = sensed[0], sensed[1]
     rot, rot0 = rotation(x, model.kind), rotation(ref, model.kind)
     flexible = model.layout.flexible
-    nm = 0 if flexible is None else flexible.n_modes
-    modal = None if flexible is None else (x[13:13 + nm], x[13 + nm:13 + 2 * nm],
-                                           model.rhs(x, c, p)[13 + nm:13 + 2 * nm], ref[13:13 + nm])
+    nm = modal_count(model)
+    modal = None if flexible is None else (x[13:13 + nm], x[13 + nm:13 + 2 * nm], sensed[2], ref[13:13 + nm])
     out = []
     for s in sensors:
         if s.on != "table":

@@ -36,7 +36,8 @@ __all__ = ["floor_motion", "sensor_columns", "sensor_history", "sensor_signals",
 def _motion_function(model: Model) -> ca.Function:
     """``(x, c, p, ref) -> (motion (12,), rates (6,))``: the sensed motion of the mass centre (displacement,
     rotation vector, velocity, angular velocity; world axes) and the time derivative of its velocities along
-    the model's right-hand side."""
+    the model's right-hand side; on a top that bends a third output, the modal accelerations (modes,) of that
+    same right-hand side."""
     x = ca.SX.sym("x", model.n_states)
     ref = ca.SX.sym("ref", model.n_states)
     c = ca.SX.sym("c", model.layout.input_size)
@@ -44,7 +45,13 @@ def _motion_function(model: Model) -> ca.Function:
     motion = model.variant.sensed_motion(x, ref)
     xdot = model.rhs(x, c, p)
     rates = ca.jacobian(motion[6:12], x) @ xdot
-    return ca.Function("sensed_rates", [x, c, p, ref], [motion, rates])
+    nm = modal_count(model)
+    return ca.Function("sensed_rates", [x, c, p, ref], [motion, rates] + ([xdot[13 + nm:13 + 2 * nm]] if nm else []))
+
+
+def modal_count(model: Model) -> int:
+    """The number of a bending top's modal coordinates in the model's state (0 on a rigid top)."""
+    return 0 if model.layout.flexible is None else model.layout.flexible.n_modes
 
 
 @lru_cache(maxsize=16)
@@ -58,13 +65,15 @@ def table_motion(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.nda
     """The mass centre's velocity and acceleration, the table's angular velocity and angular acceleration
     (each (N, 3), world axes, [m/s], [m/s^2], [rad/s], [rad/s^2]) at states (N, n_states) with the model's
     inputs (N, input size) there and the parameter vector ``p``."""
-    motion, rates = _mapped(model)(np.asarray(states, dtype=float), np.asarray(inputs, dtype=float),
-                                   np.asarray(p, dtype=float), np.asarray(start, dtype=float))
+    out = _mapped(model)(np.asarray(states, dtype=float), np.asarray(inputs, dtype=float),
+                         np.asarray(p, dtype=float), np.asarray(start, dtype=float))
+    motion, rates = out[0], out[1]
     return motion[:, 6:9], rates[:, 0:3], motion[:, 9:12], rates[:, 3:6]
 
 
 def model_rates(model: Model, states: np.ndarray, inputs: np.ndarray, p: np.ndarray) -> np.ndarray:
-    """The model's right-hand side (N, n_states) at states (N, n_states) with its inputs (N, input size)."""
+    """The model's right-hand side (N, n_states) at states (N, n_states) with its inputs (N, input size), as
+    casadi evaluates the one symbolic model (as the compiled loop's readings do: equal to round-off of it)."""
     return np.asarray(model.rhs(states.T, inputs.T, p)).T
 
 
@@ -124,10 +133,10 @@ def sensor_signals(scenario: Scenario, model: Model, t: np.ndarray, states: np.n
             moving = accelerating = np.zeros_like(lever)
             if shapes is not None:  # a top that bends: the elastic translation at the sensor and its rates
                 nm = shapes.shape[2]
-                rates = model_rates(model, states, inputs, p)[:, 13 + nm:13 + 2 * nm]
+                modal_acceleration = model_rates(model, states, inputs, p)[:, 13 + nm:13 + 2 * nm]
                 lever = lever + np.einsum("pim,nm->pni", shapes, states[:, 13:13 + nm])
                 moving = np.einsum("nij,pjm,nm->pni", rot, shapes, states[:, 13 + nm:13 + 2 * nm])
-                accelerating = np.einsum("nij,pjm,nm->pni", rot, shapes, rates)
+                accelerating = np.einsum("nij,pjm,nm->pni", rot, shapes, modal_acceleration)
             turned = np.einsum("nij,pnj->pni", rot, lever)  # (points, N, 3)
             by_order[1] = np.einsum("pni,pi->pn", v[None] + np.cross(w[None], turned) + moving, directions)
             by_order[2] = np.einsum("pni,pi->pn", a[None] + np.cross(alpha[None], turned)

@@ -36,8 +36,8 @@ _SCAN_PER_METRE = 2000
 
 def feet_translation(data: Any, position: np.ndarray, feet: tuple[tuple[float, float], ...] | None,
                      what: str) -> np.ndarray:
-    """The mean elastic translation of a thing's feet, per unit modal coordinate (3, modes) [m/sqrt(kg)... per
-    modal unit].
+    """The mean elastic translation of a thing's feet per unit of each modal coordinate, (3, modes), in the modal
+    file's units (mass-normalised: m/sqrt(kg)); :meth:`ModalData.point_translation` transposed.
 
     Parameters
     ----------
@@ -50,11 +50,7 @@ def feet_translation(data: Any, position: np.ndarray, feet: tuple[tuple[float, f
     what : str
         The thing, for errors (a foot off the face).
     """
-    position = np.asarray(position, dtype=float)
-    offsets = np.zeros((1, 2)) if not feet else np.asarray(feet, dtype=float).reshape(-1, 2)
-    xy = position[None, :2] + offsets
-    shapes = np.asarray(data.translation(xy, data.face_for(float(position[2])), what), dtype=float)
-    return np.ascontiguousarray(shapes.mean(axis=0).T)  # (k, n, 3) -> (3, n)
+    return np.ascontiguousarray(np.asarray(data.point_translation(position, feet, what), dtype=float).T)
 
 
 def point_shape(table: Any, position: Any, feet: Any, what: str) -> np.ndarray | None:
@@ -153,12 +149,8 @@ class ElasticStructure:
         flexible = getattr(scenario.table, "flexible", None)
         if flexible is None:
             return None
-        stop = scenario.stop_time
-        horizon = max(scenario.simulation.duration, stop if np.isfinite(stop) else 0.0)
-        carriages = tuple(
-            (c.parent, tuple(c.axis), tuple(c.origin), _feet_of(c), c.name,
-             tuple(float(v) for v in c.profile.position_range(horizon)))
-            for c in scenario.carriages)
+        carriages = tuple((c.parent, tuple(c.axis), tuple(c.origin), _feet_of(c), c.name, (float(lo), float(hi)))
+                          for c, (lo, hi) in zip(scenario.carriages, scenario.travel(), strict=True))
         return _build(flexible, tuple(tuple(iso.position) for iso in scenario.isolators),
                       tuple(tuple(act.position) for act in scenario.actuators), carriages)
 
