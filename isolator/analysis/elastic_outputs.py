@@ -11,29 +11,24 @@ from typing import Any
 
 import numpy as np
 
-from isolator.model.flexible.structure import ElasticStructure, point_shape
+from isolator.analysis.sensor_outputs import skew_matrix
+from isolator.model.flexible.structure import point_shape
 from isolator.model.rotations import pose_rotation
 from isolator.scenario.definitions import Scenario, Table
 
 __all__ = ["point_force_weights", "point_rows", "sensor_shapes"]
 
 
-def _skew(r: np.ndarray) -> np.ndarray:
-    return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
-
-
-def point_rows(point: Any, rot0: np.ndarray, ndof: int, table: Table, flexible: ElasticStructure | None
-               ) -> np.ndarray:
+def point_rows(point: Any, rot0: np.ndarray, ndof: int, table: Table) -> np.ndarray:
     """Output rows of a point over the states ``(d, d')`` (``ndof`` each): its world displacement ``x, y, z``
     [m], then on a bending top its elastic translation ``ex, ey, ez`` (table axes) [m]."""
     arm = rot0 @ np.asarray(point.position, dtype=float)
-    rows = np.zeros((3 if flexible is None else 6, 2 * ndof))
-    rows[:3, :3], rows[:3, 3:6] = np.eye(3), -_skew(arm)
-    if flexible is not None:
-        shape = point_shape(table, point.position, getattr(point, "feet", None), f"points ({point.name})")
-        if shape is not None:
-            rows[:3, 6:ndof] = rot0 @ shape
-            rows[3:, 6:ndof] = shape
+    shape = point_shape(table, point.position, getattr(point, "feet", None), f"points ({point.name})")
+    rows = np.zeros((3 if shape is None else 6, 2 * ndof))
+    rows[:3, :3], rows[:3, 3:6] = np.eye(3), -skew_matrix(arm)
+    if shape is not None:
+        rows[:3, 6:ndof] = rot0 @ shape
+        rows[3:, 6:ndof] = shape
     return rows
 
 

@@ -34,7 +34,6 @@ from isolator.analysis.signal_names import labels, signals, to_control
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
-from isolator.model.flexible.structure import ElasticStructure
 from isolator.model.linearisation import build_linearisation
 from isolator.model.parameters import ParameterLayout
 from isolator.model.rotations import pose_rotation
@@ -343,7 +342,7 @@ def linearise(
     air = None if layout.pneumatic is None else AirMatrices(_air_names(scenario), *mats[7:])
     ndof = mass.shape[0]
     force_input = np.hstack([bw, ba.reshape(ndof, -1), -np.eye(ndof, ndof - 6, -6)])  # then generalised modal forces
-    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air, layout.flexible)
+    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air)
     return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p, air)
 
 
@@ -357,7 +356,6 @@ def _state_space(
     g1: np.ndarray,
     force_input: np.ndarray,
     air: AirMatrices | None = None,
-    flexible: ElasticStructure | None = None,
 ) -> control.StateSpace:
     import control  # python-control takes most of a second to import: only when needed
     ndof = mass.shape[0]
@@ -377,10 +375,8 @@ def _state_space(
     rows = [np.hstack([np.eye(6, ndof), np.zeros((6, ndof))])]
     out_names = list(DOF_NAMES)
     for point in scenario.points:
-        rows.append(point_rows(point, rot0, ndof, scenario.table, flexible))
-        out_names += [f"{point.name}:{a}" for a in "xyz"]
-        if flexible is not None:
-            out_names += [f"{point.name}:e{a}" for a in "xyz"]
+        rows.append(point_rows(point, rot0, ndof, scenario.table))
+        out_names += [f"{point.name}:{a}" for a in ("x", "y", "z", "ex", "ey", "ez")[:rows[-1].shape[0]]]
     c = np.hstack([np.vstack(rows), np.zeros((sum(r.shape[0] for r in rows), n_air))])
     modes = [f"eta{i + 1}" for i in range(ndof - 6)]
     inputs = [*GROUND_INPUTS, *FORCE_INPUTS, *(f"actuator:{act.name}" for act in scenario.actuators),

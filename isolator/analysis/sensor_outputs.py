@@ -31,10 +31,11 @@ from isolator.scenario.sensors import Sensor
 if TYPE_CHECKING:  # python-control takes most of a second to import: imported where used
     import control
 
-__all__ = ["displacement_rows", "sensor_response", "sensor_rows"]
+__all__ = ["displacement_rows", "sensor_response", "sensor_rows", "skew_matrix"]
 
 
-def _skew(r: np.ndarray) -> np.ndarray:
+def skew_matrix(r: np.ndarray) -> np.ndarray:
+    """``[r]x`` (3, 3): ``[r]x v = r x v``."""
     return np.array([[0.0, -r[2], r[1]], [r[2], 0.0, -r[0]], [-r[1], r[0], 0.0]])
 
 
@@ -52,7 +53,7 @@ def displacement_rows(sensors: Sequence[Sensor], rot0: np.ndarray, n_states: int
             d[i, 0:3] = n
         else:
             arm = rot0 @ np.asarray(s.position, dtype=float)
-            c[i, 0:3], c[i, 3:6] = n, -n @ _skew(arm)
+            c[i, 0:3], c[i, 3:6] = n, -n @ skew_matrix(arm)
             shape = None if shapes is None else shapes[i]
             if shape is not None:
                 c[i, 6:6 + shape.shape[1]] = n @ rot0 @ shape

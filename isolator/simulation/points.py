@@ -51,10 +51,11 @@ def point_positions(states: np.ndarray, arms: np.ndarray, kind: str, shapes: np.
     top with their elastic translation per modal coordinate ``shapes`` (points, 3, modes)."""
     states = np.atleast_2d(np.asarray(states, dtype=float))
     rot = rotation_matrices(states, kind)
-    lever = np.asarray(arms, dtype=float).reshape(-1, 3)[:, :, None]
-    if shapes is not None:
-        lever = lever + elastic_translation(states, shapes)
-    turned = np.einsum("nij,pjn->pin", rot, np.broadcast_to(lever, (lever.shape[0], 3, states.shape[0])))
+    arms = np.asarray(arms, dtype=float).reshape(-1, 3)
+    if shapes is None:
+        turned = np.einsum("nij,pj->pin", rot, arms)
+    else:  # the lever of each point at each state: its arm and its elastic translation
+        turned = np.einsum("nij,pjn->pin", rot, arms[:, :, None] + elastic_translation(states, shapes))
     return turned + states[:, 0:3].T[None, :, :]
 
 

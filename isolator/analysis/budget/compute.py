@@ -198,7 +198,7 @@ def _relative_outputs(lin: LinearModel, relative: Sequence[str], n_outputs: int
         pairs.append(f"{a}:{b}")
     if not pairs:
         return (), [], None
-    bends = f"{names[0]}:ex" in lin.output_names
+    bends = getattr(lin.scenario.table, "flexible", None) is not None  # a rigid top has no elastic outputs
     extra = [f"{p}:e{a}" for pair in pairs for p in pair.split(":") for a in AXES] if bends else []
     rows = n_outputs + 3 * len(pairs)
     combine = np.zeros((rows, n_outputs + len(extra)))
