@@ -6,7 +6,8 @@ State: the rigid table's 13 (position, quaternion, velocity, body rate), then th
 the carriages' weights and any steady force. Every term comes from the one residual
 (:func:`isolator.model.residual.newton_euler_residual` with an :class:`ElasticState`). The model has no
 staged form: the whole right-hand side is stepped (its time-only part, the carriages' elastic terms, would be
-larger than the state).
+larger than the state); :mod:`isolator.model.quasi_static_top` is the same model with the modes
+quasi-static, which has one.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from isolator.model.flexible.structure import ElasticStructure
 from isolator.model.residual import carriage_paths, newton_euler_residual
 from isolator.model.rotations import cardan_matrix, cardan_to_quaternion, quaternion_rate, quaternion_to_matrix
 
-__all__ = ["FlexibleEquations", "elastic_state", "flexible_equations"]
+__all__ = ["FlexibleEquations", "elastic_state", "flexible_equations", "flexible_static"]
 
 @dataclass(frozen=True)
 class FlexibleEquations:
@@ -55,6 +56,21 @@ def elastic_state(structure: ElasticStructure, parents: tuple[int, ...], c: ca.S
 
 def _state(x: ca.SX, nm: int) -> tuple[ca.SX, ...]:
     return x[0:3], x[3:7], x[7:10], x[10:13], x[13:13 + nm], x[13 + nm:13 + 2 * nm]
+
+
+def flexible_static(structure: ElasticStructure, parents: tuple[int, ...], prm: dict[str, ca.SX], z: ca.SX,
+                    rest: ca.SX, rest_extra: dict[str, ca.SX | None]) -> tuple[ca.SX, ca.SX]:
+    """The static residual (the residual at rest in pose ``z[:6]`` with the modes at ``z[6:]``, the carriages
+    parked at ``rest``'s positions) and the rest state of ``z`` (the modes at rest, every rate zero)."""
+    n, nm = len(parents), structure.n_modes
+    rot0 = cardan_matrix(z[3:6])
+    zero3, zero_m = ca.SX.zeros(3, 1), ca.SX.zeros(nm, 1)
+    static = newton_euler_residual(
+        z[:3], rot0, zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents,
+        ground=rest_extra["ground"], actuator_forces=rest_extra["actuator_forces"],
+        elastic=elastic_state(structure, parents, rest, prm, z[6:], zero_m, zero_m, zero3, zero3, zero3, rot0))
+    pose = ca.vertcat(z[:3], cardan_to_quaternion(z[3:6]), ca.SX.zeros(6, 1), z[6:], zero_m)
+    return static, pose
 
 
 def flexible_equations(
@@ -98,12 +114,5 @@ def flexible_equations(
                        -ca.substitute(res, acc, ca.SX.zeros(6 + nm, 1)))
     xdot = ca.vertcat(vel, quaternion_rate(qt, w), rot @ accel[:3], accel[3:6], rate, accel[6:])
 
-    # the static residual: the same residual at rest in pose z[:6] with the modes at z[6:]
-    rot0 = cardan_matrix(z[3:6])
-    zero3, zero_m = ca.SX.zeros(3, 1), ca.SX.zeros(nm, 1)
-    static = newton_euler_residual(
-        z[:3], rot0, zero3, zero3, zero3, zero3, rest[: 3 * n], prm, parents,
-        ground=rest_extra["ground"], actuator_forces=rest_extra["actuator_forces"],
-        elastic=elastic_state(structure, parents, rest, prm, z[6:], zero_m, zero_m, zero3, zero3, zero3, rot0))
-    pose = ca.vertcat(z[:3], cardan_to_quaternion(z[3:6]), ca.SX.zeros(6, 1), z[6:], zero_m)
+    static, pose = flexible_static(structure, parents, prm, z, rest, rest_extra)
     return FlexibleEquations(x, xdot, static, pose)

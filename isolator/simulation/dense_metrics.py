@@ -28,6 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from isolator.model.quasi_static_top import QuasiStaticTop
 from isolator.model.variants import Model
 from isolator.numerics.dop853_driver import Dop853Driver
 from isolator.numerics.step_plan import StepPlan
@@ -82,7 +83,8 @@ class DenseRuns:
     compiled: Dop853Driver | None = None
 
     @classmethod
-    def of_run(cls, plan: StepPlan, stepped: tuple[np.ndarray, ...], reference: np.ndarray, model: Model) -> DenseRuns:
+    def of_run(cls, plan: StepPlan, stepped: tuple[np.ndarray, ...], reference: np.ndarray,
+               model: Model | QuasiStaticTop) -> DenseRuns:
         """One run's (``R`` = 1): ``stepped`` the signals at the slots, the steps' peaks and deviations and their
         dense output as ``DenseStepper.run_slots`` gives them for one run, ``reference`` its start state; computed
         in the compiled loop of ``model`` when it has one."""

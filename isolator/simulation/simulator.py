@@ -5,10 +5,9 @@ controller ticking in the compiled loop (:mod:`isolator.simulation.closed_loop`)
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable, Mapping, Sequence
 from functools import cache
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 
@@ -18,8 +17,7 @@ from isolator.model.equilibrium import Equilibrium, air_in_groups, static_equili
 from isolator.model.names import expand_changes
 from isolator.model.parameters import ParameterLayout
 from isolator.model.tipping import rocking_over, tipping_verdict, travel_configurations
-from isolator.numerics.dop853 import DenseStepper, StepPlan, step_plan
-from isolator.numerics.step_plan import PROBES
+from isolator.numerics.dop853 import DenseStepper, StepPlan
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import SIGNALS, Scenario
 from isolator.scenario.validation import check_motion
@@ -29,35 +27,32 @@ from isolator.simulation.batch_setup import both_rests
 from isolator.simulation.closed_loop import FeedbackLaw, LoopGrids, closed_loop_run
 from isolator.simulation.dense_metrics import DenseRuns, run_metrics
 from isolator.simulation.discrete_controller import DiscreteController
+from isolator.simulation.elastic_method import QuasiStaticRun, check_elastic
 from isolator.simulation.leveling import PneumaticResult, metric_grid, pneumatic_result
+from isolator.simulation.method_choice import MethodChoice
 from isolator.simulation.resources import check_run_memory
 from isolator.simulation.response import Response
 from isolator.simulation.scaling import scaled_parameter_sets
 from isolator.simulation.sensors import sensor_history
 from isolator.simulation.settling import Band, SettlingResult, settling_metrics, signal_peaks
 from isolator.simulation.stepping import (
-    DENSE_STEP_ANGLE,
-    MAX_DENSE_STEP,
-    STEP_ANGLE,
     Method,
-    check_step_count,
     check_turn,
     dense_stepper,
-    fastest_rate,
     hold_time,
     plan_stage_inputs,
     rk4_stepper,
 )
 from isolator.simulation.tail_check import run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
-from isolator.simulation.valve_events import dense_run, with_switches
+from isolator.simulation.valve_events import dense_run
 from isolator.simulation.window_random import with_random_margins
 from isolator.simulation.window_settling import run_points
 
 __all__ = ["FeedbackLaw", "Method", "Simulator", "get_model"]
 
 
-class Simulator:
+class Simulator(MethodChoice):
     """A scenario's model built once, run many times.
 
     Parameters
@@ -66,6 +61,8 @@ class Simulator:
         The scenario (or a bundled scenario's name, or a TOML file's path).
     model : {"exact", "paper"}
         The exact rigid-body model, or the paper's small-angle model.
+    elastic : {"auto", "dynamic", "quasi-static"}
+        A bending top's modes in a transient (:mod:`isolator.simulation.elastic_method`).
 
     Examples
     --------
@@ -75,7 +72,8 @@ class Simulator:
     >>> response.settling_time_max  # doctest: +SKIP
     """
 
-    def __init__(self, scenario: Scenario, model: str = "exact") -> None:
+    def __init__(self, scenario: Scenario, model: str = "exact", elastic: str = "auto") -> None:
+        self.elastic = check_elastic(elastic)
         check_motion(scenario)
         check_run_memory(scenario)  # a grid the machine cannot hold: one clear error, not numpy's
         self.scenario = scenario
@@ -92,6 +90,7 @@ class Simulator:
         self._loops: LoopGrids = {}  # the closed loops' grids and inputs
         self._plans: dict[int, StepPlan] = {}
         self._staged: dict[tuple[int, bytes], np.ndarray] = {}
+        self._quasi_values: dict[tuple[int, bytes], Any] = {}  # a quasi-static top's stage values
         self._sample_inputs: np.ndarray | None = None
         self._tipping: dict[bytes, str] = {}
 
@@ -140,39 +139,6 @@ class Simulator:
         )
         where = "with the carriages at their final positions"
         return start, list(static_equilibria(self.model, params, last, where, air=air))
-
-    def substeps_for(self, omega_max: float, grid: TimeGrid | None = None, actuated: bool = False) -> int:
-        """RK4 steps per interval of ``grid`` (default the run's) for a fastest eigenvalue ``omega_max`` [rad/s],
-        the actuators' lags among the rates when they act (``actuated``: :func:`fastest_rate`)."""
-        omega = fastest_rate(self.scenario, omega_max, actuated)
-        longest = self._longest_interval if grid is None else float(np.max(np.diff(grid.nodes), initial=0.0))
-        return max(1, math.ceil(omega * longest / STEP_ANGLE))
-
-    def method_for(self, omega_max: float, actuated: bool = False) -> Method:
-        """The cheaper integration for a fastest eigenvalue ``omega_max`` [rad/s].
-
-        DOP853 steps with |lambda| h <= ``DENSE_STEP_ANGLE`` between the breakpoints,
-        unless breakpoints are so dense (sampled profiles) that RK4 on the sample
-        grid costs fewer right-hand-side evaluations; RK4 whenever the actuators act
-        (``actuated``: forces, a feedback law or a controller), their lags among the rates.
-        """
-        substeps = self.substeps_for(omega_max, actuated=actuated)
-        omega = max(fastest_rate(self.scenario, omega_max, actuated), 1e-12)
-        check_step_count(omega, float(self.grid.nodes[-1]), DENSE_STEP_ANGLE, self.scenario)
-        if actuated:
-            return Method(substeps)
-        key = max(0, math.ceil(8 * math.log2(MAX_DENSE_STEP * omega / DENSE_STEP_ANGLE)))
-        if key not in self._plans:
-            self._plans[key] = self.step_plan(key)
-        plan = self._plans[key]
-        if plan.evaluations >= 4 * substeps * (self.grid.nodes.size - 1):
-            return Method(substeps)
-        return Method(substeps, plan, key)
-
-    def step_plan(self, key: int, switches: np.ndarray | None = None) -> StepPlan:
-        """DOP853 steps of at most ``MAX_DENSE_STEP 2^(-key/8)`` [s] between the breakpoints and ``switches``."""
-        return step_plan(self.grid.samples, with_switches(self._breakpoints, switches, float(self.grid.nodes[-1])),
-                         MAX_DENSE_STEP * 2.0 ** (-key / 8), end=self.grid.nodes[-1], probes=PROBES)
 
     def check_tipping(self, p: np.ndarray) -> None:
         """Refuse what ``isolator stability`` calls unstable, in its words (:mod:`isolator.model.tipping`)."""
@@ -254,8 +220,8 @@ class Simulator:
         self.check_tipping(p)
         start, end = self.equilibria(p)
         actuated = forces is not None or feedback is not None or controller is not None
-        method = self.method_for(max(start.max_frequency, end.max_frequency if end else 0.0), actuated)
-        return self.run_method(p, start, end, method, forces, feedback, band, controller, noise, seed)
+        return self.run_method(p, start, end, self.method_of(start, end, actuated), forces, feedback, band, controller,
+                               noise, seed)
 
     def run_method(
         self,
@@ -279,27 +245,31 @@ class Simulator:
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
         if forces is None and feedback is None and controller is None and method.plan is not None:
-            plan, (raw, step_peaks, deviations, polynomials, signals) = dense_run(self, method, p, start, final)
+            quasi = QuasiStaticRun(self, p, start, self._quasi_values) if method.quasi_static else None
+            stepping, first = (self, start) if quasi is None else (quasi, quasi.start)
+            plan, (raw, step_peaks, deviations, polynomials, signals) = dense_run(stepping, method, p, first, final)
             if not np.all(np.isfinite(polynomials)):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
-            runs = DenseRuns.of_run(plan, (raw, step_peaks, deviations, polynomials), start.state, self.model)
+            runs = DenseRuns.of_run(plan, (raw, step_peaks, deviations, polynomials), first.state, stepping.model)
             x0, dense = start.state, polynomials
+            expand = (lambda _, x: x) if quasi is None else quasi.expand  # the full model's states
+            end_time = np.array([plan.end])
             free = run_tail(self.scenario, self.model, p, start, end,
-                            DenseStepper.states_at(plan, dense, np.array([plan.end]))[0], plan.end)
+                            expand(end_time, DenseStepper.states_at(plan, dense, end_time))[0], plan.end)
 
             def measure(rule: Band) -> dict[str, SettlingResult]:
                 return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals, *free)
 
             @cache  # the states at the samples, once for the response, leveling and windows
             def history() -> np.ndarray:
-                return np.vstack([x0, DenseStepper.states(plan, dense)])
+                return np.vstack([x0, expand(grid.samples[1:], DenseStepper.states(plan, dense))])
 
             @cache  # leveling and windows, read at >= 1 kHz (the samples themselves when as dense)
             def fine() -> tuple[np.ndarray, np.ndarray]:
                 times = metric_grid(grid.samples, float(grid.nodes[-1]))
                 return times, history() if times is grid.samples else np.vstack(
-                    [x0, DenseStepper.states_at(plan, dense, times[1:])])
+                    [x0, expand(times[1:], DenseStepper.states_at(plan, dense, times[1:]))])
 
             states: np.ndarray | None = None
             at_samples = self._at_samples()

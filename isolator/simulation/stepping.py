@@ -13,6 +13,7 @@ import numpy as np
 from isolator.errors import ScenarioError, SimulationError
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
+from isolator.model.quasi_static_top import QuasiStaticTop
 from isolator.model.signals import signal_function
 from isolator.model.variants import Model
 from isolator.numerics.dop853 import DenseStepper, StepPlan
@@ -62,11 +63,13 @@ _DENSE: dict[tuple[ParameterLayout, str, int, bool], DenseStepper] = {}
 
 @dataclass(frozen=True)
 class Method:
-    """How a run is integrated: DOP853 steps (``plan``) or RK4 on the sample grid (``substeps``)."""
+    """How a run is integrated: DOP853 steps (``plan``) or RK4 on the sample grid (``substeps``); a bending
+    top's modes quasi-static (:mod:`isolator.simulation.elastic_method`) when ``quasi_static``."""
 
     substeps: int
     plan: StepPlan | None = None
     plan_key: int = 0
+    quasi_static: bool = False
 
 
 def rk4_stepper(model: Model, substeps: int) -> Stepper:
@@ -77,7 +80,7 @@ def rk4_stepper(model: Model, substeps: int) -> Stepper:
     return _STEPPERS[key]
 
 
-def dense_stepper(model: Model, lanes: int = 1, staged: bool = True) -> DenseStepper:
+def dense_stepper(model: Model | QuasiStaticTop, lanes: int = 1, staged: bool = True) -> DenseStepper:
     """The DOP853 stepper of a model, ``lanes`` runs per call (built once); ``staged`` False: through the
     whole right-hand side (:class:`~isolator.numerics.systems.Unstaged`: inputs shared by runs whose
     time-only part differs)."""
@@ -89,7 +92,7 @@ def dense_stepper(model: Model, lanes: int = 1, staged: bool = True) -> DenseSte
 
 
 @lru_cache(maxsize=16)
-def signal_width(model: Model) -> int:
+def signal_width(model: Model | QuasiStaticTop) -> int:
     """How many leading states the table signals read (their dense output is all the metrics need)."""
     return max(signal_rows(signal_function(model.variant, model.n_states), model.n_states)) + 1
 

@@ -29,6 +29,7 @@ __all__ = [
     "grid_breakpoints",
     "inputs_at",
     "internal_rate",
+    "layout_inputs",
     "model_inputs",
     "stage_times",
     "time_grid",
@@ -160,8 +161,12 @@ def inputs_at(scenario: Scenario, times: np.ndarray, mid: np.ndarray) -> np.ndar
     -------
     ndarray, shape (*times.shape, input size)
     """
+    return layout_inputs(scenario, ParameterLayout.of(scenario), times, mid)
+
+
+def layout_inputs(scenario: Scenario, layout: ParameterLayout, times: np.ndarray, mid: np.ndarray) -> np.ndarray:
+    """:func:`inputs_at` with the scenario's layout already made (a bending top's takes a while)."""
     n = len(scenario.carriages)
-    layout = ParameterLayout.of(scenario)
     out = np.zeros((*times.shape, layout.input_size))
     for i, carriage in enumerate(scenario.carriages):
         q, v, a = carriage.profile.evaluate(times, mid)

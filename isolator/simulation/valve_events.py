@@ -22,6 +22,7 @@ import numpy as np
 
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.parameters import ParameterLayout
+from isolator.model.quasi_static_top import QuasiStaticTop
 from isolator.model.variants import Model
 from isolator.numerics.dop853 import DenseStepper
 from isolator.numerics.step_plan import StepPlan
@@ -156,7 +157,10 @@ class DenseSimulator(Protocol):
 
     scenario: Scenario
     layout: ParameterLayout
-    model: Model
+
+    @property
+    def model(self) -> Model | QuasiStaticTop:
+        """What is stepped (a quasi-static top's plans have no valve switches: its tables have no valves)."""
 
     def plan_inputs(self, method: Method, p: np.ndarray) -> np.ndarray: ...
 
@@ -174,7 +178,8 @@ def dense_run(sim: DenseSimulator, method: Method, p: np.ndarray, start: Equilib
         raise ValueError("dense_run: the method steps RK4 on the sample grid, it has no step plan")
 
     def step(steps: StepPlan) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        inputs = sim.plan_inputs(method, p) if steps is plan else stage_inputs(sim.scenario, sim.model, steps, p)
+        inputs = sim.plan_inputs(method, p) if steps is plan or not isinstance(sim.model, Model) else stage_inputs(
+            sim.scenario, sim.model, steps, p)
         samples = np.zeros((6, steps.sample_slots.size + 1))
         raw, peaks, deviations, polynomials = stepper.run_slots(start.state, steps, inputs, p, start.state,
                                                                 with_states=True, final=final, samples=samples)

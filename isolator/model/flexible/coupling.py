@@ -24,7 +24,6 @@ from dataclasses import dataclass
 
 import casadi as ca
 import numpy as np
-from numpy.polynomial import chebyshev
 
 from isolator.model.blocks import solve_blocks
 from isolator.model.flexible.structure import ElasticStructure
@@ -85,10 +84,7 @@ def carriage_shapes(structure: ElasticStructure, c: ca.SX, n: int) -> dict[int, 
         r = shape.root
         q, qd, qdd = c[r], c[n + r], c[2 * n + r]
         lo, hi = shape.domain
-        scale = 2.0 / (hi - lo)
-        coeffs = shape.array(nm)
-        first = chebyshev.chebder(coeffs, 1, scl=scale) if coeffs.shape[0] > 1 else np.zeros((1, 3, nm))
-        second = chebyshev.chebder(coeffs, 2, scl=scale) if coeffs.shape[0] > 2 else np.zeros((1, 3, nm))
+        coeffs, first, second = shape.series(nm)
         s_sym = ca.SX.sym("s")
         fn = ca.Function("psi", [s_sym], [_clenshaw(coeffs, s_sym), _clenshaw(first, s_sym),
                                           _clenshaw(second, s_sym)])

@@ -92,6 +92,36 @@ class CarriageShape:
         s = (2.0 * np.asarray(q, dtype=float) - lo - hi) / (hi - lo)
         return np.moveaxis(chebyshev.chebval(s, self.array(n_modes)), -1, 0)
 
+    def series(self, n_modes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """The series of ``Psi``, ``dPsi/dq`` and ``d2Psi/dq2`` in ``s``, each (degree + 1, 3, modes)
+        (``numpy.polynomial.chebyshev.chebder``, a zero series where the degree is too low; made once)."""
+        return _series(self, n_modes)
+
+    def along(self, q: np.ndarray, qd: np.ndarray, qdd: np.ndarray, n_modes: int
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """``Psi``, ``dPsi/dt = Psi_q q'`` and ``d2Psi/dt2 = Psi_qq q'^2 + Psi_q q''``, each (N, 3, modes), at
+        coordinates ``q`` (N,) [m] moving at ``qd`` [m/s] and ``qdd`` [m/s^2]: the series of :meth:`series` summed
+        through one Chebyshev-Vandermonde matrix (the sums the equations' Clenshaw recurrence makes)."""
+        lo, hi = self.domain
+        s = (2.0 * np.asarray(q, dtype=float) - lo - hi) / (hi - lo)
+        out, vander = [], chebyshev.chebvander(s, self.array(n_modes).shape[0] - 1)
+        for series in self.series(n_modes):
+            out.append((vander[:, : series.shape[0]] @ series.reshape(series.shape[0], -1)).reshape(-1, 3, n_modes))
+        psi, first, second = out
+        qd, qdd = np.asarray(qd, dtype=float)[:, None, None], np.asarray(qdd, dtype=float)[:, None, None]
+        return psi, first * qd, second * qd * qd + first * qdd
+
+
+@lru_cache(maxsize=64)
+def _series(shape: CarriageShape, n_modes: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    lo, hi = shape.domain
+    coeffs, scale = shape.array(n_modes), 2.0 / (hi - lo)
+    first = chebyshev.chebder(coeffs, 1, scl=scale) if coeffs.shape[0] > 1 else np.zeros((1, 3, n_modes))
+    second = chebyshev.chebder(coeffs, 2, scl=scale) if coeffs.shape[0] > 2 else np.zeros((1, 3, n_modes))
+    for array in (coeffs, first, second):
+        array.setflags(write=False)
+    return coeffs, first, second
+
 
 @dataclass(frozen=True)
 class ElasticStructure:
@@ -118,6 +148,10 @@ class ElasticStructure:
     actuators: tuple[tuple[float, ...], ...]
     carriages: tuple[CarriageShape, ...]
     source: Any = field(default=None, compare=False, hash=False, repr=False)
+
+    def __hash__(self) -> int:
+        """The digest's (the structure keys every cache of a model, and its shapes are long)."""
+        return hash(self.digest)
 
     def shape_at(self, position: Any, feet: Any = None, what: str = "point") -> np.ndarray:
         """The elastic translation per modal coordinate (3, modes) of a point fixed to the top at ``position``
