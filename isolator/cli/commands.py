@@ -36,6 +36,7 @@ from isolator.scenario.names import escaped
 from isolator.scenario.reader import bundled_scenarios, load_scenario
 from isolator.simulation.band import Band, parse_half_widths
 from isolator.simulation.discrete_controller import DiscreteController
+from isolator.simulation.elastic_method import ELASTIC_CHOICES
 
 __all__ = ["register"]
 
@@ -51,6 +52,10 @@ def register(sub: Any) -> None:
     scenario_argument(sim)
     sim.add_argument("--model", choices=MODEL_KINDS, default="exact",
                      help="exact rigid-body model or the paper's small-angle model")
+    sim.add_argument("--elastic", choices=ELASTIC_CHOICES, default="auto",
+                     help="a bending top's modes: quasi-static when at least ten times above the table's motion "
+                     "(auto; runs with actuators acting keep them dynamic), always in the state (dynamic: "
+                     "explicit steps that resolve them, slow), or always quasi-static")
     sim.add_argument("--out", type=Path, metavar="FILE.csv", help="write the response table")
     sim.add_argument("--plot", type=Path, metavar="FILE.png",
                      help="figure path (default: <scenario name>.png, none with --json)")
@@ -263,8 +268,8 @@ def _simulate(args: argparse.Namespace) -> int:
             print(f"isolator: error: --controller: {escaped(loop.describe())} (give --allow-unstable to run it "
                   "anyway)", file=sys.stderr)
             return 3
-    response = Simulator(scenario, args.model).run(forces=forces, band=_band_option(args), controller=controller,
-                                                   noise=args.noise, seed=args.seed)
+    response = Simulator(scenario, args.model, args.elastic).run(
+        forces=forces, band=_band_option(args), controller=controller, noise=args.noise, seed=args.seed)
     if out:
         response.to_csv(out)
     if plot is not None:

@@ -104,10 +104,9 @@ class _Rows:
     eta: ca.SX
     residual: ca.SX
 
-    @property
-    def loads(self) -> ca.SX:
-        """Minus the residual at ``acc = 0``, ``eta = 0``, (6 + modes,)."""
-        return -ca.substitute(self.residual, ca.vertcat(self.acc, self.eta), ca.SX.zeros(self.residual.shape[0], 1))
+    def loads(self, eta: ca.SX) -> ca.SX:
+        """Minus the residual at ``acc = 0`` and the modal coordinates ``eta``, (6 + modes,)."""
+        return -ca.substitute(self.residual, ca.vertcat(self.acc, self.eta), ca.vertcat(ca.SX.zeros(6, 1), eta))
 
     def matrices(self) -> list[ca.SX]:
         """``M``, ``A_re``, ``A_er``, ``D`` (the rows' Jacobians; the rows are affine)."""
@@ -137,7 +136,8 @@ def _blocks(structure: ElasticStructure, n_inputs: int) -> list[tuple[str, int]]
     """The stage values' blocks in order, (name, size): the stepping part, then the expansion's."""
     nm = structure.n_modes
     shapes = [(f"{name}{r}", 3 * nm) for r in structure.roots for name in ("psi", "dpsi", "ddpsi")]
-    return [("c", n_inputs), *shapes, ("schur", 36), ("gain", 6 * nm), ("flexibility", nm * nm), ("inertia", 6 * nm)]
+    return [("c", n_inputs), *shapes, ("rest", nm), ("schur", 36), ("gain", 6 * nm), ("flexibility", nm * nm),
+            ("inertia", 6 * nm)]
 
 
 @lru_cache(maxsize=8)
@@ -162,14 +162,15 @@ def quasi_static_top(layout: ParameterLayout) -> QuasiStaticTop:
     extra = {"ground": u[layout.ground_slice] if layout.ground else None,
              "actuator_forces": u[layout.actuator_slice] if layout.n_actuators else None}
     rows = _rows(structure, layout.parents, x, u, prm, extra, shapes)
-    loads = rows.loads
+    loads = rows.loads(part["rest"])
     accel = ca.reshape(part["schur"], 6, 6) @ (loads[:6] - ca.reshape(part["gain"], 6, nm) @ loads[6:])
     xdot = _rate(x, accel)
     stepping = sum(m for name, m in blocks if name not in ("flexibility", "inertia"))
     staged_rhs = ca.Function("staged_rhs", [x, v[:stepping], p], [ca.substitute(xdot, v[stepping:], ca.SX.zeros(
         v.shape[0] - stepping, 1))], ["x", "v", "p"], ["xdot"])
 
-    eta = ca.reshape(part["flexibility"], nm, nm) @ (loads[6:] - ca.reshape(part["inertia"], nm, 6) @ accel)
+    eta = part["rest"] + ca.reshape(part["flexibility"], nm, nm) @ (loads[6:] - ca.reshape(part["inertia"], nm, 6)
+                                                                     @ accel)
     rate_of = {"c": ca.vertcat(u[n: 3 * n], ca.SX.zeros(u.shape[0] - 2 * n, 1))}
     for r in structure.roots:
         rate_of[f"psi{r}"], rate_of[f"dpsi{r}"] = part[f"dpsi{r}"], part[f"ddpsi{r}"]
@@ -214,22 +215,24 @@ def _shape_values(structure: ElasticStructure, n: int, inputs: np.ndarray) -> np
 
 
 def rest_blocks(top: QuasiStaticTop, inputs: np.ndarray, p: np.ndarray, reference: np.ndarray
-                ) -> tuple[np.ndarray, np.ndarray]:
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """What the stage values take at the run's initial rest: the isolators' and actuators' part of ``A_re``
-    (6, modes) and ``D^-1`` (modes, modes), with the table at ``reference`` (13,) and the carriages where the
-    inputs (inputs,) put them, at rest (``D`` without the moving loads' terms)."""
+    (6, modes), ``D^-1`` (modes, modes) and the modal coordinates at rest (modes,), with the full model's state
+    ``reference`` (13 + 2 modes,) and the carriages where the inputs (inputs,) put them, at rest (``D`` without the
+    moving loads' terms)."""
     structure = top.layout.flexible
     assert structure is not None  # a quasi-static top bends
-    n = top.layout.n_carriages
+    n, nm = top.layout.n_carriages, structure.n_modes
+    reference = np.asarray(reference, dtype=float)
     resting = np.array(inputs, dtype=float).reshape(1, -1)
     resting[:, n: 3 * n] = 0.0
     fixed, stiffness = (np.asarray(m, dtype=float) for m in top.rest(
-        np.asarray(reference, dtype=float), resting[0], _shape_values(structure, n, resting)[0], p))
-    return fixed, np.linalg.inv(stiffness)
+        reference[:13], resting[0], _shape_values(structure, n, resting)[0], p))
+    return fixed, np.linalg.inv(stiffness), reference[13: 13 + nm]
 
 
-def stage_values(top: QuasiStaticTop, inputs: np.ndarray, p: np.ndarray, rest: tuple[np.ndarray, np.ndarray],
-                 expansion: bool = False) -> np.ndarray:
+def stage_values(top: QuasiStaticTop, inputs: np.ndarray, p: np.ndarray,
+                 rest: tuple[np.ndarray, np.ndarray, np.ndarray], expansion: bool = False) -> np.ndarray:
     """The quasi-static top's stage values ``v`` (N, size) at the model's inputs (N, inputs).
 
     Parameters
@@ -250,10 +253,11 @@ def stage_values(top: QuasiStaticTop, inputs: np.ndarray, p: np.ndarray, rest: t
     n, nm, count = top.layout.n_carriages, structure.n_modes, inputs.shape[0]
     shapes = _shape_values(structure, n, inputs)
     mass, carried, inertia = top.matrices(inputs, shapes, p)
-    fixed, flexibility = rest
+    fixed, flexibility, eta = rest
     gain = (fixed + carried) @ flexibility  # (N, 6, modes)
     schur = np.linalg.inv(mass - gain @ inertia)
-    parts = [inputs, shapes, schur.transpose(0, 2, 1).reshape(count, -1), gain.transpose(0, 2, 1).reshape(count, -1)]
+    parts = [inputs, shapes, np.broadcast_to(eta, (count, nm)), schur.transpose(0, 2, 1).reshape(count, -1),
+             gain.transpose(0, 2, 1).reshape(count, -1)]
     if expansion:
         parts += [np.broadcast_to(flexibility.T.reshape(1, -1), (count, nm * nm)),
                   inertia.transpose(0, 2, 1).reshape(count, -1)]

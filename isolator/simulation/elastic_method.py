@@ -111,7 +111,7 @@ class QuasiStaticRun:
         self._cache, self._key = cache, self.p.tobytes() + self.start.state.tobytes()
         if (-1, self._key) not in cache:
             cache[(-1, self._key)] = rest_blocks(self.model, self.layout.rest_inputs(start.positions), self.p,
-                                                 self.start.state)
+                                                 start.state)
         self._rest = cache[(-1, self._key)]
 
     def step_plan(self, key: int, switches: np.ndarray | None = None) -> StepPlan:
