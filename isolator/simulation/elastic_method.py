@@ -22,7 +22,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.model.quasi_static_top import QuasiStaticTop, quasi_static_top, rest_blocks, stage_values
 from isolator.numerics.dop853 import StepPlan
 from isolator.scenario.definitions import Scenario
-from isolator.simulation.stepping import Method, fastest_rate
+from isolator.simulation.stepping import STAGED_BYTES, Method, fastest_rate
 from isolator.simulation.time_grid import layout_inputs
 
 __all__ = ["ELASTIC_CHOICES", "MIN_RATIO", "QUASI_STATIC_RATIO", "QuasiStaticRun", "check_elastic",
@@ -127,8 +127,9 @@ class QuasiStaticRun:
             inputs = layout_inputs(self.scenario, self.layout, *method.plan.stage_times())
             flat = stage_values(self.model, inputs.reshape(-1, inputs.shape[2]), self.p, self._rest)
             self._cache[key] = flat.reshape(*inputs.shape[:2], -1)
-            while len(self._cache) > 16:
-                self._cache.pop(next(iter(self._cache)))
+            while len(self._cache) > 2 and sum(np.asarray(v[0] if isinstance(v, tuple) else v).nbytes
+                                               for v in self._cache.values()) > STAGED_BYTES // 4:
+                self._cache.pop(next(k for k in self._cache if k != key))  # the oldest first
         return self._cache[key]
 
     def expand(self, times: np.ndarray, states: np.ndarray) -> np.ndarray:
