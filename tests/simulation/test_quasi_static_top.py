@@ -5,11 +5,13 @@ integrated runs, and its static equilibria along a slow move), and against the c
 from __future__ import annotations
 
 import dataclasses
+import json
 
 import numpy as np
 import pytest
 from synthetic_top import with_synthetic_top
 
+from conftest import run_command
 from isolator import Simulator
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
@@ -129,3 +131,18 @@ def test_the_choice_follows_the_ratio_and_the_actuators():
     assert not Simulator(_move(), elastic="dynamic").method_of(start, end).quasi_static
     with pytest.raises(ParameterError, match="elastic: must be one of auto, dynamic, quasi-static, got 'static'"):
         Simulator(_move(), elastic="static")
+
+
+def test_simulate_elastic_option(capsys):
+    runs = {}
+    for choice in ("auto", "dynamic"):
+        status, stdout, stderr = run_command(["simulate", "paper-table-3-2-flexible", "--json", "--elastic", choice],
+                                             capsys)
+        assert status == 0, stderr
+        runs[choice] = json.loads(stdout)
+    largest = max(runs["dynamic"]["peak"].values())
+    for name, peak in runs["dynamic"]["peak"].items():
+        assert runs["auto"]["peak"][name] == pytest.approx(peak, rel=1e-2, abs=1e-3 * largest), name
+    status, stdout, stderr = run_command(["simulate", "paper-table-3-2-flexible", "--elastic", "static"], capsys)
+    assert status == 2
+    assert any("--elastic" in line for line in stderr)
