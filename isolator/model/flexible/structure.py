@@ -59,6 +59,14 @@ def point_shape(table: Any, position: Any, feet: Any, what: str) -> np.ndarray |
     flexible = getattr(table, "flexible", None)
     if flexible is None:
         return None
+    feet = None if feet is None else tuple((float(f[0]), float(f[1])) for f in feet)
+    return _point_shape(flexible, tuple(float(v) for v in position), feet, what).copy()
+
+
+@lru_cache(maxsize=256)
+def _point_shape(flexible: Any, position: tuple[float, ...], feet: tuple[tuple[float, float], ...] | None,
+                 what: str) -> np.ndarray:
+    """:func:`point_shape`, made once per top and point (every run places the scenario's points)."""
     return feet_translation(flexible.data, np.asarray(position, dtype=float), feet, what)
 
 
