@@ -38,7 +38,7 @@ from isolator.simulation.discrete_controller import DiscreteController, Schedule
 from .hinf_output import hinf_design
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
 from .output_tuning import TUNED, travel, tune
-from .rolloff import roll_off
+from .rolloff import rigid_top, roll_off
 from .sensor_plant import SensorPlant, sensor_plant
 
 __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positions", "travel"]
@@ -202,11 +202,14 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
                              "schedule, or one hinf design")
     names = [c.name for c in scenario.carriages]
     designs, lins = [], []
+    reduced = rigid_top(scenario)  # a bending top's design is made on its rigid-body model, judged on the full one
     for q in points:
         where = ", ".join(f"{n} at {v:.4g} m" for n, v in zip(names, q, strict=True)) or "at rest"
         plant = sensor_plant(linearise(scenario, positions=q, parameters=parameters))
         _check_rate(plant, sample_rate, f"with {where}")
         lins.append(plant.lin)
+        if reduced is not scenario:
+            plant = sensor_plant(linearise(reduced, positions=q, parameters=parameters))
         designs.append(METHODS[method](plant, sample_rate, delay, **settings))
     record: dict[str, Any] = {**settings, "design_positions": points.tolist(),
                               "points": [d.settings for d in designs]}
