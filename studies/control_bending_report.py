@@ -59,7 +59,8 @@ def _defaults_figure(case: BendingCase, path: Path) -> None:
         ax.set_ylabel(label)
         ax.set_title(title)
         ax.grid(True, axis="y", alpha=0.3)
-        ax.legend(fontsize=8)
+        ax.set_ylim(0.0, 1.4 * max(ax.get_ylim()[1], LIMITS.get(what, 0.0)))  # room for the legend above the bars
+        ax.legend(fontsize=8, loc="upper right")
     rolled = [f"{d.method} at {d.rolloff_hz:.0f} Hz" for d in case.designs if d.rolloff_hz is not None]
     fig.suptitle("Default sensor-based designs on the rigid and on the bending top (each judged on its own top; "
                  f"rolled off on the bending top: {', '.join(rolled) or 'none'})")
