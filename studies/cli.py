@@ -55,8 +55,8 @@ def register(sub: Any) -> None:
     control.add_argument("--bending", action="store_true",
                          help="add the bending-top case: the default designs on the rigid and the bending top, the "
                          "corner's compliance, a stiff design the check refuses (always when the scenario's top "
-                         "bends; a rigid 2 x 1 x 0.3 m, 4400 kg table gets the bundled granite top; --quick: skyhook "
-                         "only, its own gain)")
+                         "bends and has [[sensors]]; a rigid 2 x 1 x 0.3 m, 4400 kg table gets the bundled granite "
+                         "top; --quick: skyhook only, its own gain)")
     control.set_defaults(handler=_control)
 
     profiles = _study(studies, "profiles", "the scenario's profile, input shapers, time-optimal and optimised "

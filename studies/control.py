@@ -16,7 +16,7 @@ Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
   ``sensors-defaults.png`` (the defaults against the methods' own weights), ``sensors-loops.png``,
   ``sensors-margins.png``, ``sensors-time.png``, ``sensors-budget.png`` (the error budget at the tool:
   :mod:`studies.control_budget`) and their section of the report;
-* with ``bending`` (``--bending``; always when the top bends), the bending-top case
+* with ``bending`` (``--bending``; always when the top bends and has sensors), the bending-top case
   (:mod:`studies.control_bending`): ``bending-defaults.png`` (the default designs' settling and margins on the
   rigid and the bending top), ``bending-compliance.png`` (the corner's compliance, open and closed loop) and a
   stiff design the check refuses, with its growing mode, in the report.
@@ -53,7 +53,6 @@ from isolator.scenario.arguments import check_public
 
 from . import control_bending as bending_study
 from . import control_sensors as sensor_study
-from .control_bending import BendingCase
 from .control_bending_report import FIGURES as BENDING_FIGURES
 from .control_bending_report import bending_figures, bending_report
 from .control_figures import COLORS, RUNS, forces_figure, time_figure
@@ -142,7 +141,7 @@ class ControlStudy:
     max_force: tuple[float, ...] = ()
     sensors: tuple[sensor_study.SensorDesign, ...] = ()
     sensors_left_out: dict[str, str] = field(default_factory=dict)
-    bending: BendingCase | None = None
+    bending: bending_study.BendingCase | None = None
 
     def settling_time_max(self, run: str) -> float | None:
         return largest(self.settling[run].values())
@@ -212,7 +211,8 @@ def run_control_study(out: str | Path, scenario: Scenario, controller: str = "sk
     sample_rate : float
         The sensor-based designs' rate [Hz] (with ``[[sensors]]``: :mod:`studies.control_sensors`).
     bending : bool
-        Add the bending-top case (:mod:`studies.control_bending`; always on a scenario whose top bends): the
+        Add the bending-top case (:mod:`studies.control_bending`; always on a scenario with ``[[sensors]]`` whose
+        top bends): the
         default sensor-based designs on the rigid and the bending top, the compliance at the corner, a stiff
         design the check refuses.
     quick : bool
@@ -228,7 +228,8 @@ def run_control_study(out: str | Path, scenario: Scenario, controller: str = "sk
     if feedforward not in ("allocation", "optimal"):
         raise ParameterError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
     sample_rate = checked_sample_rate(sample_rate)
-    if bending or scenario.table.flexible is not None:
+    bending = bending or (scenario.table.flexible is not None and bool(scenario.sensors))
+    if bending:
         bending_study.bending_pair(scenario)  # a table the case cannot bend is refused before the runs
     folder = output_folder(out)
     say = progress_printer(progress, "  control study: ")
@@ -253,9 +254,10 @@ def run_control_study(out: str | Path, scenario: Scenario, controller: str = "sk
     designs, left_out = sensor_study.run_sensor_designs(scenario, band, settling_in_band, sample_rate, say=say) \
         if scenario.sensors else ([], {})
     sensors = tuple(designs)  # the output-feedback designs: the machine's own sensors, exported controllers
-    case = bending_study.run_bending_case(scenario, band, sample_rate, quick, {d.method: d.controller for d in sensors
-                                          if scenario.table.flexible is None}, say=say) \
-        if bending or scenario.table.flexible is not None else None
+    case = None
+    if bending:  # on a rigid scenario its rigid top's designs are the study's own
+        known = {d.method: d.controller for d in sensors} if scenario.table.flexible is None else {}
+        case = bending_study.run_bending_case(scenario, band, sample_rate, quick, known, say=say)
     study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band,
                          tuple(a.max_force for a in scenario.actuators), sensors, left_out, case)
     write_json(folder, study.to_dict())
