@@ -4,10 +4,12 @@
 scenario at the design positions, designs there (:func:`~controllers.feedback.output_designs.skyhook_design`,
 :func:`~controllers.feedback.output_designs.lqg_design`, :func:`~controllers.feedback.hinf_output.hinf_design`)
 and returns a :class:`~isolator.simulation.discrete_controller.DiscreteController` ready for
-``controller.json`` and the C export. On a bending top the design is judged on the full plant (the top's
-elastic modes included) at the design positions and the start, and rolled off above the isolation band where
-it would be unstable or short of its disk margin there (:func:`~controllers.feedback.rolloff.roll_off`,
-recorded in ``settings["rolloff"]``).
+``controller.json`` and the C export. On a bending top the design is made on the top's rigid-body model
+(:func:`~controllers.feedback.rolloff.rigid_top`: a root locus or a Riccati equation on the full plant answers
+to the elastic modes' light damping, and skyhook's would choose almost no gain), judged on the full plant (the
+top's elastic modes included) at the design positions and the start, and rolled off above the isolation band
+where it would be unstable or short of its disk margin there (:func:`~controllers.feedback.rolloff.roll_off`,
+recorded in ``settings["rolloff"]``); the search's moves are simulated on the full plant.
 
 Design positions: without a schedule, every carriage at the middle of its travel (the configuration
 that is closest to all others; the robustness check then covers the travel's ends). With ``schedule=N``
