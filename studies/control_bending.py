@@ -30,7 +30,6 @@ from typing import Any
 import numpy as np
 
 from controllers import feedback as fb
-from controllers.feedback.rolloff import rigid_top
 from isolator import Band, OptimisationError, ParameterError, Scenario, ScenarioError, Simulator
 from isolator.analysis.budget.loop import SourceResponses
 from isolator.analysis.budget.sources import Source
@@ -218,7 +217,7 @@ def bending_pair(scenario: Scenario) -> tuple[Scenario, Scenario]:
                             "and [[actuators]]")
     scenario = _with_corner(scenario)
     if getattr(scenario.table, "flexible", None) is not None:
-        return rigid_top(scenario), scenario
+        return fb.rigid_top(scenario), scenario
     top = load_scenario(BENDING_TOP).table
     table = scenario.table
     same = table.size == top.size and table.mass == top.mass and np.allclose(table.inertia, top.inertia)
