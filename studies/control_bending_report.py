@@ -21,6 +21,9 @@ __all__ = ["FIGURES", "bending_figures", "bending_report"]
 #: the case's figures
 FIGURES = ("bending-defaults.png", "bending-compliance.png")
 _COLORS = {"rigid": "tab:blue", "bending": "tab:red"}
+#: what a missing value means: not settled in the run; no loop's gain crosses 1 (phase) or no gain above 1
+#: destabilises (gain)
+_NONE = {"settling": "not settled", "disk_margin": "n/a", "phase_margin": "unlimited", "gain_margin": "unlimited"}
 #: the least margins a default design keeps (drawn on the figure)
 LIMITS = {"disk_margin": MIN_DISK_MARGIN, "phase_margin": PHASE_MARGIN}
 
@@ -44,15 +47,17 @@ def _defaults_figure(case: BendingCase, path: Path) -> None:
               ("phase_margin", "loop-at-a-time phase margin [deg]", "worst phase margin over the travel"))
     for ax, (what, label, title) in zip(axes, panels, strict=True):
         for k, top in enumerate(TOPS):
-            values = []
+            values, texts = [], []
             for method in methods:
                 d = next((d for d in case.designs if d.method == method and d.top == top), None)
                 value = None if d is None else (d.settling if what == "settling" else d.margin(what))
                 values.append(math.nan if value is None else value)
+                texts.append("n/a" if d is None else _NONE[what] if value is None or math.isnan(value) else
+                             f"{value:.3g}")
             bars = ax.bar(x + (k - 0.5) * 0.38, np.nan_to_num(values), 0.38, color=_COLORS[top], label=f"{top} top")
-            for bar, v in zip(bars, values, strict=True):
-                ax.annotate("n/a" if not math.isfinite(v) else f"{v:.3g}", (bar.get_x() + bar.get_width() / 2,
-                            0 if not math.isfinite(v) else v), ha="center", va="bottom", fontsize=8)
+            for bar, v, text in zip(bars, values, texts, strict=True):
+                ax.annotate(text, (bar.get_x() + bar.get_width() / 2, 0 if not math.isfinite(v) else v),
+                            ha="center", va="bottom", fontsize=8)
         if what in LIMITS:
             ax.axhline(LIMITS[what], color="0.3", ls="--", lw=1.0, label=f"the designs' least ({LIMITS[what]:g})")
         ax.set_xticks(x, [m + ("" if case.searched else " (own weights)") for m in methods])
@@ -118,7 +123,9 @@ def bending_report(case: BendingCase | None) -> list[str]:
         data = d.to_dict()
         lines.append(table_row([d.method, d.top, fmt(d.settling, suffix=" s"), f"{d.peak_force:.3g} N",
                                 f"{data['spectral_radius']:.6f}", fmt(data["disk_margin"]),
-                                fmt(data["gain_margin"]), fmt(data["phase_margin"], ".3g", " deg"),
+                                fmt(data["gain_margin"]) if data["gain_margin"] is not None else _NONE["gain_margin"],
+                                fmt(data["phase_margin"], ".3g", " deg") if data["phase_margin"] is not None else
+                                _NONE["phase_margin"],
                                 "none" if d.rolloff_hz is None else f"low-pass at {d.rolloff_hz:.3g} Hz"]))
     lines += ["", *(f"- {name} left out: {why}" for name, why in case.left_out.items())]
     f = case.frequency_hz
