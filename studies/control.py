@@ -15,7 +15,11 @@ Run it with ``isolator study control [SCENARIO] --out DIR``. It writes
 * with ``[[sensors]]``, the output-feedback designs the machine can run (:mod:`studies.control_sensors`):
   ``sensors-defaults.png`` (the defaults against the methods' own weights), ``sensors-loops.png``,
   ``sensors-margins.png``, ``sensors-time.png``, ``sensors-budget.png`` (the error budget at the tool:
-  :mod:`studies.control_budget`) and their section of the report.
+  :mod:`studies.control_budget`) and their section of the report;
+* with ``bending`` (``--bending``; always when the top bends and has sensors), the bending-top case
+  (:mod:`studies.control_bending`): ``bending-defaults.png`` (the default designs' settling and margins on the
+  rigid and the bending top), ``bending-compliance.png`` (the corner's compliance, open and closed loop) and a
+  stiff design the check refuses, with its growing mode, in the report.
 
 With feedback alone the controller regulates to the initial equilibrium (state-feedback lqr and hinf, which
 would fight the carriages' quasi-static tilt with saturating forces, to the planned move's quasi-static path:
@@ -25,7 +29,6 @@ the two do not fight over the tilt.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, cast
@@ -48,7 +51,11 @@ from isolator.analysis.linear import LinearModel, linearise
 from isolator.analysis.transmissibility import transmissibility
 from isolator.scenario.arguments import check_public
 
+from . import control_bending as bending_study
 from . import control_sensors as sensor_study
+from .control_bending_report import FIGURES as BENDING_FIGURES
+from .control_bending_report import bending_figures, bending_report
+from .control_figures import COLORS, RUNS, forces_figure, time_figure
 from .figures import nan_if_none, save_figure
 from .reporting import (
     band_lines,
@@ -67,12 +74,10 @@ from .throughput import window_cycle
 __all__ = ["CONTROLLERS", "ControlStudy", "design", "run_control_study"]
 
 CONTROLLERS = ("skyhook", "lead", "lqr", "hinf")
-RUNS = ("passive", "feedforward", "feedback", "both")
 #: what the feedback-alone run regulates to, by the controller's follows_path
 _ALONE = {False: "the initial equilibrium",
           True: "the planned move's quasi-static path (a state-feedback design: about the initial equilibrium its "
           "micrometre weights would fight the carriages' quasi-static tilt)"}
-_COLORS = {"passive": "0.35", "feedforward": "tab:blue", "feedback": "tab:orange", "both": "tab:green"}
 
 
 def design(name: str, lin: LinearModel) -> fb.Controller:
@@ -121,6 +126,8 @@ class ControlStudy:
         The output-feedback designs from the scenario's ``[[sensors]]`` (none without sensors).
     sensors_left_out : dict
         The output-feedback methods that could not be designed on the scenario, with the reason.
+    bending : BendingCase or None
+        The bending-top case (:mod:`studies.control_bending`), when asked for or the scenario's top bends.
     """
 
     runs: dict[str, Response]
@@ -134,6 +141,7 @@ class ControlStudy:
     max_force: tuple[float, ...] = ()
     sensors: tuple[sensor_study.SensorDesign, ...] = ()
     sensors_left_out: dict[str, str] = field(default_factory=dict)
+    bending: bending_study.BendingCase | None = None
 
     def settling_time_max(self, run: str) -> float | None:
         return largest(self.settling[run].values())
@@ -178,11 +186,14 @@ class ControlStudy:
         if self.sensors or self.sensors_left_out:
             out["sensor_feedback"] = {d.method: d.to_dict() for d in self.sensors}
             out["sensor_feedback_left_out"] = self.sensors_left_out
+        if self.bending is not None:
+            out["bending_top"] = self.bending.to_dict()
         return out
 
 
 def run_control_study(out: str | Path, scenario: Scenario, controller: str = "skyhook", feedforward: str = "allocation",
-                      progress: bool = False, sample_rate: float = 2000.0) -> ControlStudy:
+                      progress: bool = False, sample_rate: float = 2000.0, bending: bool = False,
+                      quick: bool = False) -> ControlStudy:
     """Run the study and write its figures and report into ``out``.
 
     Parameters
@@ -199,6 +210,13 @@ def run_control_study(out: str | Path, scenario: Scenario, controller: str = "sk
         Print what it does on stderr (off by default; ``isolator study`` turns it on).
     sample_rate : float
         The sensor-based designs' rate [Hz] (with ``[[sensors]]``: :mod:`studies.control_sensors`).
+    bending : bool
+        Add the bending-top case (:mod:`studies.control_bending`; always on a scenario with ``[[sensors]]`` whose
+        top bends): the
+        default sensor-based designs on the rigid and the bending top, the compliance at the corner, a stiff
+        design the check refuses.
+    quick : bool
+        The bending-top case reduced (skyhook only, its own gain).
 
     Returns
     -------
@@ -210,6 +228,9 @@ def run_control_study(out: str | Path, scenario: Scenario, controller: str = "sk
     if feedforward not in ("allocation", "optimal"):
         raise ParameterError(f"feedforward: must be 'allocation' or 'optimal', got '{feedforward}'")
     sample_rate = checked_sample_rate(sample_rate)
+    bending = bending or (scenario.table.flexible is not None and bool(scenario.sensors))
+    if bending:
+        bending_study.bending_pair(scenario)  # a table the case cannot bend is refused before the runs
     folder = output_folder(out)
     say = progress_printer(progress, "  control study: ")
     lin = linearise(scenario)
@@ -233,43 +254,28 @@ def run_control_study(out: str | Path, scenario: Scenario, controller: str = "sk
     designs, left_out = sensor_study.run_sensor_designs(scenario, band, settling_in_band, sample_rate, say=say) \
         if scenario.sensors else ([], {})
     sensors = tuple(designs)  # the output-feedback designs: the machine's own sensors, exported controllers
+    case = None
+    if bending:  # on a rigid scenario its rigid top's designs are the study's own
+        known = {d.method: d.controller for d in sensors} if scenario.table.flexible is None else {}
+        case = bending_study.run_bending_case(scenario, band, sample_rate, quick, known, say=say)
     study = ControlStudy(runs, settling, deviation, ctrl, fb.check_stability(lin, ctrl), ff, folder, band,
-                         tuple(a.max_force for a in scenario.actuators), sensors, left_out)
+                         tuple(a.max_force for a in scenario.actuators), sensors, left_out, case)
     write_json(folder, study.to_dict())
     ff.forces.to_csv(folder / "feedforward.csv")
     say("figures and report")
-    _time_figure(study, folder / "time.png")
+    time_figure(runs, folder / "time.png")
     loops = _transmissibility_figure(scenario, lin, folder / "transmissibility.png")
     _settling_figure(study, folder / "settling.png")
-    _forces_figure(study, folder / "forces.png")
+    forces_figure(runs, folder / "forces.png")
     if sensors:
         sensor_study.write_figures(sensors, scenario, runs["passive"], band, folder)
+    if case is not None:
+        bending_figures(case, folder)
     _report(study, scenario, loops)
     return study
 
 
 # -- figures --------------------------------------------------------------------------
-def _time_figure(study: ControlStudy, path: Path) -> None:
-    fig, axes = plt.subplots(3, 2, figsize=(12, 8.5), sharex=True, layout="constrained")
-    for i, name in enumerate(SIGNALS):
-        ax = axes[i % 3, i // 3]
-        scale, unit = micro_unit(name)
-        for run, r in study.runs.items():
-            ax.plot(r.t, r.signals[i] * scale, color=_COLORS[run], lw=1.0 if run != "passive" else 1.4,
-                    ls="--" if run == "both" else "-", label=run)
-        ax.set_ylabel(f"{name} [{unit}]")
-        ax.grid(True, alpha=0.3)
-        stop = study.runs["passive"].stop_time
-        if math.isfinite(stop):
-            ax.axvline(stop, color="0.6", lw=0.8, ls=":")
-    axes[0, 0].legend(fontsize=9, ncol=2)
-    axes[-1, 0].set_xlabel("time [s]")
-    axes[-1, 1].set_xlabel("time [s]")
-    fig.suptitle(f"Table motion from its initial equilibrium: passive and active ({study.runs['passive'].name}); "
-                 "dotted: the carriages stop")
-    save_figure(fig, path)
-
-
 def _transmissibility_figure(scenario: Scenario, lin: LinearModel, path: Path) -> dict[str, Any]:
     f = np.logspace(-1, 2, 600)
     loops: dict[str, Any] = {"passive (and with feedforward)": transmissibility(lin, f)}
@@ -311,7 +317,7 @@ def _settling_figure(study: ControlStudy, path: Path) -> None:
         values = [study.settling[run][k] for k in SIGNALS] + [study.settling_time_max(run)]
         heights = [nan_if_none(v) for v in values]
         top = max(top, np.nanmax(heights, initial=0.0))
-        bars = ax.bar(x + (j - 1.5) * width, heights, width, label=run, color=_COLORS[run])
+        bars = ax.bar(x + (j - 1.5) * width, heights, width, label=run, color=COLORS[run])
         for bar, v in zip(bars, values, strict=True):
             text = "n/a" if v is None else f"{v:.2f}"
             ax.text(bar.get_x() + bar.get_width() / 2, (0 if v is None else v), text, ha="center", va="bottom",
@@ -322,22 +328,6 @@ def _settling_figure(study: ControlStudy, path: Path) -> None:
     ax.set_title(f"Settling time per signal (band: {study.band.how()}; n/a: not settled within the run)")
     ax.legend()
     ax.grid(True, axis="y", alpha=0.3)
-    save_figure(fig, path)
-
-
-def _forces_figure(study: ControlStudy, path: Path) -> None:
-    fig, axes = plt.subplots(3, 1, figsize=(11, 8), sharex=True, layout="constrained")
-    for ax, run in zip(axes, RUNS[1:], strict=True):
-        r = study.runs[run]
-        colors = plt.cm.tab20(np.linspace(0, 1, max(len(r.actuator_names), 1)))
-        for k, name in enumerate(r.actuator_names):
-            ax.plot(r.t, r.actuator_forces[k], lw=0.9, label=name, color=colors[k])
-        ax.set_ylabel("force [N]")
-        ax.set_title(f"{run}: largest {np.abs(r.actuator_forces).max():.0f} N")
-        ax.grid(True, alpha=0.3)
-    axes[0].legend(fontsize=7, ncol=6)
-    axes[-1].set_xlabel("time [s]")
-    fig.suptitle("Forces the actuators apply (after saturation and lag)")
     save_figure(fig, path)
 
 
@@ -389,9 +379,10 @@ def _report(study: ControlStudy, scenario: Scenario, loops: dict[str, Any]) -> N
               *table_header(["design", *SIGNALS])]
     for name, resp in loops.items():
         lines.append(table_row([name, *(f"{resp.peak(a)[0]:.3g} at {resp.peak(a)[1]:.3g} Hz" for a in SIGNALS)]))
-    extra = "".join(f", `{name}`" for name in sensor_study.FIGURES if (study.folder / name).exists()) \
-        if study.sensors else ""
+    extra = "".join(f", `{name}`" for name in (*sensor_study.FIGURES, *BENDING_FIGURES)
+                    if (study.folder / name).exists())
     lines += ["", *sensor_study.sensor_report(study.sensors, study.sensors_left_out),
+              *bending_report(study.bending),
               f"Figures: `time.png`, `transmissibility.png`, `settling.png`, `forces.png`{extra}."]
     write_report(study.folder, lines)
 

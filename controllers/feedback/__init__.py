@@ -15,8 +15,9 @@ optional delay), :mod:`.output_designs` (:func:`skyhook_design` from collocated 
 :func:`lqg_design`), :mod:`.hinf_output` (:func:`hinf_design`), :mod:`.output_feedback`
 (:func:`design_controller`: design points, gain scheduling over the travel, the sample-rate check),
 :mod:`.robustness` (:func:`check_robustness` over the travel and the isolators' uncertainty, on a bending top
-with its elastic modes), :mod:`.rolloff` (:func:`roll_off`: a design unstable or short of margin on the bending
-top's full plant low-passed above the isolation band) and
+with its elastic modes), :mod:`.rolloff` (:func:`rigid_top`: the bending top's rigid-body model the designs are made on;
+:func:`roll_off`: a design unstable or short of margin on the bending top's full plant low-passed above the
+isolation band) and
 :mod:`.export` (:func:`write_c`: the :class:`DiscreteController` as C99; :func:`from_statespace`
 discretises any python-control design into one) and :mod:`.fmu` (:func:`write_controller_fmu`: the same
 C as an FMI 2.0 Co-Simulation FMU).
@@ -37,7 +38,7 @@ from .loops import REFERENCE_INPUTS, ClosedLoop, LoopStability, check_stability,
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
 from .output_feedback import METHODS, design_controller, design_positions
 from .robustness import RobustnessCase, RobustnessReport, check_robustness
-from .rolloff import roll_off
+from .rolloff import rigid_top, roll_off
 from .sensor_plant import SensorPlant, loop_matrix, sensor_plant
 from .state_designs import hinf, lqr
 from .uncertainty import Uncertainty, parse_uncertainty, uncertainty_from_calibration
@@ -75,6 +76,7 @@ __all__ = [
     "lqr",
     "parse_uncertainty",
     "pid",
+    "rigid_top",
     "roll_off",
     "sensor_plant",
     "skyhook",

@@ -4,10 +4,12 @@
 scenario at the design positions, designs there (:func:`~controllers.feedback.output_designs.skyhook_design`,
 :func:`~controllers.feedback.output_designs.lqg_design`, :func:`~controllers.feedback.hinf_output.hinf_design`)
 and returns a :class:`~isolator.simulation.discrete_controller.DiscreteController` ready for
-``controller.json`` and the C export. On a bending top the design is judged on the full plant (the top's
-elastic modes included) at the design positions and the start, and rolled off above the isolation band where
-it would be unstable or short of its disk margin there (:func:`~controllers.feedback.rolloff.roll_off`,
-recorded in ``settings["rolloff"]``).
+``controller.json`` and the C export. On a bending top the design is made on the top's rigid-body model
+(:func:`~controllers.feedback.rolloff.rigid_top`: a root locus or a Riccati equation on the full plant answers
+to the elastic modes' light damping, and skyhook's would choose almost no gain), judged on the full plant (the
+top's elastic modes included) at the design positions and the start, and rolled off above the isolation band
+where it would be unstable or short of its disk margin there (:func:`~controllers.feedback.rolloff.roll_off`,
+recorded in ``settings["rolloff"]``); the search's moves are simulated on the full plant.
 
 Design positions: without a schedule, every carriage at the middle of its travel (the configuration
 that is closest to all others; the robustness check then covers the travel's ends). With ``schedule=N``
@@ -38,7 +40,7 @@ from isolator.simulation.discrete_controller import DiscreteController, Schedule
 from .hinf_output import hinf_design
 from .output_designs import DiscreteDesign, lqg_design, skyhook_design
 from .output_tuning import TUNED, travel, tune
-from .rolloff import roll_off
+from .rolloff import rigid_top, roll_off
 from .sensor_plant import SensorPlant, sensor_plant
 
 __all__ = ["METHODS", "checked_sample_rate", "design_controller", "design_positions", "travel"]
@@ -202,11 +204,14 @@ def design_controller(scenario: Scenario, method: str, sample_rate: float, delay
                              "schedule, or one hinf design")
     names = [c.name for c in scenario.carriages]
     designs, lins = [], []
+    reduced = rigid_top(scenario)  # a bending top's design is made on its rigid-body model, judged on the full one
     for q in points:
         where = ", ".join(f"{n} at {v:.4g} m" for n, v in zip(names, q, strict=True)) or "at rest"
         plant = sensor_plant(linearise(scenario, positions=q, parameters=parameters))
         _check_rate(plant, sample_rate, f"with {where}")
         lins.append(plant.lin)
+        if reduced is not scenario:
+            plant = sensor_plant(linearise(reduced, positions=q, parameters=parameters))
         designs.append(METHODS[method](plant, sample_rate, delay, **settings))
     record: dict[str, Any] = {**settings, "design_positions": points.tolist(),
                               "points": [d.settings for d in designs]}

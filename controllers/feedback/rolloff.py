@@ -26,11 +26,12 @@ from isolator.analysis.linear import LinearModel
 from isolator.analysis.modes import modes
 from isolator.model.equilibrium import DOF_NAMES
 from isolator.scenario.arguments import check_public
+from isolator.scenario.definitions import Scenario
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
 
 from .loop_margins import sampled_margins
 
-__all__ = ["BAND_FACTOR", "MIN_DISK_MARGIN", "lowpass", "roll_off", "with_lowpass"]
+__all__ = ["BAND_FACTOR", "MIN_DISK_MARGIN", "lowpass", "rigid_top", "roll_off", "with_lowpass"]
 
 #: the smallest multiloop disk margin [-] at the actuators a design keeps on the full plant (gain x1.67 or
 #: 0.6, phase 28 deg at once)
@@ -39,6 +40,16 @@ MIN_DISK_MARGIN = 0.5
 BAND_FACTOR = 5.0
 #: corners tried, geometrically spaced from half the lowest elastic mode down to the lowest
 _CORNERS = 10
+
+
+def rigid_top(scenario: Scenario) -> Scenario:
+    """``scenario`` with its top rigid: the reduced model a bending top's designs are made on (the six rigid
+    modes of the modal file are ``[table]``'s mass and inertia, checked when it was read); a rigid top's
+    scenario itself."""
+    table = scenario.table
+    if getattr(table, "flexible", None) is None:
+        return scenario
+    return replace(scenario, table=replace(table, flexible=None))
 
 
 def lowpass(corner_hz: float, sample_rate: float, channels: int
