@@ -19,6 +19,8 @@ from isolator.model.cache import get_model
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
+from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
+from isolator.simulation.actuation import crosses, lag_constants, lag_switch, lag_weights
 from isolator.simulation.sampled_loop import readings, rotation
 
 __all__ = ["PlantFunctions", "plant_functions", "state_nominals"]
@@ -43,6 +45,10 @@ class PlantFunctions:
         ``(z, c, p) -> (r, dr/dz)``: the static residual (:attr:`Model.static_residual`).
     pose : casadi.Function
         ``(z, p) -> x``: the FMU's state at rest in pose ``z`` (no lagged force).
+    step : casadi.Function
+        ``(x, u0, um, u1, h, p) -> x``: one RK4 step of ``h`` [s] of the FMU's state, the inputs at its start,
+        middle and end (linear between), each lagged force taken exactly
+        (:func:`~isolator.simulation.actuation.lag_stages`: the stages' forces, the lag's force at the end).
     lagged : tuple of int
         The actuators with a lag, in order.
     """
@@ -52,6 +58,7 @@ class PlantFunctions:
     outputs: ca.Function
     static: ca.Function
     pose: ca.Function
+    step: ca.Function
     lagged: tuple[int, ...]
 
     @property
@@ -103,7 +110,36 @@ def plant_functions(scenario: Scenario, positions: bool = False) -> PlantFunctio
                           ["y"])
     z = ca.SX.sym("z", model.n_static)
     pose = ca.Function("pose", [z, p], [ca.vertcat(model.pose_state(z, p), ca.SX.zeros(len(lagged)))])
-    return PlantFunctions(model, ode, outputs, model.static_residual, pose, lagged)
+    return PlantFunctions(model, ode, outputs, model.static_residual, pose, _step(model, scenario, lagged), lagged)
+
+
+def _step(model: Model, scenario: Scenario, lagged: tuple[int, ...]) -> ca.Function:
+    """The FMU's RK4 step (see :class:`PlantFunctions`): the simulator's steps of a forced run, one at a time."""
+    layout = model.layout
+    nx, nu = model.n_states, layout.input_size
+    x, h, p = ca.MX.sym("x", nx + len(lagged)), ca.MX.sym("h"), ca.MX.sym("p", layout.size)
+    us = [ca.MX.sym(name, nu) for name in ("u0", "um", "u1")]
+    where, tau = layout.actuator_slice, lag_constants(scenario)
+    limits = [a.max_force for a in scenario.actuators]
+    raw = [ca.vertsplit(u[where]) for u in us]
+    forces = [[ca.fmin(ca.fmax(r[k], -limits[k]), limits[k]) for k in range(len(limits))] for r in raw]
+    stage_forces = [[forces[t][k] for k in range(len(limits))] for t in BY_TIME]
+    ends, switch, weights = [], lag_switch(), lag_weights()
+    shared = {float(tau[k]): weights(h, float(tau[k])) for k in lagged}  # once per lag time constant
+    for j, k in enumerate(lagged):  # the clipping's kinks followed only in steps that cross a limit
+        ramps = (raw[0][k], raw[1][k], raw[2][k])
+        out = ca.vertsplit(switch(crosses(*ramps, limits[k]), shared[float(tau[k])], x[nx + j], *ramps, h,
+                                  float(tau[k]), float(limits[k])))
+        for i in range(4):
+            stage_forces[i][k] = out[i]
+        ends.append(out[5])
+    inputs = [ca.vertcat(us[t][: where.start], *stage_forces[i], us[t][where.stop:]) for i, t in enumerate(BY_TIME)]
+
+    def rates(xs: ca.MX, stage: int) -> ca.MX:
+        return model.rhs(xs, inputs[stage], p)
+
+    xk = rk4_step(rates, x[:nx], h, SPLIT)
+    return ca.Function("step", [x, *us, h, p], [ca.vertcat(xk, *ends)], ["x", "u0", "um", "u1", "h", "p"], ["x1"])
 
 
 def state_nominals(functions: PlantFunctions, rest: np.ndarray) -> np.ndarray:

@@ -82,16 +82,17 @@ def _tunable(layout: ParameterLayout, names: Sequence[str], key: str) -> list[tu
 
 
 def _generated(functions: PlantFunctions, identifier: str) -> tuple[str, str, list[dict[str, Any]]]:
-    """casadi's C for the four functions, its header, and each function's C name and sizes."""
+    """casadi's C for the five functions, its header, and each function's C name and sizes."""
     z = ca.SX.sym("z", functions.static.size1_in(0))
     c, p = ca.SX.sym("c", functions.static.size1_in(1)), ca.SX.sym("p", functions.static.size1_in(2))
     r, jac = functions.static(z, c, p)
     static = ca.Function("static", [z, c, p], [r, ca.densify(jac)])
-    named = {"ODE": functions.ode, "OUTPUTS": functions.outputs, "STATIC": static, "POSE": functions.pose}
+    named = {"ODE": functions.ode, "OUTPUTS": functions.outputs, "STATIC": static, "POSE": functions.pose,
+             "STEP": functions.step}
     generator = ca.CodeGenerator(f"{identifier}_model.c", {"with_header": True})
     rows = []
     for macro, f in named.items():
-        sx = f.sx_in()
+        sx = f.mx_in() if f.is_a("MXFunction") else f.sx_in()  # MX: its conditional calls kept
         fn = ca.Function(f"{identifier}_{macro.lower()}", sx, [ca.densify(o) for o in f.call(sx)])
         generator.add(fn)
         rows.append({"macro": macro, "name": fn.name(), "arg": fn.n_in(), "res": fn.n_out(), "iw": fn.sz_iw(),
@@ -197,8 +198,8 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     inputs_mode = carriages == "inputs"
     functions = plant_functions(scenario, positions=not inputs_mode)
     model, layout = functions.model, functions.model.layout
-    omega = max(fastest_rate(scenario, max(start.max_frequency, end.max_frequency if end is not None else 0.0),
-                             actuated=True), 1e-9)  # the simulator's rule: a host may drive the actuators
+    omega = max(fastest_rate(scenario, max(start.max_frequency, end.max_frequency if end is not None else 0.0)),
+                1e-9)  # the simulator's rule (a lag costs no step: the step function takes it exactly)
     max_step = min(COMMUNICATION_STEP, STEP_ANGLE / omega / REFINE)
     floor = scenario.ground.motion if scenario.ground is not None else {}
     profiles: list[tuple[str, Profile | None]] = [] if inputs_mode else [
