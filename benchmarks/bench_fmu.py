@@ -29,16 +29,16 @@ def build(name: str, folder: Path) -> Path:
     return write_fmu(load_scenario(name), folder / f"{name.replace('-', '_')}.fmu")
 
 
-def do_steps(path: Path, seconds: float, unzip: Path) -> float:
-    """Wall time [s] of ``seconds`` of 1 ms ``doStep`` calls (initialisation not counted); with actuators, a 7 Hz
-    and a 3 Hz sine command (the second clipped at 500 N) set before every step."""
+def do_steps(path: Path, seconds: float, unzip: Path, inputs: bool = True) -> float:
+    """Wall time [s] of ``seconds`` of 1 ms ``doStep`` calls (initialisation not counted); with actuators and
+    ``inputs``, a 7 Hz and a 3 Hz sine command (the second clipped at 500 N) set before every step."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
     md = read_model_description(str(path))
     folder = extract(str(path), unzipdir=str(unzip))
     refs = {v.name: v.valueReference for v in md.modelVariables}
-    forced = [refs[n] for n in ("f:z1", "f:x2") if n in refs]
+    forced = [refs[n] for n in ("f:z1", "f:x2") if n in refs and inputs]
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
                     instanceName="bench")
     fmu.instantiate()
@@ -73,6 +73,7 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--seconds", type=float, default=7.0)
     parser.add_argument("--no-me", action="store_true", help="the Co-Simulation loop only")
+    parser.add_argument("--no-inputs", action="store_true", help="no command set before the steps (zero forces)")
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
@@ -81,7 +82,8 @@ def main() -> None:
         me: dict[str, list[float]] = {name: [] for name in TABLES}
         for r in range(args.rounds):
             for name in TABLES if r % 2 == 0 else TABLES[::-1]:
-                cs[name].append(do_steps(paths[name], args.seconds, folder / f"unzip-{name}-{r}") / args.seconds)
+                cs[name].append(do_steps(paths[name], args.seconds, folder / f"unzip-{name}-{r}",
+                                            not args.no_inputs) / args.seconds)
                 if not args.no_me:
                     me[name].append(model_exchange(paths[name], args.seconds) / args.seconds)
     passive, active = TABLES

@@ -20,7 +20,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
-from isolator.simulation.actuation import crosses, lag_constants, lag_switch, lag_weights
+from isolator.simulation.actuation import lag_constants, lag_step
 from isolator.simulation.sampled_loop import readings, rotation
 
 __all__ = ["PlantFunctions", "plant_functions", "state_nominals"]
@@ -114,32 +114,35 @@ def plant_functions(scenario: Scenario, positions: bool = False) -> PlantFunctio
 
 
 def _step(model: Model, scenario: Scenario, lagged: tuple[int, ...]) -> ca.Function:
-    """The FMU's RK4 step (see :class:`PlantFunctions`): the simulator's steps of a forced run, one at a time."""
+    """The FMU's RK4 step (see :class:`PlantFunctions`): the simulator's steps of a forced run, one at a time: the
+    lags' stage forces (:func:`~isolator.simulation.actuation.lag_step`), then the table's step, one SX function
+    of them."""
     layout = model.layout
-    nx, nu = model.n_states, layout.input_size
-    x, h, p = ca.MX.sym("x", nx + len(lagged)), ca.MX.sym("h"), ca.MX.sym("p", layout.size)
-    us = [ca.MX.sym(name, nu) for name in ("u0", "um", "u1")]
+    nx, nu, na = model.n_states, layout.input_size, len(scenario.actuators)
     where, tau = layout.actuator_slice, lag_constants(scenario)
     limits = [a.max_force for a in scenario.actuators]
-    raw = [ca.vertsplit(u[where]) for u in us]
-    forces = [[ca.fmin(ca.fmax(r[k], -limits[k]), limits[k]) for k in range(len(limits))] for r in raw]
-    stage_forces = [[forces[t][k] for k in range(len(limits))] for t in BY_TIME]
-    ends, switch, weights = [], lag_switch(), lag_weights()
-    shared = {float(tau[k]): weights(h, float(tau[k])) for k in lagged}  # once per lag time constant
-    for j, k in enumerate(lagged):  # the clipping's kinks followed only in steps that cross a limit
-        ramps = (raw[0][k], raw[1][k], raw[2][k])
-        out = ca.vertsplit(switch(crosses(*ramps, limits[k]), shared[float(tau[k])], x[nx + j], *ramps, h,
-                                  float(tau[k]), float(limits[k])))
-        for i in range(4):
-            stage_forces[i][k] = out[i]
-        ends.append(out[5])
-    inputs = [ca.vertcat(us[t][: where.start], *stage_forces[i], us[t][where.stop:]) for i, t in enumerate(BY_TIME)]
+    x, h, p = ca.SX.sym("x", nx), ca.SX.sym("h"), ca.SX.sym("p", layout.size)
+    us, taken = [ca.SX.sym(name, nu) for name in ("u0", "um", "u1")], ca.SX.sym("F", na, 4)
+    clipped = [ca.fmin(ca.fmax(u[where], -ca.DM(limits)), ca.DM(limits)) for u in us]
+    inputs = [ca.vertcat(us[t][: where.start], *[taken[k, i] if k in lagged else clipped[t][k] for k in range(na)],
+                         us[t][where.stop:]) for i, t in enumerate(BY_TIME)]
 
-    def rates(xs: ca.MX, stage: int) -> ca.MX:
+    def rates(xs: ca.SX, stage: int) -> ca.SX:
         return model.rhs(xs, inputs[stage], p)
 
-    xk = rk4_step(rates, x[:nx], h, SPLIT)
-    return ca.Function("step", [x, *us, h, p], [ca.vertcat(xk, *ends)], ["x", "u0", "um", "u1", "h", "p"], ["x1"])
+    table = ca.Function("table_step", [x, *us, taken, h, p], [rk4_step(rates, x, h, SPLIT)])
+    xm, hm, pm = ca.MX.sym("x", nx + len(lagged)), ca.MX.sym("h"), ca.MX.sym("p", layout.size)
+    um = [ca.MX.sym(name, nu) for name in ("u0", "um", "u1")]
+    picked = [ca.vertcat(*[u[where.start + k] for k in lagged]) for u in um]
+    rows = [ca.MX.zeros(1, 4)] * na
+    ends = []
+    if lagged:
+        out = lag_step([float(tau[k]) for k in lagged], [limits[k] for k in lagged])(xm[nx:], *picked, hm)
+        for j, k in enumerate(lagged):
+            rows[k] = out[j, :4]
+        ends = [out[:, 5]]
+    x1 = table(xm[:nx], *um, ca.vertcat(*rows), hm, pm)
+    return ca.Function("step", [xm, *um, hm, pm], [ca.vertcat(x1, *ends)], ["x", "u0", "um", "u1", "h", "p"], ["x1"])
 
 
 def state_nominals(functions: PlantFunctions, rest: np.ndarray) -> np.ndarray:

@@ -23,6 +23,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from collections.abc import Sequence
 from typing import Any
 
 import casadi as ca
@@ -35,8 +36,8 @@ from isolator.scenario.output_files import atomic_output
 from isolator.scenario.tables import read_csv_columns
 from isolator.simulation.time_grid import TimeGrid, stage_times
 
-__all__ = ["LAG_WINDOW", "ForceHistory", "applied_forces", "crosses", "lag_constants", "lag_stages", "lag_sums",
-           "lag_switch", "lag_weights", "lagged_actuators", "load_forces", "with_forces"]
+__all__ = ["LAG_WINDOW", "ForceHistory", "applied_forces", "lag_constants", "lag_stages", "lag_sums",
+           "lag_step", "lagged_actuators", "load_forces", "with_forces"]
 
 #: the lags' sums run over windows of at most this many time constants (e^50: far from overflow; a sum's
 #: rounding is relative to its largest term, which the window's end scales back to the force's size: the
@@ -144,33 +145,31 @@ def lag_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any 
     return [b1, b2, b3, b4], [ends[len(ends) // 2 - 1], ends[-1]]
 
 
-def lag_weights() -> ca.Function:
-    """``(h, tau) -> W`` (6, 4): :func:`lag_stages` of a command within its limits is linear,
-    ``(b1, b2, b3, b4, f_half, f_end) = W (f0, u0, um, u1)``; one ``W`` serves every actuator of one lag."""
-    f, h, tau = ca.SX.sym("f", 4), ca.SX.sym("h"), ca.SX.sym("tau")
-    out = ca.vertcat(*sum(lag_stages(f[0], f[1], f[2], f[3], h, tau), []))
-    return ca.Function("lag_weights", [h, tau], [ca.densify(ca.jacobian(out, f))], {"cse": True})
+def lag_step(tau: Sequence[float], limit: Sequence[float]) -> ca.Function:
+    """``(f0, u0, um, u1, h) -> (lags, 6)``: :func:`lag_stages` of lags with time constants ``tau`` [s] and limits
+    ``limit`` [N] (columns ``b1..b4``, the middle and end forces), as a casadi function that follows the
+    clipping's kinks only in a step where some lag's command crosses its limit (a conditional call: the other
+    branch, the two halves of the clipped command, is not evaluated)."""
+    n = len(tau)
+    f0, u0, um, u1 = (ca.SX.sym(name, n) for name in ("f0", "u0", "um", "u1"))
+    h = ca.SX.sym("h")
+    lim = ca.DM(list(limit))
+    clipped = [ca.fmin(ca.fmax(u, -lim), lim) for u in (u0, um, u1)]
+    args = [f0, u0, um, u1, h]
 
-
-def lag_switch() -> ca.Function:
-    """``(crossing, W, f0, u0, um, u1, h, tau, limit) -> (b1, b2, b3, b4, f_half, f_end)``: :func:`lag_stages`
-    as a casadi function that follows the clipping's kinks only where ``crossing`` (a half of the step whose
-    command crosses ``+-limit``, :func:`crosses`) and else applies the weights ``W`` of :func:`lag_weights` to the
-    clipped command (called from MX, only the branch taken is evaluated)."""
-    args = [ca.SX.sym(n) for n in ("f0", "u0", "um", "u1", "h", "tau", "limit")]
-    weights = ca.SX.sym("W", 6, 4)
-    f0, u0, um, u1, h, tau, limit = args
-    clipped = [ca.fmin(ca.fmax(u, -limit), limit) for u in (u0, um, u1)]
-    plain = ca.Function("lag_plain", [weights, *args], [weights @ ca.vertcat(f0, *clipped)])
-    cut = ca.Function("lag_cut", [weights, *args], [ca.vertcat(*sum(lag_stages(*args), []))], {"cse": True})
-    return ca.Function.conditional("lag_switch", [plain], cut)
-
-
-def crosses(u0: Any, um: Any, u1: Any, limit: Any) -> Any:
-    """1 where a half of the step's command (linear from ``u0`` to ``um``, from ``um`` to ``u1``) crosses ``+-limit``
-    (casadi)."""
-    side = [ca.sign(ca.fmax(u - limit, 0.0)) - ca.sign(ca.fmax(-limit - u, 0.0)) for u in (u0, um, u1)]
-    return ca.logic_or(side[0] != side[1], side[1] != side[2])
+    # within the limits, linear: (b1..b4, f_half, f_end) = W (f0, u0, um, u1), one W per time constant
+    unit = ca.SX.sym("unit", 4)
+    weights = {t: ca.densify(ca.jacobian(ca.vertcat(*sum(lag_stages(*ca.vertsplit(unit), h, t), [])), unit))
+               for t in set(tau)}
+    plain = ca.Function("lag_plain", args, [ca.vertcat(*[(weights[tau[k]] @ ca.vertcat(
+        f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T for k in range(n)])], {"cse": True})
+    cut = ca.Function("lag_cut", args, [ca.vertcat(*[ca.horzcat(*sum(lag_stages(
+        f0[k], u0[k], um[k], u1[k], h, tau[k], limit[k]), [])) for k in range(n)])], {"cse": True})
+    side = [ca.sign(ca.fmax(u - lim, 0.0)) - ca.sign(ca.fmax(-lim - u, 0.0)) for u in (u0, um, u1)]
+    crossing = ca.Function("lag_crossing", [u0, um, u1], [ca.sum1((side[0] != side[1]) + (side[1] != side[2])) > 0])
+    switch = ca.Function.conditional("lag_switch", [plain], cut)
+    mx = [ca.MX.sym(name, n) for name in ("f0", "u0", "um", "u1")] + [ca.MX.sym("h")]
+    return ca.Function("lag_step", mx, [switch(crossing(*mx[1:4]), *mx)])
 
 
 @dataclass(frozen=True)

@@ -132,7 +132,7 @@ def test_sensors_and_lagged_actuators_with_a_sine_force_equal_simulate_forces(tm
     """The geophones' table: twelve velocity sensors, twelve actuators with a 200 Hz lag; a sine on two of them,
     interpolated linearly between 1 ms samples as a forces file is (followed exactly through the input
     derivatives), one of them clipped at its 500 N. The reference is ``simulate --forces`` itself (its RK4 steps
-    resolve the lags' rate, ``fastest_rate``), and RK4 at 1/8 of its step a second one."""
+    take the lags exactly, ``lag_stages``), and RK4 at 1/8 of its step a second one."""
     scenario = shortened("paper-table-3-2-geophones", 9.0)
     path = write_fmu(scenario, tmp_path / "geophones.fmu")
     samples = np.arange(0.0, 9.0 + STEP / 2, STEP)
