@@ -18,9 +18,10 @@ import numpy as np
 from isolator.model.cache import get_model
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
-from isolator.scenario.definitions import Scenario
 from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
-from isolator.simulation.actuation import lag_constants, lag_step
+from isolator.scenario.definitions import Scenario
+from isolator.simulation.actuation import lag_constants
+from isolator.simulation.lag_steps import lag_step
 from isolator.simulation.sampled_loop import readings, rotation
 
 __all__ = ["PlantFunctions", "plant_functions", "state_nominals"]

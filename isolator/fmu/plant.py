@@ -92,7 +92,7 @@ def _generated(functions: PlantFunctions, identifier: str) -> tuple[str, str, li
     generator = ca.CodeGenerator(f"{identifier}_model.c", {"with_header": True})
     rows = []
     for macro, f in named.items():
-        sx = f.mx_in() if f.is_a("MXFunction") else f.sx_in()  # MX: its conditional calls kept
+        sx: list[Any] = f.mx_in() if f.is_a("MXFunction") else f.sx_in()  # MX: its conditional calls kept
         fn = ca.Function(f"{identifier}_{macro.lower()}", sx, [ca.densify(o) for o in f.call(sx)])
         generator.add(fn)
         rows.append({"macro": macro, "name": fn.name(), "arg": fn.n_in(), "res": fn.n_out(), "iw": fn.sz_iw(),

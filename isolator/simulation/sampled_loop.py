@@ -35,8 +35,8 @@ from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.sensors import Sensor
-from isolator.simulation.actuation import lag_stages
 from isolator.simulation.controller_schema import spectral_radius
+from isolator.simulation.lag_steps import lag_stages
 from isolator.simulation.sensors import _motion_function, modal_count
 
 __all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "readings", "rotation", "sampled_loop"]

@@ -17,11 +17,12 @@ from conftest import active_dict, make, run_command
 from controllers import feedback as fb
 from isolator import ParameterError, Simulator, scenario_from_dict
 from isolator.analysis.linear import linearise
-from isolator.scenario.definitions import SIGNALS
 from isolator.numerics.rk4 import BY_TIME
-from isolator.simulation.actuation import ForceHistory, lag_constants, lag_stages
+from isolator.scenario.definitions import SIGNALS
+from isolator.simulation.actuation import ForceHistory, lag_constants
 from isolator.simulation.closed_loop import controller_factor, controller_law
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
+from isolator.simulation.lag_steps import lag_stages
 from isolator.simulation.stepping import rk4_stepper
 from sampled_loops import RATE, dynamic, geophone_data, names, pulse, settling
 

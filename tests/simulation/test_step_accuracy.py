@@ -1,5 +1,6 @@
 """The simulator's own steps are as accurate as a converged run: the actuators' lags taken exactly by the RK4
-steps of the table's own rule (forces, controllers: lag_stages), the leveling valves' switches as DOP853 step ends (pneumatic tables); the
+steps of the table's own rule (forces, controllers: lag_stages), the leveling valves' switches as DOP853 step
+ends (pneumatic tables); the
 lags' windowed sums against their closed forms."""
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ from isolator.numerics.dop853 import DenseStepper
 from isolator.scenario.ground import Ground
 from isolator.scenario.profiles import SineProfile
 from isolator.simulation import simulator as simulator_module
-from isolator.simulation.actuation import ForceHistory, applied_forces, lag_stages
+from isolator.simulation.actuation import ForceHistory, applied_forces
+from isolator.simulation.lag_steps import lag_stages
 from isolator.simulation.leveling import sensor_heights
 from isolator.simulation.stepping import STEP_ANGLE, Method, fastest_rate
 from isolator.simulation.valve_events import ValveSwitches, dense_run
@@ -60,7 +62,8 @@ def test_the_step_rule_does_not_resolve_the_lags():
     sim = Simulator(scenario)
     assert sim.substeps_for(40.0) == math.ceil(40.0 * 1e-3 / STEP_ANGLE) == 1
     method = sim.method_for(40.0, actuated=True)
-    assert method.plan is None and method.substeps == 1
+    assert method.plan is None
+    assert method.substeps == 1
 
 
 def forced(amplitude: float) -> tuple[object, ForceHistory]:

@@ -1,0 +1,153 @@
+"""The forces an RK4 step gives its four stages for an actuator's first-order lag ``tau f' = u - f``, so that the
+step integrates the lag's exact force as it would a linear table's input, however fast the lag.
+
+For ``x' = A x + B f``, one RK4 step with the stage forces ``b1..b4`` adds ``h/6 (b1 + 2 b2 + 2 b3 + b4) B``,
+``h^2/6 (b1 + b2 + b3) A B``, ``h^3/12 (b1 + b2) A^2 B`` and ``h^4/24 b1 A^3 B`` to the state; the exact solution
+adds the moments ``int_0^h (h - s)^n / n! f(s) ds A^n B``. :func:`lag_stages` chooses the ``b`` whose four
+sums are the lag's exact moments (the command linear between the step's start, middle and end, clipped at the
+actuator's limit with its kinks inside the step), so the step is as exact for the lagged force as for the table
+itself (through ``h^3 A^3``) and the step rule follows the table's own eigenvalues
+(:func:`~isolator.simulation.stepping.fastest_rate`). The forces runs (numpy,
+:func:`~isolator.simulation.actuation.with_forces`), the compiled closed loop (casadi,
+:mod:`isolator.simulation.sampled_loop`) and the FMU's step (:func:`lag_step`, generated C) use this one formula.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import casadi as ca
+import numpy as np
+
+__all__ = ["lag_stages", "lag_step"]
+
+#: below this ``|z|`` the exponential's moments come down from the series of the fifth (16 terms: within 1e-16),
+#: above it up from the first (which divides by ``z``)
+_SERIES_BELOW = 1.0
+_TERMS = 16
+
+
+def _exponential_moments(z: Any, exp: Any, select: Any) -> tuple[list[Any], list[Any]]:
+    """``g_k = int_0^1 th^k e^(z th) dth`` and ``q_k = (g_k - 1/(k+1)) / z = (g_0 - g_(k+1)) / (k+1)``,
+    k = 0..3, for ``z <= 0``: each recursion ``z g_k = e^z - k g_(k-1)`` in its stable direction."""
+    small = z > -_SERIES_BELOW
+    safe = select(small, -1.0, z)  # the upward branch, never at z = 0
+    ez, e_small = exp(safe), exp(z)
+    term, down = 1.0, 1.0 / 5
+    for m in range(1, _TERMS):
+        term = term * z / m
+        down = down + term / (m + 5)
+    downward = [down]
+    for k in range(4, 0, -1):
+        downward.insert(0, (e_small - z * downward[0]) / k)
+    upward = [(ez - 1.0) / safe]
+    for k in range(1, 5):
+        upward.append((ez - k * upward[-1]) / safe)
+    g = [select(small, a, b) for a, b in zip(downward, upward, strict=True)]
+    return g[:4], [(g[0] - g[k + 1]) / (k + 1) for k in range(4)]
+
+
+def _pieces(u0: Any, um: Any, u1: Any, limit: Any, lo: Any, hi: Any, select: Any) -> list[tuple[Any, Any, Any, Any]]:
+    """The command over a step as linear pieces ``(start, length, value at start, value at end)`` in units of the
+    step: its two halves, each cut where it crosses ``+-limit`` and clipped there (None: not clipped)."""
+    if limit is None:
+        return [(0.0, 0.5, u0, um), (0.5, 0.5, um, u1)]
+    out = []
+    for start, ua, ub in ((0.0, u0, um), (0.5, um, u1)):
+        slope = ub - ua
+        safe = select(slope == 0, 1.0, slope)  # no crossing when 0: its cuts are not used
+        cuts = [lo(hi((sign * limit - ua) / safe, 0.0), 1.0) for sign in (1.0, -1.0)]
+        marks = [0.0, lo(cuts[0], cuts[1]), hi(cuts[0], cuts[1]), 1.0]
+        values = [lo(hi(ua + slope * m, -limit), limit) for m in marks]
+        out += [(start + marks[i] / 2, (marks[i + 1] - marks[i]) / 2, values[i], values[i + 1]) for i in range(3)]
+    return out
+
+
+def lag_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any = None
+               ) -> tuple[list[Any], list[Any]]:
+    """The forces an RK4 step of length ``h`` gives its four stages for a lagged actuator, and the lag's force at
+    the step's middle and end.
+
+    The command [N] is ``u0``, ``um``, ``u1`` at the step's start, middle and end and linear between them,
+    clipped at ``+-limit`` (its kinks where it crosses them, inside the step, followed exactly); the lag
+    ``tau f' = u - f`` starts from ``f0`` [N]. The stage forces ``b1..b4`` are those whose RK4 step of a linear
+    system ``x' = A x + B f`` equals the exact one through ``h^3 A^3``: the moments
+    ``int_0^h (h - s)^n / n! f(s) ds``, n = 0..3, of the lag's exact force equal RK4's
+    ``h/6 (b1 + 2 b2 + 2 b3 + b4)``, ``h^2/6 (b1 + b2 + b3)``, ``h^3/12 (b1 + b2)``, ``h^4/24 b1`` (a constant
+    force gives its value to every stage; a fast lag's transient, its weight in the step).
+
+    Parameters
+    ----------
+    f0, u0, um, u1 : float, ndarray or casadi expression
+        [N], broadcast together.
+    h, tau : float, ndarray or casadi expression
+        The step and the lag's time constant [s], ``h > 0``, ``tau > 0``.
+    limit : float, ndarray or casadi expression, optional
+        The actuator's ``max_force`` [N] (None: the command as it is).
+
+    Returns
+    -------
+    stages : list
+        ``[b1, b2, b3, b4]`` [N].
+    forces : list
+        The lag's exact force at ``h / 2`` and ``h`` [N].
+    """
+    symbolic = any(isinstance(v, (ca.SX, ca.MX)) for v in (f0, u0, um, u1, h, tau, limit))
+    exp, select, lo, hi = (ca.exp, ca.if_else, ca.fmin, ca.fmax) if symbolic else (
+        np.exp, np.where, np.minimum, np.maximum)
+    moments: list[Any] = [0.0] * 4
+    ends, fa = [], f0
+    # each piece: the moments of f(a + w) against w^k over its length l, in units of l^(k+1), shifted to
+    # (1 - a - w)^n / n! (units of the step)
+    for start, length, ua, ub in _pieces(u0, um, u1, limit, lo, hi, select):
+        z = -length * h / tau
+        g, q = _exponential_moments(z, exp, select)
+        mu = [ua / (k + 1) + (ub - ua) / (k + 2) + (fa - ua) * g[k] - (ub - ua) * q[k] for k in range(4)]
+        scaled = [length ** (k + 1) * mu[k] for k in range(4)]
+        for n in range(4):
+            moments[n] = moments[n] + sum(math.comb(n, k) * (1 - start) ** (n - k) * (-1) ** k * scaled[k]
+                                          for k in range(n + 1)) / math.factorial(n)
+        fa = ub + (fa - ua) * exp(z) - (ub - ua) * g[0]
+        ends.append(fa)
+    b1 = 24 * moments[3]
+    b2 = 12 * moments[2] - b1
+    b3 = 6 * moments[1] - b1 - b2
+    b4 = 6 * moments[0] - b1 - 2 * b2 - 2 * b3
+    return [b1, b2, b3, b4], [ends[len(ends) // 2 - 1], ends[-1]]
+
+
+def _flat(result: tuple[list[Any], list[Any]]) -> list[Any]:
+    """:func:`lag_stages`' stage forces and its middle and end forces, one list."""
+    return [*result[0], *result[1]]
+
+
+def lag_step(tau: Sequence[float], limit: Sequence[float]) -> ca.Function:
+    """``(f0, u0, um, u1, h) -> (lags, 6)``: :func:`lag_stages` of lags with time constants ``tau`` [s] and limits
+    ``limit`` [N] (columns ``b1..b4``, the middle and end forces), as a casadi function that follows the
+    clipping's kinks only in a step where some lag's command crosses its limit (a conditional call: the other
+    branch, the two halves of the clipped command, is not evaluated)."""
+    n = len(tau)
+    f0, u0, um, u1 = (ca.SX.sym(name, n) for name in ("f0", "u0", "um", "u1"))
+    h = ca.SX.sym("h")
+    lim = ca.DM(list(limit))
+    clipped = [ca.fmin(ca.fmax(u, -lim), lim) for u in (u0, um, u1)]
+    args = [f0, u0, um, u1, h]
+
+    # within the limits, linear: (b1..b4, f_half, f_end) = W (f0, u0, um, u1), one W per time constant
+    unit = ca.SX.sym("unit", 4)
+    parts = ca.vertsplit(unit)
+    weights = {t: ca.densify(ca.jacobian(ca.vertcat(*_flat(lag_stages(parts[0], parts[1], parts[2], parts[3], h, t))),
+                                         unit)) for t in set(tau)}
+    plain = ca.Function("lag_plain", args, [ca.vertcat(*[(weights[tau[k]] @ ca.vertcat(
+        f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T for k in range(n)])], {"cse": True})
+    cut = ca.Function("lag_cut", args, [ca.vertcat(*[ca.horzcat(*_flat(lag_stages(
+        f0[k], u0[k], um[k], u1[k], h, tau[k], limit[k]))) for k in range(n)])], {"cse": True})
+    side = [ca.sign(ca.fmax(u - lim, 0.0)) - ca.sign(ca.fmax(-lim - u, 0.0)) for u in (u0, um, u1)]
+    crossing = ca.Function("lag_crossing", [u0, um, u1], [ca.sum1((side[0] != side[1]) + (side[1] != side[2])) > 0])
+    switch = ca.Function.conditional("lag_switch", [plain], cut)
+    mx = [ca.MX.sym(name, n) for name in ("f0", "u0", "um", "u1")] + [ca.MX.sym("h")]
+    return ca.Function("lag_step", mx, [switch(crossing(*mx[1:4]), *mx)])
+
+
