@@ -132,16 +132,17 @@ def _step(model: Model, scenario: Scenario, lagged: tuple[int, ...]) -> ca.Funct
         return model.rhs(xs, inputs[stage], p)
 
     table = ca.Function("table_step", [x, *us, taken, h, p], [rk4_step(rates, x, h, SPLIT)])
+    if not lagged:  # the table's step alone, SX
+        return ca.Function("step", [x, *us, h, p], [table(x, *us, ca.DM.zeros(na, 4), h, p)],
+                           ["x", "u0", "um", "u1", "h", "p"], ["x1"])
     xm, hm, pm = ca.MX.sym("x", nx + len(lagged)), ca.MX.sym("h"), ca.MX.sym("p", layout.size)
     um = [ca.MX.sym(name, nu) for name in ("u0", "um", "u1")]
     picked = [ca.vertcat(*[u[where.start + k] for k in lagged]) for u in um]
     rows = [ca.MX.zeros(1, 4)] * na
-    ends = []
-    if lagged:
-        out = lag_step([float(tau[k]) for k in lagged], [limits[k] for k in lagged])(xm[nx:], *picked, hm)
-        for j, k in enumerate(lagged):
-            rows[k] = out[j, :4]
-        ends = [out[:, 5]]
+    out = lag_step([float(tau[k]) for k in lagged], [limits[k] for k in lagged])(xm[nx:], *picked, hm)
+    for j, k in enumerate(lagged):
+        rows[k] = out[j, :4]
+    ends = [out[:, 5]]
     x1 = table(xm[:nx], *um, ca.vertcat(*rows), hm, pm)
     return ca.Function("step", [xm, *um, hm, pm], [ca.vertcat(x1, *ends)], ["x", "u0", "um", "u1", "h", "p"], ["x1"])
 
