@@ -21,7 +21,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["lag_stages", "lag_step"]
+__all__ = ["clipped_stages", "crosses", "lag_stages", "lag_step"]
 
 #: below this ``|z|`` the exponential's moments come down from the series of the fifth (16 terms: within 1e-16),
 #: above it up from the first (which divides by ``z``)
@@ -101,9 +101,15 @@ def lag_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any 
     ends, fa = [], f0
     # each piece: the moments of f(a + w) against w^k over its length l, in units of l^(k+1), shifted to
     # (1 - a - w)^n / n! (units of the step)
+    shared: dict[float, tuple[Any, tuple[list[Any], list[Any]]]] = {}  # pieces of one length: their moments once
     for start, length, ua, ub in _pieces(u0, um, u1, limit, lo, hi, select):
-        z = -length * h / tau
-        g, q = _exponential_moments(z, exp, select)
+        if isinstance(length, float) and length in shared:
+            z, (g, q) = shared[length]
+        else:
+            z = -length * h / tau
+            g, q = _exponential_moments(z, exp, select)
+            if isinstance(length, float):
+                shared[length] = z, (g, q)
         mu = [ua / (k + 1) + (ub - ua) / (k + 2) + (fa - ua) * g[k] - (ub - ua) * q[k] for k in range(4)]
         scaled = [length ** (k + 1) * mu[k] for k in range(4)]
         for n in range(4):
@@ -121,6 +127,31 @@ def lag_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any 
 def _flat(result: tuple[list[Any], list[Any]]) -> list[Any]:
     """:func:`lag_stages`' stage forces and its middle and end forces, one list."""
     return [*result[0], *result[1]]
+
+
+def crosses(u0: Any, um: Any, u1: Any, limit: Any) -> Any:
+    """Where a half of the step's command (linear from ``u0`` to ``um``, from ``um`` to ``u1``) crosses ``+-limit``:
+    a kink of the clipped command inside the step (numpy booleans, or casadi 0/1)."""
+    symbolic = any(isinstance(v, (ca.SX, ca.MX)) for v in (u0, um, u1, limit))
+    hi, sign = (ca.fmax, ca.sign) if symbolic else (np.maximum, np.sign)
+    side = [sign(hi(u - limit, 0.0)) - sign(hi(-limit - u, 0.0)) for u in (u0, um, u1)]
+    return (side[0] != side[1]) + (side[1] != side[2]) if symbolic else (side[0] != side[1]) | (side[1] != side[2])
+
+
+def clipped_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any) -> tuple[list[Any], list[Any]]:
+    """:func:`lag_stages` with ``limit`` for arrays (broadcast together), the clipping's kinks followed only where
+    a step's command :func:`crosses` its limit (elsewhere the two halves of the clipped command, the same numbers
+    at less cost)."""
+    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (f0, u0, um, u1, h, tau, limit)))
+    f0, u0, um, u1, h, tau, limit = arrays
+    plain = lag_stages(f0, np.clip(u0, -limit, limit), np.clip(um, -limit, limit), np.clip(u1, -limit, limit), h, tau)
+    cut = crosses(u0, um, u1, limit)
+    if cut.any():
+        picked = [a[cut] for a in arrays]
+        exact = lag_stages(picked[0], picked[1], picked[2], picked[3], picked[4], picked[5], picked[6])
+        for whole, part in zip([*plain[0], *plain[1]], [*exact[0], *exact[1]], strict=True):
+            whole[cut] = part
+    return plain
 
 
 def lag_step(tau: Sequence[float], limit: Sequence[float]) -> ca.Function:
@@ -144,8 +175,7 @@ def lag_step(tau: Sequence[float], limit: Sequence[float]) -> ca.Function:
         f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T for k in range(n)])], {"cse": True})
     cut = ca.Function("lag_cut", args, [ca.vertcat(*[ca.horzcat(*_flat(lag_stages(
         f0[k], u0[k], um[k], u1[k], h, tau[k], limit[k]))) for k in range(n)])], {"cse": True})
-    side = [ca.sign(ca.fmax(u - lim, 0.0)) - ca.sign(ca.fmax(-lim - u, 0.0)) for u in (u0, um, u1)]
-    crossing = ca.Function("lag_crossing", [u0, um, u1], [ca.sum1((side[0] != side[1]) + (side[1] != side[2])) > 0])
+    crossing = ca.Function("lag_crossing", [u0, um, u1], [ca.sum1(crosses(u0, um, u1, lim)) > 0])
     switch = ca.Function.conditional("lag_switch", [plain], cut)
     mx = [ca.MX.sym(name, n) for name in ("f0", "u0", "um", "u1")] + [ca.MX.sym("h")]
     return ca.Function("lag_step", mx, [switch(crossing(*mx[1:4]), *mx)])
