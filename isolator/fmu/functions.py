@@ -21,7 +21,7 @@ from isolator.model.variants import Model
 from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
 from isolator.scenario.definitions import Scenario
 from isolator.simulation.actuation import lag_constants
-from isolator.simulation.lag_steps import lag_step
+from isolator.simulation.lag_steps import crosses, lag_rows
 from isolator.simulation.sampled_loop import readings, rotation
 
 __all__ = ["PlantFunctions", "plant_functions", "state_nominals"]
@@ -49,7 +49,12 @@ class PlantFunctions:
     step : casadi.Function
         ``(x, u0, um, u1, h, p) -> x``: one RK4 step of ``h`` [s] of the FMU's state, the inputs at its start,
         middle and end (linear between), each lagged force taken exactly
-        (:func:`~isolator.simulation.actuation.lag_stages`: the stages' forces, the lag's force at the end).
+        (:func:`~isolator.simulation.lag_steps.lag_stages`: the stages' forces, the lag's force at the end), the
+        commands within their limits over the step.
+    step_cut : casadi.Function
+        The same step where a command crosses its limit inside it (the clipping's kinks followed).
+    crossing : casadi.Function
+        ``(u0, um, u1) -> 1`` where some lagged actuator's command crosses its limit inside the step.
     lagged : tuple of int
         The actuators with a lag, in order.
     """
@@ -60,6 +65,8 @@ class PlantFunctions:
     static: ca.Function
     pose: ca.Function
     step: ca.Function
+    step_cut: ca.Function
+    crossing: ca.Function
     lagged: tuple[int, ...]
 
     @property
@@ -111,40 +118,38 @@ def plant_functions(scenario: Scenario, positions: bool = False) -> PlantFunctio
                           ["y"])
     z = ca.SX.sym("z", model.n_static)
     pose = ca.Function("pose", [z, p], [ca.vertcat(model.pose_state(z, p), ca.SX.zeros(len(lagged)))])
-    return PlantFunctions(model, ode, outputs, model.static_residual, pose, _step(model, scenario, lagged), lagged)
+    return PlantFunctions(model, ode, outputs, model.static_residual, pose, *_steps(model, scenario, lagged), lagged)
 
 
-def _step(model: Model, scenario: Scenario, lagged: tuple[int, ...]) -> ca.Function:
-    """The FMU's RK4 step (see :class:`PlantFunctions`): the simulator's steps of a forced run, one at a time: the
-    lags' stage forces (:func:`~isolator.simulation.actuation.lag_step`), then the table's step, one SX function
-    of them."""
+def _steps(model: Model, scenario: Scenario, lagged: tuple[int, ...]) -> tuple[ca.Function, ca.Function, ca.Function]:
+    """The FMU's RK4 step (see :class:`PlantFunctions`): the simulator's steps of a forced run, one at a time, the
+    lags' stage forces by :func:`~isolator.simulation.lag_steps.lag_rows`: the step within the limits, the step
+    across them, and which one a step is (SX, so that the C evaluates only the one it takes)."""
     layout = model.layout
     nx, nu, na = model.n_states, layout.input_size, len(scenario.actuators)
     where, tau = layout.actuator_slice, lag_constants(scenario)
     limits = [a.max_force for a in scenario.actuators]
-    x, h, p = ca.SX.sym("x", nx), ca.SX.sym("h"), ca.SX.sym("p", layout.size)
-    us, taken = [ca.SX.sym(name, nu) for name in ("u0", "um", "u1")], ca.SX.sym("F", na, 4)
+    x, h, p = ca.SX.sym("x", nx + len(lagged)), ca.SX.sym("h"), ca.SX.sym("p", layout.size)
+    us = [ca.SX.sym(name, nu) for name in ("u0", "um", "u1")]
     clipped = [ca.fmin(ca.fmax(u[where], -ca.DM(limits)), ca.DM(limits)) for u in us]
-    inputs = [ca.vertcat(us[t][: where.start], *[taken[k, i] if k in lagged else clipped[t][k] for k in range(na)],
-                         us[t][where.stop:]) for i, t in enumerate(BY_TIME)]
+    picked = [ca.vertcat(*[u[where.start + k] for k in lagged]) for u in us]
+    lag_limits = [limits[k] for k in lagged]
+    out = []
+    for cut in (False, True):
+        rows = ca.SX(0, 6) if not lagged else lag_rows(x[nx:], picked[0], picked[1], picked[2], h,
+                                                        [float(tau[k]) for k in lagged], lag_limits, cut)
+        inputs = [ca.vertcat(us[t][: where.start], *[rows[lagged.index(k), i] if k in lagged else clipped[t][k]
+                                                      for k in range(na)], us[t][where.stop:])
+                  for i, t in enumerate(BY_TIME)]
 
-    def rates(xs: ca.SX, stage: int) -> ca.SX:
-        return model.rhs(xs, inputs[stage], p)
+        def rates(xs: ca.SX, stage: int, inputs: list[ca.SX] = inputs) -> ca.SX:
+            return model.rhs(xs, inputs[stage], p)
 
-    table = ca.Function("table_step", [x, *us, taken, h, p], [rk4_step(rates, x, h, SPLIT)])
-    if not lagged:  # the table's step alone, SX
-        return ca.Function("step", [x, *us, h, p], [table(x, *us, ca.DM.zeros(na, 4), h, p)],
-                           ["x", "u0", "um", "u1", "h", "p"], ["x1"])
-    xm, hm, pm = ca.MX.sym("x", nx + len(lagged)), ca.MX.sym("h"), ca.MX.sym("p", layout.size)
-    um = [ca.MX.sym(name, nu) for name in ("u0", "um", "u1")]
-    picked = [ca.vertcat(*[u[where.start + k] for k in lagged]) for u in um]
-    rows = [ca.MX.zeros(1, 4)] * na
-    out = lag_step([float(tau[k]) for k in lagged], [limits[k] for k in lagged])(xm[nx:], *picked, hm)
-    for j, k in enumerate(lagged):
-        rows[k] = out[j, :4]
-    ends = [out[:, 5]]
-    x1 = table(xm[:nx], *um, ca.vertcat(*rows), hm, pm)
-    return ca.Function("step", [xm, *um, hm, pm], [ca.vertcat(x1, *ends)], ["x", "u0", "um", "u1", "h", "p"], ["x1"])
+        out.append(ca.Function("step_cut" if cut else "step", [x, *us, h, p],
+                               [ca.vertcat(rk4_step(rates, x[:nx], h, SPLIT), rows[:, 5])],
+                               ["x", "u0", "um", "u1", "h", "p"], ["x1"], {"cse": True}))
+    crossing = ca.Function("crossing", us, [ca.sum1(crosses(picked[0], picked[1], picked[2], ca.DM(lag_limits))) > 0])
+    return out[0], out[1], crossing
 
 
 def state_nominals(functions: PlantFunctions, rest: np.ndarray) -> np.ndarray:

@@ -90,11 +90,11 @@ def _generated(functions: PlantFunctions, identifier: str) -> tuple[str, str, li
     static = ca.Function("static", [z, c, p], [r, ca.densify(jac)])
     named = {"ODE": functions.ode, "OUTPUTS": functions.outputs, "STATIC": static, "POSE": functions.pose}
     if functions.lagged:  # doStep's step with the lags taken exactly (without lags, RK4 in C on the ODE)
-        named["STEP"] = functions.step
+        named |= {"STEP": functions.step, "STEP_CUT": functions.step_cut, "CROSSING": functions.crossing}
     generator = ca.CodeGenerator(f"{identifier}_model.c", {"with_header": True})
     rows = []
     for macro, f in named.items():
-        sx: list[Any] = f.mx_in() if f.is_a("MXFunction") else f.sx_in()  # MX: its conditional calls kept
+        sx = f.sx_in()
         fn = ca.Function(f"{identifier}_{macro.lower()}", sx, [ca.densify(o) for o in f.call(sx)])
         generator.add(fn)
         rows.append({"macro": macro, "name": fn.name(), "arg": fn.n_in(), "res": fn.n_out(), "iw": fn.sz_iw(),

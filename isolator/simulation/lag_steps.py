@@ -9,7 +9,7 @@ actuator's limit with its kinks inside the step), so the step is as exact for th
 itself (through ``h^3 A^3``) and the step rule follows the table's own eigenvalues
 (:func:`~isolator.simulation.stepping.fastest_rate`). The forces runs (numpy,
 :func:`~isolator.simulation.actuation.with_forces`), the compiled closed loop (casadi,
-:mod:`isolator.simulation.sampled_loop`) and the FMU's step (:func:`lag_step`, generated C) use this one formula.
+:mod:`isolator.simulation.sampled_loop`) and the FMU's step (:func:`lag_rows`, generated C) use this one formula.
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["clipped_stages", "crosses", "lag_stages", "lag_step"]
+__all__ = ["clipped_stages", "crosses", "lag_rows", "lag_stages"]
 
 #: below this ``|z|`` the exponential's moments come down from the series of the fifth (16 terms: within 1e-16),
 #: above it up from the first (which divides by ``z``)
@@ -154,30 +154,22 @@ def clipped_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: 
     return plain
 
 
-def lag_step(tau: Sequence[float], limit: Sequence[float]) -> ca.Function:
-    """``(f0, u0, um, u1, h) -> (lags, 6)``: :func:`lag_stages` of lags with time constants ``tau`` [s] and limits
-    ``limit`` [N] (columns ``b1..b4``, the middle and end forces), as a casadi function that follows the
-    clipping's kinks only in a step where some lag's command crosses its limit (a conditional call: the other
-    branch, the two halves of the clipped command, is not evaluated)."""
+def lag_rows(f0: ca.SX, u0: ca.SX, um: ca.SX, u1: ca.SX, h: ca.SX, tau: Sequence[float], limit: Sequence[float],
+             cut: bool) -> ca.SX:
+    """(lags, 6): :func:`lag_stages` of lags with time constants ``tau`` [s] and limits ``limit`` [N] (columns
+    ``b1..b4``, the middle and end forces), casadi SX; ``cut``: the clipping's kinks inside the step followed
+    (for a step where :func:`crosses` says so), else the two halves of the clipped command, linear in the forces:
+    ``(b1..b4, f_half, f_end) = W (f0, u0, um, u1)`` with one ``W`` per time constant (the same numbers where no
+    command crosses its limit, at a fraction of the cost)."""
     n = len(tau)
-    f0, u0, um, u1 = (ca.SX.sym(name, n) for name in ("f0", "u0", "um", "u1"))
-    h = ca.SX.sym("h")
+    if cut:
+        return ca.vertcat(*[ca.horzcat(*_flat(lag_stages(f0[k], u0[k], um[k], u1[k], h, tau[k], limit[k])))
+                            for k in range(n)])
     lim = ca.DM(list(limit))
     clipped = [ca.fmin(ca.fmax(u, -lim), lim) for u in (u0, um, u1)]
-    args = [f0, u0, um, u1, h]
-
-    # within the limits, linear: (b1..b4, f_half, f_end) = W (f0, u0, um, u1), one W per time constant
     unit = ca.SX.sym("unit", 4)
     parts = ca.vertsplit(unit)
     weights = {t: ca.densify(ca.jacobian(ca.vertcat(*_flat(lag_stages(parts[0], parts[1], parts[2], parts[3], h, t))),
                                          unit)) for t in set(tau)}
-    plain = ca.Function("lag_plain", args, [ca.vertcat(*[(weights[tau[k]] @ ca.vertcat(
-        f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T for k in range(n)])], {"cse": True})
-    cut = ca.Function("lag_cut", args, [ca.vertcat(*[ca.horzcat(*_flat(lag_stages(
-        f0[k], u0[k], um[k], u1[k], h, tau[k], limit[k]))) for k in range(n)])], {"cse": True})
-    crossing = ca.Function("lag_crossing", [u0, um, u1], [ca.sum1(crosses(u0, um, u1, lim)) > 0])
-    switch = ca.Function.conditional("lag_switch", [plain], cut)
-    mx = [ca.MX.sym(name, n) for name in ("f0", "u0", "um", "u1")] + [ca.MX.sym("h")]
-    return ca.Function("lag_step", mx, [switch(crossing(*mx[1:4]), *mx)])
-
-
+    return ca.vertcat(*[(weights[tau[k]] @ ca.vertcat(f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T
+                        for k in range(n)])
