@@ -148,7 +148,8 @@ def _steps(model: Model, scenario: Scenario, lagged: tuple[int, ...]) -> tuple[c
         out.append(ca.Function("step_cut" if cut else "step", [x, *us, h, p],
                                [ca.vertcat(rk4_step(rates, x[:nx], h, SPLIT), rows[:, 5])],
                                ["x", "u0", "um", "u1", "h", "p"], ["x1"], {"cse": True}))
-    crossing = ca.Function("crossing", us, [ca.sum1(crosses(picked[0], picked[1], picked[2], ca.DM(lag_limits))) > 0])
+    crossing = ca.Function("crossing", us, [ca.sum1(crosses(picked[0], picked[1], picked[2], ca.DM(lag_limits))) > 0
+                                            if lagged else ca.SX(0.0)])
     return out[0], out[1], crossing
 
 
