@@ -90,7 +90,8 @@ def _generated(functions: PlantFunctions, identifier: str) -> tuple[str, str, li
     static = ca.Function("static", [z, c, p], [r, ca.densify(jac)])
     named = {"ODE": functions.ode, "OUTPUTS": functions.outputs, "STATIC": static, "POSE": functions.pose}
     if functions.lagged:  # doStep's step with the lags taken exactly (without lags, RK4 in C on the ODE)
-        named |= {"STEP": functions.step, "STEP_CUT": functions.step_cut, "CROSSING": functions.crossing}
+        named |= {"STEP": functions.step, "STEP_CUT": functions.step_cut, "CROSSING": functions.crossing,
+                  "LAG_WEIGHTS": functions.weights}
     generator = ca.CodeGenerator(f"{identifier}_model.c", {"with_header": True})
     rows = []
     for macro, f in named.items():
@@ -231,7 +232,7 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
         "parameters": [float(v) for v in p], "entry_at": entry_at, "entries": entries,
         "nominals": [float(v) for v in nominals], "rest_guess": [float(v) for v in start.pose],
         "input_starts": input_starts, "input_names": [v.name for v in variables if v.causality == "input"],
-        "lagged": bool(functions.lagged),
+        "lagged": bool(functions.lagged), "nw": functions.weights.numel_out(0),
         **parameter_checks(sim.layout, tunable),
     }
     sources = {

@@ -21,7 +21,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["clipped_stages", "crosses", "lag_rows", "lag_stages"]
+__all__ = ["clipped_stages", "crosses", "lag_rows", "lag_stages", "lag_weights"]
 
 #: below this ``|z|`` the exponential's moments come down from the series of the fifth (16 terms: within 1e-16),
 #: above it up from the first (which divides by ``z``)
@@ -130,12 +130,16 @@ def _flat(result: tuple[list[Any], list[Any]]) -> list[Any]:
 
 
 def crosses(u0: Any, um: Any, u1: Any, limit: Any) -> Any:
-    """Where a half of the step's command (linear from ``u0`` to ``um``, from ``um`` to ``u1``) crosses ``+-limit``:
-    a kink of the clipped command inside the step (numpy booleans, or casadi 0/1)."""
+    """Where a half of the step's command (linear from ``u0`` to ``um``, from ``um`` to ``u1``) crosses ``+-limit``
+    strictly inside it: a kink of the clipped command inside the step (numpy booleans, or casadi 0/1)."""
     symbolic = any(isinstance(v, (ca.SX, ca.MX)) for v in (u0, um, u1, limit))
-    hi, sign = (ca.fmax, ca.sign) if symbolic else (np.maximum, np.sign)
-    side = [sign(hi(u - limit, 0.0)) - sign(hi(-limit - u, 0.0)) for u in (u0, um, u1)]
-    return (side[0] != side[1]) + (side[1] != side[2]) if symbolic else (side[0] != side[1]) | (side[1] != side[2])
+    either = ca.logic_or if symbolic else np.logical_or
+    out = None
+    for a, b in ((u0, um), (um, u1)):
+        for edge in (limit, -limit):
+            kink = (a - edge) * (b - edge) < 0
+            out = kink if out is None else either(out, kink)
+    return out
 
 
 def clipped_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any) -> tuple[list[Any], list[Any]]:
@@ -154,22 +158,28 @@ def clipped_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: 
     return plain
 
 
+def lag_weights(h: ca.SX, taus: Sequence[float]) -> ca.SX:
+    """(6 per time constant, 4): for each of ``taus`` [s] the matrix ``W`` of :func:`lag_stages` over a step of
+    ``h`` [s] for a command within its limits, ``(b1..b4, f_half, f_end) = W (f0, u0, um, u1)`` (casadi SX)."""
+    unit = ca.SX.sym("unit", 4)
+    parts = ca.vertsplit(unit)
+    return ca.vertcat(*[ca.densify(ca.jacobian(ca.vertcat(*_flat(lag_stages(parts[0], parts[1], parts[2], parts[3], h,
+                                                                              t))), unit)) for t in taus])
+
+
 def lag_rows(f0: ca.SX, u0: ca.SX, um: ca.SX, u1: ca.SX, h: ca.SX, tau: Sequence[float], limit: Sequence[float],
-             cut: bool) -> ca.SX:
+             weights: ca.SX | None = None) -> ca.SX:
     """(lags, 6): :func:`lag_stages` of lags with time constants ``tau`` [s] and limits ``limit`` [N] (columns
-    ``b1..b4``, the middle and end forces), casadi SX; ``cut``: the clipping's kinks inside the step followed
-    (for a step where :func:`crosses` says so), else the two halves of the clipped command, linear in the forces:
-    ``(b1..b4, f_half, f_end) = W (f0, u0, um, u1)`` with one ``W`` per time constant (the same numbers where no
-    command crosses its limit, at a fraction of the cost)."""
+    ``b1..b4``, the middle and end forces), casadi SX. Without ``weights``, the clipping's kinks inside the step
+    followed (for a step where :func:`crosses` says so); with them (:func:`lag_weights` of the sorted distinct
+    ``tau``), the two halves of the clipped command, linear in the forces: the same numbers where no command
+    crosses its limit, at a fraction of the cost."""
     n = len(tau)
-    if cut:
+    if weights is None:
         return ca.vertcat(*[ca.horzcat(*_flat(lag_stages(f0[k], u0[k], um[k], u1[k], h, tau[k], limit[k])))
                             for k in range(n)])
     lim = ca.DM(list(limit))
     clipped = [ca.fmin(ca.fmax(u, -lim), lim) for u in (u0, um, u1)]
-    unit = ca.SX.sym("unit", 4)
-    parts = ca.vertsplit(unit)
-    weights = {t: ca.densify(ca.jacobian(ca.vertcat(*_flat(lag_stages(parts[0], parts[1], parts[2], parts[3], h, t))),
-                                         unit)) for t in set(tau)}
-    return ca.vertcat(*[(weights[tau[k]] @ ca.vertcat(f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T
-                        for k in range(n)])
+    at = {t: 6 * i for i, t in enumerate(sorted(set(tau)))}
+    return ca.vertcat(*[(weights[at[tau[k]]:at[tau[k]] + 6, :] @ ca.vertcat(
+        f0[k], clipped[0][k], clipped[1][k], clipped[2][k])).T for k in range(n)])
