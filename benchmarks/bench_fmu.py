@@ -30,8 +30,9 @@ def build(name: str, folder: Path) -> Path:
 
 
 def do_steps(path: Path, seconds: float, unzip: Path, inputs: bool = True) -> float:
-    """Wall time [s] of ``seconds`` of 1 ms ``doStep`` calls (initialisation not counted); with actuators and
-    ``inputs``, a 7 Hz and a 3 Hz sine command (the second clipped at 500 N) set before every step."""
+    """Wall time [s] of ``seconds`` of 1 ms ``doStep`` calls (initialisation not counted); with ``inputs``, two
+    inputs set before every step: with actuators, a 7 Hz and a 3 Hz sine command (the second clipped at 500 N),
+    without, the floor's x and y at rest (the same host calls)."""
     from fmpy import extract, read_model_description
     from fmpy.fmi2 import FMU2Slave
 
@@ -39,6 +40,7 @@ def do_steps(path: Path, seconds: float, unzip: Path, inputs: bool = True) -> fl
     folder = extract(str(path), unzipdir=str(unzip))
     refs = {v.name: v.valueReference for v in md.modelVariables}
     forced = [refs[n] for n in ("f:z1", "f:x2") if n in refs and inputs]
+    still = [refs[n] for n in ("floor:x", "floor:y") if inputs and not forced]
     fmu = FMU2Slave(guid=md.guid, unzipDirectory=folder, modelIdentifier=md.coSimulation.modelIdentifier,
                     instanceName="bench")
     fmu.instantiate()
@@ -51,6 +53,8 @@ def do_steps(path: Path, seconds: float, unzip: Path, inputs: bool = True) -> fl
         t = k * STEP
         if forced:
             fmu.setReal(forced, [300.0 * np.sin(2 * np.pi * 7.0 * t), 700.0 * np.sin(2 * np.pi * 3.0 * t)])
+        elif still:
+            fmu.setReal(still, [0.0 * np.sin(t), 0.0 * np.sin(t)])
         fmu.doStep(currentCommunicationPoint=t, communicationStepSize=STEP)
     wall = time.perf_counter() - t0
     fmu.terminate()
