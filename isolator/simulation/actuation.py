@@ -30,7 +30,7 @@ from isolator.numerics.rk4 import BY_TIME
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.output_files import atomic_output
 from isolator.scenario.tables import read_csv_columns
-from isolator.simulation.lag_steps import clipped_stages, lag_stages
+from isolator.simulation.lag_steps import clipped_stages
 from isolator.simulation.time_grid import TimeGrid, stage_times
 
 __all__ = ["LAG_WINDOW", "ForceHistory", "applied_forces", "lag_constants", "lag_sums", "lagged_actuators",
@@ -253,14 +253,13 @@ def with_forces(
     raw, tau, limit = command[..., lagged], lag_constants(scenario)[lagged], limits[lagged]
     lengths, which = np.unique(np.diff(grid.nodes) / substeps, return_inverse=True)
     at = np.arange(0, 2 * substeps, 2)  # each step's start among the stage times
-    own = clipped_stages(0.0, raw[:, at], raw[:, at + 1], raw[:, at + 2], lengths[which, None, None], tau, limit)
-    unit = lag_stages(1.0, 0.0, 0.0, 0.0, lengths[:, None, None], tau)  # the lag is linear: from zero force, plus
-    unit = ([a[which] for a in unit[0]], [a[which] for a in unit[1]])  # the start's force times a unit's
+    # (the lag is linear: its part from zero force, plus the start's force times a unit's)
+    own, unit = clipped_stages(raw[:, at], raw[:, at + 1], raw[:, at + 2], lengths, which, tau, limit)
     starts = np.append(times[:, at].ravel(), times[-1, -1])
-    lags = lag_sums(starts, np.reshape(own[1][1], (-1, len(lagged))), np.zeros(len(lagged)), tau)
-    first = lags[:-1].reshape(own[1][1].shape)
-    stages = [a + first * b for a, b in zip(own[0], unit[0], strict=True)]
-    half, end = (a + first * b for a, b in zip(own[1], unit[1], strict=True))
+    lags = lag_sums(starts, np.reshape(own[5], (-1, len(lagged))), np.zeros(len(lagged)), tau)
+    first = lags[:-1].reshape(own[5].shape)
+    stages = [a + first * b for a, b in zip(own[:4], unit[:4], strict=True)]
+    half, end = (a + first * b for a, b in zip(own[4:], unit[4:], strict=True))
     applied[:, at[:, None], lagged] = first
     applied[:, at[:, None] + 1, lagged] = half
     applied[:, -1, lagged] = end[:, -1]

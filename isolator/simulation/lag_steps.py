@@ -142,20 +142,42 @@ def crosses(u0: Any, um: Any, u1: Any, limit: Any) -> Any:
     return out
 
 
-def clipped_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any) -> tuple[list[Any], list[Any]]:
-    """:func:`lag_stages` with ``limit`` for arrays (broadcast together), the clipping's kinks followed only where
-    a step's command :func:`crosses` its limit (elsewhere the two halves of the clipped command, the same numbers
-    at less cost)."""
-    arrays = np.broadcast_arrays(*(np.asarray(v, dtype=float) for v in (f0, u0, um, u1, h, tau, limit)))
-    f0, u0, um, u1, h, tau, limit = arrays
-    plain = lag_stages(f0, np.clip(u0, -limit, limit), np.clip(um, -limit, limit), np.clip(u1, -limit, limit), h, tau)
+def clipped_stages(u0: np.ndarray, um: np.ndarray, u1: np.ndarray, lengths: np.ndarray, which: np.ndarray,
+                   tau: np.ndarray, limit: np.ndarray) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """:func:`lag_stages` of many steps (numpy) as the lag's linearity splits it: from zero force, and per unit of
+    the force at the step's start.
+
+    Parameters
+    ----------
+    u0, um, u1 : ndarray (steps, ..., lags)
+        The commands [N] at the steps' starts, middles and ends (unclipped).
+    lengths, which : ndarray
+        The distinct step lengths [s] and each step's among them (``steps``,).
+    tau, limit : ndarray (lags,)
+        [s], [N].
+
+    Returns
+    -------
+    own : list of ndarray
+        ``b1..b4``, the middle and end forces from zero force [N]: within the limits, the weights of each
+        distinct step applied to the clipped command; the clipping's kinks followed where a step's command
+        :func:`crosses` its limit.
+    unit : list of ndarray
+        The same per newton of force at the start, (steps, 1, ..., lags).
+    """
+    steps = lengths[(slice(None),) + (None,) * (u0.ndim - 1)]
+    units = np.eye(4)
+    weights = [_flat(lag_stages(units[c, 0], units[c, 1], units[c, 2], units[c, 3], steps, tau)) for c in range(4)]
+    per_step = [[w[which] for w in column] for column in weights]  # (steps, 1.., lags) each
+    clipped = [np.clip(u, -limit, limit) for u in (u0, um, u1)]
+    own = [sum(per_step[c + 1][k] * clipped[c] for c in range(3)) for k in range(6)]
     cut = crosses(u0, um, u1, limit)
     if cut.any():
-        picked = [a[cut] for a in arrays]
-        exact = lag_stages(picked[0], picked[1], picked[2], picked[3], picked[4], picked[5], picked[6])
-        for whole, part in zip([*plain[0], *plain[1]], [*exact[0], *exact[1]], strict=True):
+        full = np.broadcast_arrays(u0, steps[which], tau, limit)
+        exact = _flat(lag_stages(0.0, u0[cut], um[cut], u1[cut], full[1][cut], full[2][cut], full[3][cut]))
+        for whole, part in zip(own, exact, strict=True):
             whole[cut] = part
-    return plain
+    return own, per_step[0]
 
 
 def lag_weights(h: ca.SX, taus: Sequence[float]) -> ca.SX:
