@@ -25,8 +25,10 @@ import numpy as np
 import isolator.simulation.closed_loop as loopmod
 from controllers.feedback import from_statespace
 from isolator import Simulator, scenario_from_dict
+from isolator.numerics.rk4 import BY_TIME
 from isolator.scenario.reader import bundled_scenarios
-from isolator.simulation.actuation import applied_forces
+from isolator.simulation.actuation import lag_constants
+from isolator.simulation.lag_steps import lag_stages
 from isolator.simulation.sensors import sensor_signals
 from isolator.simulation.stepping import rk4_stepper
 
@@ -59,7 +61,10 @@ def python_loop(scenario, model, grid, grid_inputs, p, start, substeps, forces, 
     inputs = grid_inputs.copy()
     times = grid.nodes[:-1, None] + np.diff(grid.nodes)[:, None] * np.linspace(0.0, 1.0, 2 * substeps + 1)
     ticks = grid.regular[:-1] & ((np.cumsum(grid.regular[:-1]) - 1) % period == 0)
-    stepper = rk4_stepper(model, substeps)
+    lagged = np.array([a.bandwidth is not None for a in scenario.actuators])
+    stepper = rk4_stepper(model, substeps, bool(lagged.any()))
+    limits, tau = np.array([a.max_force for a in scenario.actuators]), lag_constants(scenario)
+    order = (2 * np.arange(substeps)[:, None] + np.array(BY_TIME)[None, :]).ravel()
     x, xc, u, lag = start.state.copy(), ctrl.reset(), np.zeros(12), np.zeros(12)
     c0 = grid_inputs[0, 0].copy()
     rest = sensor_signals(scenario, model, grid.nodes[:1], x[None], c0[None], p, start.state)[:, 0]
@@ -69,10 +74,20 @@ def python_loop(scenario, model, grid, grid_inputs, p, start, substeps, forces, 
             y = sensor_signals(scenario, model, grid.nodes[i:i + 1], x[None], inputs[i - 1, -1][None] if i else
                                c0[None], p, start.state)[:, 0] - rest
             xc, u = ctrl.step(xc, y)
-        applied = applied_forces(scenario, np.broadcast_to(u, (times.shape[1], 12)), times[i], lag)
-        lag = applied[-1]
+        command = np.broadcast_to(u, (times.shape[1], 12))
+        applied = np.clip(command, -limits, limits)
+        taken = applied[order] if lagged.any() else applied
+        for j in range(substeps if lagged.any() else 0):  # the lags' stage forces, as the compiled loop takes them
+            stages, (half, end) = lag_stages(lag, *command[2 * j:2 * j + 3], h / substeps, tau, limits)
+            applied[2 * j, lagged], applied[2 * j + 1, lagged], applied[2 * j + 2, lagged] = \
+                lag[lagged], half[lagged], end[lagged]
+            for k in range(4):
+                taken[4 * j + k, lagged] = stages[k][lagged]
+            lag = end
         inputs[i, :, acts] = applied
-        x, _ = stepper.step(x, inputs[i], float(h), p, start.state)
+        stepped = inputs[i][order] if lagged.any() else inputs[i].copy()
+        stepped[:, acts] = taken
+        x, _ = stepper.step(x, stepped, float(h), p, start.state)
         out[i] = x
     return out, inputs
 

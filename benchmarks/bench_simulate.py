@@ -143,7 +143,7 @@ def main() -> None:
     n_rk4 = max(20, args.batch // 10)
     original = simmod.Simulator.method_for
     simmod.Simulator.method_for = lambda self, omega, actuated=False: simmod.Method(
-        self.substeps_for(omega, actuated=actuated))
+        self.substeps_for(omega))
     try:
         t0 = time.perf_counter()
         sim.run_batch(k[:n_rk4], c[:n_rk4], workers=2)

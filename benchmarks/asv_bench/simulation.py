@@ -62,3 +62,27 @@ class Sweep:
 
     def time_sweep(self) -> None:
         self.sweep("paper-table-3-2", scale=self.scale, samples=2000, workers=1)
+
+
+class Forced:
+    """The geophone table's 12 s run with a forces file's commands on its twelve lagged actuators (issue 43: the
+    lags at no cost), in this process, as ``isolator simulate --forces`` runs it."""
+
+    repeat = (3, 10, 20.0)
+    number = 1
+    warmup_time = 0.0
+    timeout = 300
+
+    def setup(self) -> None:
+        import sys
+        from pathlib import Path
+
+        sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the benchmark scripts beside this folder
+        from bench_forces import history
+
+        scenario, self.forces = history()
+        self.sim = Simulator(scenario)
+        self.sim.run(forces=self.forces)  # compiles the stepper
+
+    def time_forced_run(self) -> None:
+        self.sim.run(forces=self.forces)

@@ -18,7 +18,10 @@ import numpy as np
 from isolator.model.cache import get_model
 from isolator.model.parameters import ParameterLayout
 from isolator.model.variants import Model
+from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
 from isolator.scenario.definitions import Scenario
+from isolator.simulation.actuation import lag_constants
+from isolator.simulation.lag_steps import crosses, lag_rows, lag_weights
 from isolator.simulation.sampled_loop import readings, rotation
 
 __all__ = ["PlantFunctions", "plant_functions", "state_nominals"]
@@ -43,6 +46,18 @@ class PlantFunctions:
         ``(z, c, p) -> (r, dr/dz)``: the static residual (:attr:`Model.static_residual`).
     pose : casadi.Function
         ``(z, p) -> x``: the FMU's state at rest in pose ``z`` (no lagged force).
+    step : casadi.Function
+        ``(x, u0, um, u1, h, p, W) -> x``: one RK4 step of ``h`` [s] of the FMU's state, the inputs at its start,
+        middle and end (linear between), each lagged force taken exactly
+        (:func:`~isolator.simulation.lag_steps.lag_stages`: the stages' forces, the lag's force at the end), the
+        commands within their limits over the step (the lags' weights ``W`` of ``weights``).
+    step_cut : casadi.Function
+        The same step where a command crosses its limit inside it (the clipping's kinks followed).
+    crossing : casadi.Function
+        ``(u0, um, u1) -> 1`` where some lagged actuator's command crosses its limit inside the step.
+    weights : casadi.Function
+        ``h -> W``: the lags' weights for a step of ``h`` [s]
+        (:func:`~isolator.simulation.lag_steps.lag_weights`).
     lagged : tuple of int
         The actuators with a lag, in order.
     """
@@ -52,6 +67,10 @@ class PlantFunctions:
     outputs: ca.Function
     static: ca.Function
     pose: ca.Function
+    step: ca.Function
+    step_cut: ca.Function
+    crossing: ca.Function
+    weights: ca.Function
     lagged: tuple[int, ...]
 
     @property
@@ -103,7 +122,43 @@ def plant_functions(scenario: Scenario, positions: bool = False) -> PlantFunctio
                           ["y"])
     z = ca.SX.sym("z", model.n_static)
     pose = ca.Function("pose", [z, p], [ca.vertcat(model.pose_state(z, p), ca.SX.zeros(len(lagged)))])
-    return PlantFunctions(model, ode, outputs, model.static_residual, pose, lagged)
+    return PlantFunctions(model, ode, outputs, model.static_residual, pose, *_steps(model, scenario, lagged), lagged)
+
+
+def _steps(model: Model, scenario: Scenario, lagged: tuple[int, ...]
+           ) -> tuple[ca.Function, ca.Function, ca.Function, ca.Function]:
+    """The FMU's RK4 step (see :class:`PlantFunctions`): the simulator's steps of a forced run, one at a time, the
+    lags' stage forces by :func:`~isolator.simulation.lag_steps.lag_rows`: the step within the limits, the step
+    across them, which one a step is, and the lags' weights for a step's length (SX, so that the C evaluates
+    only the step it takes, and the weights when the length changes)."""
+    layout = model.layout
+    nx, nu, na = model.n_states, layout.input_size, len(scenario.actuators)
+    where, tau = layout.actuator_slice, lag_constants(scenario)
+    limits = [a.max_force for a in scenario.actuators]
+    lag_tau, lag_limits = [float(tau[k]) for k in lagged], [limits[k] for k in lagged]
+    x, h, p = ca.SX.sym("x", nx + len(lagged)), ca.SX.sym("h"), ca.SX.sym("p", layout.size)
+    us = [ca.SX.sym(name, nu) for name in ("u0", "um", "u1")]
+    weights = ca.SX.sym("W", 6 * len(set(lag_tau)), 4)
+    clipped = [ca.fmin(ca.fmax(u[where], -ca.DM(limits)), ca.DM(limits)) for u in us]
+    picked = [ca.vertcat(*[u[where.start + k] for k in lagged]) for u in us]
+    out = []
+    for cut in (False, True):
+        rows = ca.SX(0, 6) if not lagged else lag_rows(x[nx:], picked[0], picked[1], picked[2], h, lag_tau,
+                                                        lag_limits, None if cut else weights)
+        inputs = [ca.vertcat(us[t][: where.start], *[rows[lagged.index(k), i] if k in lagged else clipped[t][k]
+                                                      for k in range(na)], us[t][where.stop:])
+                  for i, t in enumerate(BY_TIME)]
+
+        def rates(xs: ca.SX, stage: int, inputs: list[ca.SX] = inputs) -> ca.SX:
+            return model.rhs(xs, inputs[stage], p)
+
+        out.append(ca.Function("step_cut" if cut else "step", [x, *us, h, p, weights],
+                               [ca.vertcat(rk4_step(rates, x[:nx], h, SPLIT), rows[:, 5])],
+                               ["x", "u0", "um", "u1", "h", "p", "W"], ["x1"], {"cse": True}))
+    crossing = ca.Function("crossing", us, [ca.sum1(crosses(picked[0], picked[1], picked[2], ca.DM(lag_limits))) > 0
+                                            if lagged else ca.SX(0.0)])
+    lag = ca.Function("lag_weights", [h], [lag_weights(h, sorted(set(lag_tau)))], {"cse": True})
+    return out[0], out[1], crossing, lag
 
 
 def state_nominals(functions: PlantFunctions, rest: np.ndarray) -> np.ndarray:

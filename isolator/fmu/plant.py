@@ -82,12 +82,16 @@ def _tunable(layout: ParameterLayout, names: Sequence[str], key: str) -> list[tu
 
 
 def _generated(functions: PlantFunctions, identifier: str) -> tuple[str, str, list[dict[str, Any]]]:
-    """casadi's C for the four functions, its header, and each function's C name and sizes."""
+    """casadi's C for the functions (the step only with lagged actuators), its header, and each function's C name
+    and sizes."""
     z = ca.SX.sym("z", functions.static.size1_in(0))
     c, p = ca.SX.sym("c", functions.static.size1_in(1)), ca.SX.sym("p", functions.static.size1_in(2))
     r, jac = functions.static(z, c, p)
     static = ca.Function("static", [z, c, p], [r, ca.densify(jac)])
     named = {"ODE": functions.ode, "OUTPUTS": functions.outputs, "STATIC": static, "POSE": functions.pose}
+    if functions.lagged:  # doStep's step with the lags taken exactly (without lags, RK4 in C on the ODE)
+        named |= {"STEP": functions.step, "STEP_CUT": functions.step_cut, "CROSSING": functions.crossing,
+                  "LAG_WEIGHTS": functions.weights}
     generator = ca.CodeGenerator(f"{identifier}_model.c", {"with_header": True})
     rows = []
     for macro, f in named.items():
@@ -197,8 +201,8 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
     inputs_mode = carriages == "inputs"
     functions = plant_functions(scenario, positions=not inputs_mode)
     model, layout = functions.model, functions.model.layout
-    omega = max(fastest_rate(scenario, max(start.max_frequency, end.max_frequency if end is not None else 0.0),
-                             actuated=True), 1e-9)  # the simulator's rule: a host may drive the actuators
+    omega = max(fastest_rate(scenario, max(start.max_frequency, end.max_frequency if end is not None else 0.0)),
+                1e-9)  # the simulator's rule (a lag costs no step: the step function takes it exactly)
     max_step = min(COMMUNICATION_STEP, STEP_ANGLE / omega / REFINE)
     floor = scenario.ground.motion if scenario.ground is not None else {}
     profiles: list[tuple[str, Profile | None]] = [] if inputs_mode else [
@@ -228,6 +232,7 @@ def write_fmu(scenario: Scenario, out: str | Path, carriages: Literal["profiles"
         "parameters": [float(v) for v in p], "entry_at": entry_at, "entries": entries,
         "nominals": [float(v) for v in nominals], "rest_guess": [float(v) for v in start.pose],
         "input_starts": input_starts, "input_names": [v.name for v in variables if v.causality == "input"],
+        "lagged": bool(functions.lagged), "nw": functions.weights.numel_out(0),
         **parameter_checks(sim.layout, tunable),
     }
     sources = {

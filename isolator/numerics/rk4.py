@@ -4,7 +4,10 @@
 on the sample grid, the profile optimiser's shooting, the optimal
 feedforward's transcription). :class:`Stepper` runs it in compiled code over
 a grid of intervals, ``substeps`` steps per interval, in chunks of a fixed
-number of intervals.
+number of intervals; with ``split``, each of a step's four stages takes its own
+inputs (the two middle stages, at the same time, may differ: inputs chosen for
+what the step integrates, such as an actuator's lag,
+:func:`isolator.simulation.actuation.lag_stages`).
 """
 
 from __future__ import annotations
@@ -18,7 +21,7 @@ import numpy as np
 from isolator.numerics.native import NativeFunction
 from isolator.numerics.systems import SteppedSystem
 
-__all__ = ["Motion", "SteppedSystem", "Stepper", "rk4_step"]
+__all__ = ["BY_TIME", "SPLIT", "Motion", "SteppedSystem", "Stepper", "rk4_step", "stage_count"]
 
 CHUNK = 512
 
@@ -27,28 +30,41 @@ X = TypeVar("X")
 Motion = Callable[[Any, Any], Any]
 
 
-def rk4_step(rates: Callable[[X, int], X], x: X, h: Any) -> X:
+#: the stage indices ``rates`` is called with: by time (start, middle twice, end), or one per stage
+BY_TIME = (0, 1, 1, 2)
+SPLIT = (0, 1, 2, 3)
+
+
+def rk4_step(rates: Callable[[X, int], X], x: X, h: Any, stages: tuple[int, int, int, int] = BY_TIME) -> X:
     """One classical RK4 step of length ``h``.
 
     Parameters
     ----------
     rates : callable
-        ``(x, stage) -> dx/dt`` with ``stage`` 0 at the step's start, 1 at its middle, 2 at its end
-        (so that time-dependent inputs are looked up per stage).
+        ``(x, stage) -> dx/dt`` with ``stage`` from ``stages`` (so that time-dependent inputs are looked up
+        per stage).
     x : array or casadi expression
         The state at the step's start.
     h : float or casadi expression
         Step length [s].
+    stages : tuple of int
+        What ``rates`` is told for the four stages: :data:`BY_TIME` (0 at the step's start, 1 at its middle,
+        2 at its end) or :data:`SPLIT` (0, 1, 2, 3: the two middle stages' inputs apart).
 
     Returns
     -------
     The state at the step's end.
     """
-    k1 = rates(x, 0)
-    k2 = rates(x + h / 2 * k1, 1)
-    k3 = rates(x + h / 2 * k2, 1)
-    k4 = rates(x + h * k3, 2)
+    k1 = rates(x, stages[0])
+    k2 = rates(x + h / 2 * k1, stages[1])
+    k3 = rates(x + h / 2 * k2, stages[2])
+    k4 = rates(x + h * k3, stages[3])
     return x + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)  # type: ignore[operator]
+
+
+def stage_count(substeps: int, split: bool = False) -> int:
+    """Inputs per grid interval: at the RK4 stage times (``2 substeps + 1``), or four per step (``split``)."""
+    return 4 * substeps if split else 2 * substeps + 1
 
 
 class Stepper:
@@ -64,15 +80,19 @@ class Stepper:
         ``(x, reference) -> (12,)`` casadi: what motion sensors see (for :meth:`step`).
     compile : bool
         Compile the loop (else casadi evaluates it).
+    split : bool
+        Four inputs per step, one per stage (:func:`stage_count`), instead of the stage times' ``2 substeps + 1``.
     """
 
-    def __init__(self, model: SteppedSystem, substeps: int, motion: Motion, compile: bool = True) -> None:
+    def __init__(self, model: SteppedSystem, substeps: int, motion: Motion, compile: bool = True,
+                 split: bool = False) -> None:
         self.model = model
         self.substeps = substeps
+        self.split = split
         nx = model.n_states
         nc = model.rhs.size1_in(1)
         npar = model.rhs.size1_in(2)
-        stages = 2 * substeps + 1
+        stages = stage_count(substeps, split)
         x = ca.MX.sym("x", nx)
         cin = ca.MX.sym("c", nc, stages)
         h = ca.MX.sym("h")
@@ -80,12 +100,13 @@ class Stepper:
         dt = h / substeps
         xk = x
         for j in range(substeps):
-            at = (cin[:, 2 * j], cin[:, 2 * j + 1], cin[:, 2 * j + 2])
+            first = 4 * j if split else 2 * j
+            at = tuple(cin[:, first + k] for k in range(4 if split else 3))
 
-            def rates(xs: ca.MX, k: int, at: tuple[ca.MX, ca.MX, ca.MX] = at) -> ca.MX:
+            def rates(xs: ca.MX, k: int, at: tuple[ca.MX, ...] = at) -> ca.MX:
                 return model.rhs(xs, at[k], p)
 
-            xk = rk4_step(rates, xk, dt)
+            xk = rk4_step(rates, xk, dt, SPLIT if split else BY_TIME)
         step = ca.Function("step", [x, cin, h, p], [xk])
         reference = ca.MX.sym("x_ref", nx)
         self._step_parts = ([x, cin, h, p, reference], [xk, motion(xk, reference)])
@@ -97,14 +118,14 @@ class Stepper:
         hh = ca.MX.sym("H", 1, CHUNK)
         pp = ca.MX.sym("p", npar)
         xs = acc(x0, cc, hh, ca.repmat(pp, 1, CHUNK))
-        name = f"isolator_{model.tag}_s{substeps}"
+        name = f"isolator_{model.tag}_s{substeps}{'_split' if split else ''}"
         self.name = name
         self.chunk = NativeFunction(ca.Function(name, [x0, cc, hh, pp], [xs]), compile=compile)
 
     def step(
         self, x: np.ndarray, inputs: np.ndarray, h: float, p: np.ndarray, reference: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
-        """One grid interval of length ``h`` [s] with stage inputs (2 substeps + 1, input size).
+        """One grid interval of length ``h`` [s] with stage inputs (:func:`stage_count`, input size).
 
         Returns
         -------
@@ -126,7 +147,7 @@ class Stepper:
         Parameters
         ----------
         x0 : ndarray (n_states,)
-        inputs : ndarray (intervals, 2 substeps + 1, input size)
+        inputs : ndarray (intervals, stage_count(substeps, split), input size)
         steps : ndarray (intervals,)
             Interval lengths [s].
         p : ndarray

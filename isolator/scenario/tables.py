@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 from pathlib import Path
 
 import numpy as np
@@ -81,6 +82,14 @@ def read_csv_columns(
     for i, (line, row) in enumerate(rows[1:]):
         if len(row) != len(header):
             raise ScenarioError(f"{where} line {line}: {len(row)} values for {len(header)} columns ({columns})")
+        if not blank:  # a row of finite numbers at once; a bad cell is named by the loop below
+            try:
+                numbers = [float(cell) for cell in row]
+            except ValueError:
+                numbers = []
+            if numbers and all(math.isfinite(v) for v in numbers):
+                values[i] = numbers
+                continue
         for j, cell in enumerate(row):
             if header[j] in blank and not cell.strip():
                 values[i, j] = np.nan

@@ -10,6 +10,11 @@ is the command clipped at ``max_force`` and, for an actuator with a
 ``bandwidth``, passed through the first-order lag ``tau f' = u - f`` with
 ``tau = 1 / (2 pi bandwidth)`` (starting from zero force), solved exactly for
 a command that is linear between evaluation times.
+
+The table's RK4 steps take the lagged forces through
+:func:`~isolator.simulation.lag_steps.lag_stages`: each of a step's four stages gets the force that makes the
+step integrate the lag's exact force as it would a linear table's input, however fast the lag. So the table's
+steps follow the table's own eigenvalues, not the lags' rates: a lag costs no extra step.
 """
 
 from __future__ import annotations
@@ -21,12 +26,15 @@ from pathlib import Path
 import numpy as np
 
 from isolator.errors import ParameterError, ScenarioError
+from isolator.numerics.rk4 import BY_TIME
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.output_files import atomic_output
 from isolator.scenario.tables import read_csv_columns
+from isolator.simulation.lag_steps import clipped_stages
 from isolator.simulation.time_grid import TimeGrid, stage_times
 
-__all__ = ["LAG_WINDOW", "ForceHistory", "applied_forces", "load_forces", "with_forces"]
+__all__ = ["LAG_WINDOW", "ForceHistory", "applied_forces", "lag_constants", "lag_sums", "lagged_actuators",
+           "load_forces", "with_forces"]
 
 #: the lags' sums run over windows of at most this many time constants (e^50: far from overflow; a sum's
 #: rounding is relative to its largest term, which the window's end scales back to the force's size: the
@@ -154,10 +162,10 @@ def applied_forces(
     limits = np.array([a.max_force for a in scenario.actuators])
     u = np.clip(command, -limits, limits)
     out = u.copy()
-    lagged = [k for k, a in enumerate(scenario.actuators) if a.bandwidth is not None]
+    lagged = lagged_actuators(scenario)
     if not lagged:
         return out
-    tau = np.array([1.0 / (2 * math.pi * scenario.actuators[k].bandwidth) for k in lagged])  # type: ignore[operator]
+    tau = lag_constants(scenario)[lagged]
     times = np.asarray(times, dtype=float)
     # exact for u linear over [t_i, t_i+1] (held where the time repeats): y_i+1 = d_i y_i + c_i with
     # d = e^(-h/tau), c = u_i+1 (1 - a) - u_i (d - a), a = tau (1 - d) / h (a few step lengths h: their
@@ -172,8 +180,28 @@ def applied_forces(
     ul = u[:, lagged]
     c = ul[1:] * ahead[which] - ul[:-1] * behind[which]
     y = np.zeros(len(lagged)) if initial is None else np.asarray(initial, dtype=float)[lagged]
-    lags = np.empty((times.size, len(lagged)))
-    lags[0] = y
+    lags = lag_sums(times, c, y, tau)
+    out[:, lagged] = lags
+    return out
+
+
+def lagged_actuators(scenario: Scenario) -> list[int]:
+    """The indices of the scenario's actuators with a ``bandwidth`` (a first-order lag)."""
+    return [k for k, a in enumerate(scenario.actuators) if a.bandwidth is not None]
+
+
+def lag_constants(scenario: Scenario) -> np.ndarray:
+    """Each actuator's lag time constant ``1 / (2 pi bandwidth)`` [s] (1 for one without a lag)."""
+    return np.array([1.0 / (2 * math.pi * a.bandwidth) if a.bandwidth is not None else 1.0
+                     for a in scenario.actuators])
+
+
+def lag_sums(times: np.ndarray, c: np.ndarray, y0: np.ndarray, tau: np.ndarray) -> np.ndarray:
+    """The lags' forces at ``times`` (N,) [s] from ``y0`` (lags,) [N] by ``y_i+1 = e^(-(t_i+1 - t_i)/tau) y_i + c_i``
+    (``c`` (N - 1, lags) [N]): summed in windows of at most :data:`LAG_WINDOW` time constants as
+    ``z_n = y_n e^((t_n - r) / tau) = z_0 + sum c_k e^((t_k+1 - r) / tau)``."""
+    lags = np.empty((times.size, tau.size))
+    lags[0] = y0
     edges = np.searchsorted(times, times[0] + LAG_WINDOW * tau.min() * np.arange(1, 2 + (times[-1] - times[0]) / (
         LAG_WINDOW * tau.min())), side="right")
     first = 0
@@ -183,14 +211,23 @@ def applied_forces(
         grow = np.exp((times[first + 1 : last + 1, None] - times[first]) / tau[None, :])
         lags[first + 1 : last + 1] = (lags[first] + np.cumsum(c[first:last] * grow, axis=0)) / grow
         first = last
-    out[:, lagged] = lags
-    return out
+    return lags
 
 
 def with_forces(
     scenario: Scenario, where: slice, grid: TimeGrid, inputs: np.ndarray, substeps: int, forces: ForceHistory | None
-) -> np.ndarray:
-    """The model's inputs at every RK4 stage time with the actuators' applied forces in their ``where`` slot.
+) -> tuple[np.ndarray, np.ndarray]:
+    """The model's inputs with the actuators' forces in their ``where`` slot: what the RK4 steps take, and what
+    the actuators apply at every RK4 stage time.
+
+    Returns
+    -------
+    taken : ndarray (intervals, stages, input size)
+        The steps' inputs: at the stage times (``2 substeps + 1``) when no actuator lags, else four per step
+        (:func:`~isolator.numerics.rk4.stage_count` with ``split``), a lagged force as
+        :func:`~isolator.simulation.lag_steps.lag_stages` gives it to each stage.
+    applied : ndarray (intervals, 2 substeps + 1, input size)
+        At the stage times, the forces applied there [N].
 
     Raises
     ------
@@ -198,13 +235,36 @@ def with_forces(
         ``forces`` is for other actuators than the scenario's.
     """
     if forces is None:
-        return inputs
+        return inputs, inputs
     names = tuple(a.name for a in scenario.actuators)
     if forces.names != names:
         raise ParameterError(f"forces: are for actuators {forces.names}, the scenario has {names}")
     times, mid = stage_times(grid, substeps)
-    flat = times.ravel()
-    applied = applied_forces(scenario, forces.command(flat, mid.ravel()), flat)
+    command = forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, len(names))
+    limits = np.array([a.max_force for a in scenario.actuators])
+    applied = np.clip(command, -limits, limits)
     out = inputs.copy()
-    out[..., where] = applied.reshape(*times.shape, len(names))
-    return out
+    lagged = lagged_actuators(scenario)
+    if not lagged:
+        out[..., where] = applied
+        return out, out
+    # the lags step by step, their kinks where the command crosses its limits followed exactly: the force at each
+    # step's start by the recursion (the step's own part, from zero force, is lag_stages' end), then the stages
+    raw, tau, limit = command[..., lagged], lag_constants(scenario)[lagged], limits[lagged]
+    lengths, which = np.unique(np.diff(grid.nodes) / substeps, return_inverse=True)
+    at = np.arange(0, 2 * substeps, 2)  # each step's start among the stage times
+    # (the lag is linear: its part from zero force, plus the start's force times a unit's)
+    own, unit = clipped_stages(raw[:, at], raw[:, at + 1], raw[:, at + 2], lengths, which, tau, limit)
+    starts = np.append(times[:, at].ravel(), times[-1, -1])
+    lags = lag_sums(starts, np.reshape(own[5], (-1, len(lagged))), np.zeros(len(lagged)), tau)
+    first = lags[:-1].reshape(own[5].shape)
+    stages = [a + first * b for a, b in zip(own[:4], unit[:4], strict=True)]
+    half, end = (a + first * b for a, b in zip(own[4:], unit[4:], strict=True))
+    applied[:, at[:, None], lagged] = first
+    applied[:, at[:, None] + 1, lagged] = half
+    applied[:, -1, lagged] = end[:, -1]
+    out[..., where] = applied
+    taken = out[:, (at[:, None] + np.array(BY_TIME)[None, :]).ravel()]  # (intervals, 4 substeps, input size)
+    slots = np.arange(where.start, where.stop)[lagged]
+    taken[..., slots] = np.stack(stages, axis=2).reshape(times.shape[0], 4 * substeps, len(lagged))
+    return taken, out

@@ -213,9 +213,8 @@ def closed_loop_run(scenario: Scenario, model: Model,
     Parameters
     ----------
     simulator : tuple
-        The simulator's grid, its ``grid_inputs(substeps)``, its ``substeps_for(omega, grid, actuated)`` (the
-        RK4 substeps rule, the actuators' lags among its rates) and its cache of closed-loop grids (filled here,
-        the last four kept).
+        The simulator's grid, its ``grid_inputs(substeps)``, its ``substeps_for(omega, grid)`` (the RK4
+        substeps rule) and its cache of closed-loop grids (filled here, the last four kept).
     equilibria : tuple
         The initial and the final equilibrium (None when a carriage never stops).
     substeps : int
@@ -249,7 +248,7 @@ def closed_loop_run(scenario: Scenario, model: Model,
         law = controller_law(scenario, model, p, start, controller, noise, seed)
     if factor != internal:  # the substeps rule on the loop's own grid
         grid = time_grid(scenario.simulation, scenario.breakpoints, factor)
-        substeps = substeps_for(max(start.max_frequency, end.max_frequency if end else 0.0), grid, True)
+        substeps = substeps_for(max(start.max_frequency, end.max_frequency if end else 0.0), grid)
         if (factor, substeps) not in cache:
             while len(cache) > 3:
                 cache.pop(next(iter(cache)))

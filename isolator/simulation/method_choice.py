@@ -40,10 +40,10 @@ class MethodChoice:
     _breakpoints: np.ndarray
     _plans: dict[int, StepPlan]
 
-    def substeps_for(self, omega_max: float, grid: TimeGrid | None = None, actuated: bool = False) -> int:
-        """RK4 steps per interval of ``grid`` (default the run's) for a fastest eigenvalue ``omega_max`` [rad/s],
-        the actuators' lags among the rates when they act (``actuated``: :func:`fastest_rate`)."""
-        omega = fastest_rate(self.scenario, omega_max, actuated)
+    def substeps_for(self, omega_max: float, grid: TimeGrid | None = None) -> int:
+        """RK4 steps per interval of ``grid`` (default the run's) for a fastest eigenvalue ``omega_max`` [rad/s]
+        (:func:`fastest_rate`: the actuators' lags cost no step, :func:`~isolator.simulation.actuation.lag_stages`)."""
+        omega = fastest_rate(self.scenario, omega_max)
         longest = self._longest_interval if grid is None else float(np.max(np.diff(grid.nodes), initial=0.0))
         return max(1, math.ceil(omega * longest / STEP_ANGLE))
 
@@ -51,9 +51,9 @@ class MethodChoice:
         """The cheaper integration for a fastest eigenvalue ``omega_max`` [rad/s]: DOP853 steps with |lambda| h <=
         ``DENSE_STEP_ANGLE`` between the breakpoints, unless breakpoints are so dense (sampled profiles) that RK4 on
         the sample grid costs fewer right-hand-side evaluations; RK4 whenever the actuators act (``actuated``:
-        forces, a feedback law or a controller), their lags among the rates."""
-        substeps = self.substeps_for(omega_max, actuated=actuated)
-        omega = max(fastest_rate(self.scenario, omega_max, actuated), 1e-12)
+        forces, a feedback law or a controller)."""
+        substeps = self.substeps_for(omega_max)
+        omega = max(fastest_rate(self.scenario, omega_max), 1e-12)
         check_step_count(omega, float(self.grid.nodes[-1]), DENSE_STEP_ANGLE, self.scenario)
         if actuated:
             return Method(substeps)

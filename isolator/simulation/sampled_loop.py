@@ -5,7 +5,9 @@ One casadi function advances one grid interval: at a tick it reads the sensors a
 a floor sensor's signal), interpolates the controller's matrices with the tick's weights, updates the
 controller and the held command; then it adds the feedforward command at every RK4 stage time, clips it at
 ``max_force``, lags it exactly (the first-order lag of :func:`~isolator.simulation.actuation.applied_forces`,
-the command linear between stage times) and steps the plant. ``CHUNK`` such intervals are one compiled
+the command linear between stage times, its kinks at the limits followed) and steps the plant, each RK4 stage
+taking a lagged force as :func:`~isolator.simulation.actuation.lag_stages` gives it (so that the steps follow
+the table's own rates, not the lags'). ``CHUNK`` such intervals are one compiled
 call (:class:`~isolator.numerics.native.NativeFunction`, cached on disk); the controller's matrices, the
 actuators' limits and lags and the delay flag are arguments, so another controller of the same shape runs
 without compiling. Functions are built once per model, substeps, controller shape and sensor set.
@@ -29,11 +31,12 @@ from isolator.errors import SimulationError
 from isolator.model.rotations import cardan_matrix, quaternion_to_matrix
 from isolator.model.variants import Model
 from isolator.numerics.native import NativeFunction
-from isolator.numerics.rk4 import rk4_step
+from isolator.numerics.rk4 import BY_TIME, SPLIT, rk4_step
 from isolator.scenario.arguments import check_public
 from isolator.scenario.definitions import Scenario
 from isolator.scenario.sensors import Sensor
 from isolator.simulation.controller_schema import spectral_radius
+from isolator.simulation.lag_steps import crosses, lag_stages
 from isolator.simulation.sensors import _motion_function, modal_count
 
 __all__ = ["CHUNK", "LoopRun", "SampledLaw", "SampledLoop", "readings", "rotation", "sampled_loop"]
@@ -158,22 +161,37 @@ def _tick(shape: tuple[int, int, int, int]) -> ca.Function:
     return ca.Function("tick", [xc, hold, pending, y, tick, weights, packed, delay], outs)
 
 
-def _actuators(m: int, stages: int) -> ca.Function:
-    """``(hold, ff, h, lag, limits, tau, lagged) -> (applied (m, stages), lag)``: the command plus feedforward
-    at the stage times, clipped, then lagged exactly (linear between stage times) where ``lagged`` (SX)."""
+def _actuators(m: int, substeps: int) -> ca.Function:
+    """``(hold, ff, h, lag, limits, tau, lagged) -> (applied (m, stages), taken (m, 4 substeps), lag)``: the command
+    plus feedforward at the stage times, clipped; what acts at the stage times, and what each RK4 stage takes (a
+    lag's force through :func:`~isolator.simulation.lag_steps.lag_stages`). The clipping's kinks inside a step
+    are followed only in an interval where a command crosses its limit (a conditional call; elsewhere the two
+    halves of the clipped command give the same numbers at a fraction of the cost)."""
     sym = ca.SX.sym
+    stages = 2 * substeps + 1
     hold, ff, h, lag = sym("hold", m), sym("ff", m, stages), sym("h"), sym("lag", m)
     limits, tau, lagged = sym("limits", m), sym("tau", m), sym("lagged", m)
-    u = [ca.fmin(ca.fmax(hold + ff[:, j], -limits), limits) for j in range(stages)]
-    hs = h / (stages - 1)
-    decay = ca.exp(-hs / tau)
-    lags, applied = lag, []
-    for j in range(stages):
-        if j:
-            slope = (u[j] - u[j - 1]) / ca.fmax(hs, 1e-300)
-            lags = u[j] + (lags - u[j - 1] + slope * tau) * decay - slope * tau
-        applied.append(ca.if_else(lagged, lags, u[j]))
-    return ca.Function("actuators", [hold, ff, h, lag, limits, tau, lagged], [ca.horzcat(*applied), lags])
+    args = [hold, ff, h, lag, limits, tau, lagged]
+    raw = [hold + ff[:, j] for j in range(stages)]
+    u = [ca.fmin(ca.fmax(r, -limits), limits) for r in raw]
+    branches = []
+    for cut in (False, True):
+        lags, applied, taken = lag, [ca.if_else(lagged, lag, u[0])], []
+        for j in range(substeps):
+            ramps = raw if cut else u
+            stage, (half, end) = lag_stages(lags, ramps[2 * j], ramps[2 * j + 1], ramps[2 * j + 2], h / substeps, tau,
+                                            limits if cut else None)
+            held = [u[2 * j + k] for k in BY_TIME]
+            taken += [ca.if_else(lagged, b, v) for b, v in zip(stage, held, strict=True)]
+            applied += [ca.if_else(lagged, half, u[2 * j + 1]), ca.if_else(lagged, end, u[2 * j + 2])]
+            lags = end
+        branches.append(ca.Function("actuators_cut" if cut else "actuators", args,
+                                    [ca.horzcat(*applied), ca.horzcat(*taken), lags]))
+    kinks = ca.vertcat(*[crosses(raw[2 * j], raw[2 * j + 1], raw[2 * j + 2], limits) for j in range(substeps)])
+    which = ca.Function("crossing", args, [ca.sum1(kinks)])
+    switch = ca.Function.conditional("actuators_switch", [branches[0]], branches[1])
+    mx = [ca.MX.sym(f"a{i}", *a.shape) for i, a in enumerate(args)]
+    return ca.Function("actuators", mx, [*switch(which(*mx) > 0, *mx)])
 
 
 def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, int, int, int],
@@ -194,17 +212,18 @@ def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, i
     delay, limits, tau, lagged = sym("delay"), sym("limits", m), sym("tau", m), sym("lagged", m)
     y = reading(x, cprev, p, ref) + offset
     xc_next, hold_next, pending_next = _tick(shape)(xc, hold, pending, y, tick, weights, packed, delay)
-    applied, lags = _actuators(m, stages)(hold_next, ff, h, lag, limits, tau, lagged)
+    applied, taken, lags = _actuators(m, substeps)(hold_next, ff, h, lag, limits, tau, lagged)
     inputs = [ca.vertcat(cin[: actuators.start, j], applied[:, j], cin[actuators.stop:, j]) for j in range(stages)]
     dt = h / substeps
     xk = x
     for s in range(substeps):
-        at3 = (inputs[2 * s], inputs[2 * s + 1], inputs[2 * s + 2])
+        at4 = tuple(ca.vertcat(cin[: actuators.start, 2 * s + k], taken[:, 4 * s + i], cin[actuators.stop:, 2 * s + k])
+                    for i, k in enumerate(BY_TIME))
 
-        def rates(xs: ca.MX, stage: int, at3: tuple[ca.MX, ca.MX, ca.MX] = at3) -> ca.MX:
-            return model.rhs(xs, at3[stage], p)
+        def rates(xs: ca.MX, stage: int, at4: tuple[ca.MX, ...] = at4) -> ca.MX:
+            return model.rhs(xs, at4[stage], p)
 
-        xk = rk4_step(rates, xk, dt)
+        xk = rk4_step(rates, xk, dt, SPLIT)
     ins = [x, xc, hold, pending, lag, cprev, cin, h, p, ref, tick, offset, weights, ff, packed, delay, limits, tau,
            lagged]
     outs = [xk, xc_next, hold_next, pending_next, lags, inputs[-1], applied]

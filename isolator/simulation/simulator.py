@@ -276,9 +276,10 @@ class Simulator(MethodChoice):
         else:
             substeps = method.substeps
             if feedback is None and controller is None:
-                inputs = with_forces(self.scenario, self.layout.actuator_slice, self.grid, self.grid_inputs(substeps),
-                                     substeps, forces)
-                stepped = rk4_stepper(self.model, substeps).run(start.state, inputs, np.diff(grid.nodes), p)
+                taken, inputs = with_forces(self.scenario, self.layout.actuator_slice, self.grid,
+                                            self.grid_inputs(substeps), substeps, forces)
+                stepped = rk4_stepper(self.model, substeps, taken.shape[1] != inputs.shape[1]).run(
+                    start.state, taken, np.diff(grid.nodes), p)
             else:
                 grid, stepped, inputs = closed_loop_run(
                     self.scenario, self.model, (self.grid, self.grid_inputs, self.substeps_for, self._loops), p,

@@ -57,7 +57,7 @@ DENSE_STEP_ANGLE = 0.9
 #: longest DOP853 step [s]; shorter ones come in ratios of 2^(1/8)
 MAX_DENSE_STEP = 0.05
 
-_STEPPERS: dict[tuple[ParameterLayout, str, int], Stepper] = {}
+_STEPPERS: dict[tuple[ParameterLayout, str, int, bool], Stepper] = {}
 _DENSE: dict[tuple[ParameterLayout, str, int, bool], DenseStepper] = {}
 
 
@@ -72,11 +72,12 @@ class Method:
     quasi_static: bool = False
 
 
-def rk4_stepper(model: Model, substeps: int) -> Stepper:
-    """The compiled RK4 stepper of a model with ``substeps`` steps per grid interval (built once)."""
-    key = (model.layout, model.kind, substeps)
+def rk4_stepper(model: Model, substeps: int, split: bool = False) -> Stepper:
+    """The compiled RK4 stepper of a model with ``substeps`` steps per grid interval (built once); ``split``: four
+    inputs per step (lagged actuators' forces, :func:`~isolator.simulation.actuation.with_forces`)."""
+    key = (model.layout, model.kind, substeps, split)
     if key not in _STEPPERS:
-        _STEPPERS[key] = Stepper(model, substeps, model.variant.sensed_motion)
+        _STEPPERS[key] = Stepper(model, substeps, model.variant.sensed_motion, split=split)
     return _STEPPERS[key]
 
 
@@ -164,20 +165,15 @@ def plan_stage_inputs(scenario: Scenario, model: Model, method: Method, p: np.nd
     return cache[key]
 
 
-def fastest_rate(scenario: Scenario, omega_max: float, actuated: bool = False) -> float:
-    """The fastest rate [rad/s] a run's steps must resolve: the equilibria's fastest eigenvalue ``omega_max``,
-    the sine drives (a carriage's or the floor's ``omega``) and, when the actuators act (forces, a feedback law,
-    a controller: ``actuated``), their first-order lags ``2 pi bandwidth``. The simulator solves each lag exactly
-    (:mod:`isolator.simulation.actuation`), so its rate is among no equilibrium's eigenvalues; but the force it
-    applies changes at that rate after every change of the command, and the table's steps integrate that force
-    as they would a mode of the rate (at 1 kHz, a 200 Hz lag made the one RK4 step of the table's own rule stray
-    by 1e-5 of a signal's peak)."""
+def fastest_rate(scenario: Scenario, omega_max: float) -> float:
+    """The fastest rate [rad/s] a run's steps must resolve: the equilibria's fastest eigenvalue ``omega_max`` and
+    the sine drives (a carriage's or the floor's ``omega``). The actuators' first-order lags are not among them:
+    the RK4 steps take a lagged force through :func:`~isolator.simulation.actuation.lag_stages`, which integrates
+    it as exactly as the step does the table, however fast the lag (without it, a 200 Hz lag made one RK4 step
+    per millisecond stray by 1e-5 of a signal's peak, and resolving the lag's rate took 26 steps)."""
     drives = [c.profile for c in scenario.carriages]
     drives += list(scenario.ground.motion.values()) if scenario.ground is not None else []
-    rates = [omega_max, *(abs(d.omega) for d in drives if isinstance(d, SineProfile))]
-    if actuated:
-        rates += [2 * math.pi * a.bandwidth for a in scenario.actuators if a.bandwidth is not None]
-    return max(rates)
+    return max([omega_max, *(abs(d.omega) for d in drives if isinstance(d, SineProfile))])
 
 
 def stage_inputs(scenario: Scenario, model: Model, plan: StepPlan, p: np.ndarray) -> np.ndarray:

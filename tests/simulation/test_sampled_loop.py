@@ -17,10 +17,12 @@ from conftest import active_dict, make, run_command
 from controllers import feedback as fb
 from isolator import ParameterError, Simulator, scenario_from_dict
 from isolator.analysis.linear import linearise
+from isolator.numerics.rk4 import BY_TIME
 from isolator.scenario.definitions import SIGNALS
-from isolator.simulation.actuation import ForceHistory, applied_forces
+from isolator.simulation.actuation import ForceHistory, lag_constants
 from isolator.simulation.closed_loop import controller_factor, controller_law
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
+from isolator.simulation.lag_steps import lag_stages
 from isolator.simulation.stepping import rk4_stepper
 from sampled_loops import RATE, dynamic, geophone_data, names, pulse, settling
 
@@ -209,7 +211,8 @@ def test_command_line(tmp_path, capsys, parked):
 
 
 def python_loop(law):
-    """The loop the compiled one replaced (a Python iteration per interval calling the law), for equality."""
+    """The loop the compiled one replaced (a Python iteration per interval calling the law, the lags' stage
+    forces by lag_stages), for equality."""
 
     def run(scenario, model, grid, grid_inputs, p, start, substeps, forces, sampled, period):
         inputs = grid_inputs.copy()
@@ -219,19 +222,31 @@ def python_loop(law):
         mid = np.broadcast_to(((grid.nodes[:-1] + grid.nodes[1:]) / 2)[:, None], times.shape)
         commanded = None if forces is None else forces.command(times.ravel(), mid.ravel()).reshape(*times.shape, -1)
         ticks = grid.regular & ((np.cumsum(grid.regular) - 1) % period == 0)
-        stepper = rk4_stepper(model, substeps)
+        lagged = np.array([a.bandwidth is not None for a in scenario.actuators])
+        stepper = rk4_stepper(model, substeps, bool(lagged.any()))
         n_a = len(scenario.actuators)
+        limits, tau = np.array([a.max_force for a in scenario.actuators]), lag_constants(scenario)
+        order = (2 * np.arange(substeps)[:, None] + np.array(BY_TIME)[None, :]).ravel()
         u, lag, x, motion = np.zeros(n_a), np.zeros(n_a), start.state.copy(), np.zeros(12)
         out = np.empty((grid.nodes.size - 1, x.size))
         law.reset()
         for i, h in enumerate(np.diff(grid.nodes)):
             if ticks[i]:
                 u = np.asarray(law(float(grid.nodes[i]), motion), dtype=float)
-            command = u if commanded is None else commanded[i] + u
-            applied = applied_forces(scenario, np.broadcast_to(command, (times.shape[1], n_a)), times[i], lag)
-            lag = applied[-1]
+            command = np.broadcast_to(u if commanded is None else commanded[i] + u, (times.shape[1], n_a))
+            applied = np.clip(command, -limits, limits)
+            taken = applied[order] if lagged.any() else applied
+            for j in range(substeps if lagged.any() else 0):  # each step's lagged forces by lag_stages
+                stages, (half, end) = lag_stages(lag, *command[2 * j:2 * j + 3], h / substeps, tau, limits)
+                applied[2 * j, lagged], applied[2 * j + 1, lagged], applied[2 * j + 2, lagged] = \
+                    lag[lagged], half[lagged], end[lagged]
+                for k in range(4):
+                    taken[4 * j + k, lagged] = stages[k][lagged]
+                lag = end
             inputs[i, :, acts] = applied
-            x, motion = stepper.step(x, inputs[i], float(h), p, start.state)
+            stepped = inputs[i][order] if lagged.any() else inputs[i].copy()
+            stepped[:, acts] = taken
+            x, motion = stepper.step(x, stepped, float(h), p, start.state)
             out[i] = x
         return out, inputs
 
