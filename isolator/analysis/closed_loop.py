@@ -60,9 +60,9 @@ def command_plant(lin: LinearModel) -> tuple[np.ndarray, np.ndarray, np.ndarray,
     inputs, outputs = lin.input_names, lin.output_names
     iu = [inputs.index(f"actuator:{a.name}") for a in lin.scenario.actuators]
     ys = [outputs.index(f"s:{s.name}") for s in lin.scenario.sensors]
-    sys = lin.system
-    a, b = np.asarray(sys.A, dtype=float), np.asarray(sys.B, dtype=float)[:, iu]
-    c, d = np.asarray(sys.C, dtype=float)[ys], np.asarray(sys.D, dtype=float)[np.ix_(ys, iu)]
+    sys = lin.realisation  # its arrays: the python-control system is not needed here
+    a, b = np.asarray(sys.a, dtype=float), np.asarray(sys.b, dtype=float)[:, iu]
+    c, d = np.asarray(sys.c, dtype=float)[ys], np.asarray(sys.d, dtype=float)[np.ix_(ys, iu)]
     acts = lin.scenario.actuators
     lagged = [k for k, act in enumerate(acts) if act.bandwidth is not None]
     n, nl, m = a.shape[0], len(lagged), len(acts)
@@ -163,7 +163,7 @@ class SampledLoop:
         table = modes(self.lin)
         if k < 0 or not table.eigenvalues.size:
             return "none", math.nan
-        a = np.asarray(self.lin.system.A, dtype=float)
+        a = np.asarray(self.lin.realisation.a, dtype=float)
         lam, vec = np.linalg.eig(a)
         n, ndof = a.shape[0], self.lin.mass.shape[0]
         z, w = np.linalg.eig(self.matrix)

@@ -21,6 +21,7 @@ is an ordinary input.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -29,8 +30,8 @@ import numpy as np
 
 from isolator.analysis.elastic_outputs import point_rows, sensor_shapes
 from isolator.analysis.frequency_response import state_space_response
+from isolator.analysis.realisation import Realisation
 from isolator.analysis.sensor_outputs import sensor_response, sensor_rows
-from isolator.analysis.signal_names import labels, signals, to_control
 from isolator.errors import ParameterError
 from isolator.model.cache import get_model
 from isolator.model.equilibrium import DOF_NAMES, Equilibrium, RockingStiffness, rocking_stiffness, static_equilibrium
@@ -179,18 +180,23 @@ class LinearModel:
     ground_stiffness: np.ndarray
     ground_damping: np.ndarray
     force_input: np.ndarray
-    system: control.StateSpace
+    realisation: Realisation
     parameters: np.ndarray
     air: AirMatrices | None = None
+
+    @functools.cached_property
+    def system(self) -> control.StateSpace:
+        """The python-control system (built on first use: importing python-control takes about a second)."""
+        return self.realisation.state_space()
 
     # -- names -------------------------------------------------------------------
     @property
     def input_names(self) -> list[str]:
-        return labels(self.system.input_labels)
+        return list(self.realisation.inputs)
 
     @property
     def output_names(self) -> list[str]:
-        return labels(self.system.output_labels)
+        return list(self.realisation.outputs)
 
     # -- analyses ----------------------------------------------------------------
     def frequency_response(
@@ -342,11 +348,11 @@ def linearise(
     air = None if layout.pneumatic is None else AirMatrices(_air_names(scenario), *mats[7:])
     ndof = mass.shape[0]
     force_input = np.hstack([bw, ba.reshape(ndof, -1), -np.eye(ndof, ndof - 6, -6)])  # then generalised modal forces
-    system = _state_space(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air)
-    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, system, p, air)
+    realisation = _realisation(scenario, eq, mass, damping, stiffness, g0, g1, force_input, air)
+    return LinearModel(scenario, q, eq, mass, damping, stiffness, g0, g1, force_input, realisation, p, air)
 
 
-def _state_space(
+def _realisation(
     scenario: Scenario,
     eq: Equilibrium,
     mass: np.ndarray,
@@ -356,8 +362,7 @@ def _state_space(
     g1: np.ndarray,
     force_input: np.ndarray,
     air: AirMatrices | None = None,
-) -> control.StateSpace:
-    import control  # python-control takes most of a second to import: only when needed
+) -> Realisation:
     ndof = mass.shape[0]
     inv_m = np.linalg.inv(mass)
     zero, eye = np.zeros((ndof, ndof)), np.eye(ndof)
@@ -383,11 +388,8 @@ def _state_space(
               *(f"modal:{m}" for m in modes)]
     states = [*DOF_NAMES, *modes, *STATE_NAMES[6:], *(f"d{m}" for m in modes), *(air.names if air is not None else ())]
     c_sensors, d_sensors = sensor_rows(scenario.sensors, rot0, a, a @ b1 + b0, b1, sensor_shapes(scenario))
-    return control.ss(
-        a, a @ b1 + b0, np.vstack([c, c_sensors]), np.vstack([c @ b1, d_sensors]),
-        inputs=signals(inputs), outputs=signals([*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)]),
-        states=signals(states), name=to_control(scenario.name),
-    )
+    return Realisation(a, a @ b1 + b0, np.vstack([c, c_sensors]), np.vstack([c @ b1, d_sensors]), tuple(inputs),
+                       (*out_names, *(f"s:{sensor.name}" for sensor in scenario.sensors)), tuple(states), scenario.name)
 
 
 check_public(globals(), ("LinearModel", "linearise"))
