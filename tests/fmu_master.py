@@ -68,3 +68,29 @@ def run(path, tmp, names: Sequence[str], stop: float, step: float = 1e-3, inputs
 def relative_error(got: np.ndarray, reference: np.ndarray) -> float:
     """max |got - reference| / max |reference| (the contract's measure)."""
     return float(np.max(np.abs(got - reference)) / np.max(np.abs(reference)))
+
+
+def master_loop(plant: Slave, controller: Slave, ctrl: Any, steps: int, h: float, read: Sequence[str],
+                wired: Sequence[str] = ()) -> np.ndarray:
+    """A plant FMU and a controller FMU in the contract's master order at each of ``steps + 1`` samples ``h`` [s]
+    apart: read the plant's outputs ``read`` (the sensors' ``s:<name>`` among them), give the controller its
+    readings ``y:<name>`` and the outputs named in ``wired`` as its inputs of the same name, step it, give its
+    commands ``u:<name>`` to the plant's ``f:<name>``, step the plant. The outputs read, (steps + 1, len(read));
+    both instances closed."""
+    read = list(read)
+    sensors = [read.index(f"s:{s}") for s in ctrl.sensors]
+    out = np.empty((steps + 1, len(read)))
+    for k in range(steps + 1):
+        t = k * h
+        out[k] = plant.get(read)
+        controller.set({**{f"y:{s}": out[k, i] for s, i in zip(ctrl.sensors, sensors, strict=True)},
+                        **{name: out[k, read.index(name)] for name in wired}})
+        if k == steps:
+            break
+        controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+        u = controller.get([f"u:{a}" for a in ctrl.actuators])
+        plant.set({f"f:{a}": u[i] for i, a in enumerate(ctrl.actuators)})
+        plant.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
+    plant.close()
+    controller.close()
+    return out

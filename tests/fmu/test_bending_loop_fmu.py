@@ -26,7 +26,7 @@ from isolator.fmu import write_fmu
 pytest.importorskip("fmpy")
 from fmpy import read_model_description
 
-from fmu_master import Slave, relative_error
+from fmu_master import Slave, master_loop, relative_error
 
 pytestmark = pytest.mark.skipif(shutil.which("cc") is None and shutil.which("gcc") is None, reason="no C compiler")
 
@@ -73,19 +73,7 @@ def _loop(plant_fmu: Path, ctrl, duration: float, tmp: Path) -> tuple[np.ndarray
     h = 1.0 / ctrl.sample_rate
     steps = round(duration / h)
     names = ["x", "y", "z", "rx", "ry", "rz", *(f"s:{s}" for s in ctrl.sensors)]
-    out = np.empty((steps + 1, len(names)))
-    for k in range(steps + 1):
-        t = k * h
-        out[k] = plant.get(names)
-        controller.set(dict(zip([f"y:{s}" for s in ctrl.sensors], out[k, 6:], strict=True)))
-        if k == steps:
-            break
-        controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        u = controller.get([f"u:{a}" for a in ctrl.actuators])
-        plant.set({f"f:{a}": u[i] for i, a in enumerate(ctrl.actuators)})
-        plant.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-    plant.close()
-    controller.close()
+    out = master_loop(plant, controller, ctrl, steps, h, names)
     return np.arange(steps + 1) * h, out, names
 
 

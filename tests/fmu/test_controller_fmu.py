@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from conftest import run_command
-from fmu_master import Slave, relative_error
+from fmu_master import Slave, master_loop, relative_error
 from isolator import Simulator, load_scenario
 from isolator.fmu import write_fmu
 from isolator.simulation.settling import settling_time
@@ -76,20 +76,7 @@ def test_plant_and_controller_fmus_settle_as_simulate_controller(tmp_path, plant
     h = 1.0 / ctrl.sample_rate
     steps = round(scenario.simulation.duration / h)
     signals, sensors = ["x", "y", "z", "rx", "ry", "rz"], [f"s:{s}" for s in ctrl.sensors]
-    out = np.empty((steps + 1, 6))
-    for k in range(steps + 1):  # the contract's master order at each sample
-        t = k * h
-        values = plant.get(signals + sensors)
-        out[k] = values[:6]
-        controller.set(dict(zip([f"y:{s}" for s in ctrl.sensors], values[6:], strict=True)))
-        if k == steps:
-            break
-        controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        u = controller.get([f"u:{a}" for a in ctrl.actuators])
-        plant.set({f"f:{a}": u[i] for i, a in enumerate(ctrl.actuators)})
-        plant.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-    plant.close()
-    controller.close()
+    out = master_loop(plant, controller, ctrl, steps, h, signals + sensors)[:, :6]
     t = np.arange(steps + 1) * h
     for i, name in enumerate(signals):
         got = np.interp(response.t, t, out[:, i])

@@ -16,7 +16,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from conftest import run_command
-from fmu_master import Slave, relative_error
+from fmu_master import Slave, master_loop, relative_error
 from isolator import Simulator, load_scenario
 from isolator.fmu import write_fmu
 from isolator.fmu.package import IDENTIFIER_LENGTH, model_identifier, valid_identifier
@@ -156,20 +156,8 @@ def test_plant_q_outputs_wired_to_a_scheduled_controllers_q_inputs_equal_simulat
     steps = round(scenario.simulation.duration / h)
     signals, sensors = ["x", "y", "z", "rx", "ry", "rz"], [f"s:{s}" for s in ctrl.sensors]
     positions = [f"q:{c}" for c in ctrl.carriages]
-    out, q = np.empty((steps + 1, 6)), np.empty((steps + 1, len(positions)))
-    for k in range(steps + 1):
-        t = k * h
-        values = plant.get(signals + sensors + positions)
-        out[k], q[k] = values[:6], values[6 + len(sensors):]
-        controller.set(dict(zip([f"y:{s}" for s in ctrl.sensors] + positions, values[6:], strict=True)))
-        if k == steps:
-            break
-        controller.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-        u = controller.get([f"u:{a}" for a in ctrl.actuators])
-        plant.set({f"f:{a}": u[i] for i, a in enumerate(ctrl.actuators)})
-        plant.fmu.doStep(currentCommunicationPoint=t, communicationStepSize=h)
-    plant.close()
-    controller.close()
+    values = master_loop(plant, controller, ctrl, steps, h, signals + sensors + positions, positions)
+    out, q = values[:, :6], values[:, 6 + len(sensors):]
     t = np.arange(steps + 1) * h
     for i, c in enumerate(scenario.carriages):
         np.testing.assert_allclose(q[:, i], c.profile.evaluate(t)[0], rtol=0, atol=1e-12)
