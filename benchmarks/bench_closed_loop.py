@@ -28,7 +28,7 @@ from isolator import Simulator, scenario_from_dict
 from isolator.numerics.rk4 import BY_TIME
 from isolator.scenario.reader import bundled_scenarios
 from isolator.simulation.actuation import lag_constants
-from isolator.simulation.lag_steps import lag_stages
+from isolator.simulation.lag_steps import held_interval
 from isolator.simulation.sensors import sensor_signals
 from isolator.simulation.stepping import rk4_stepper
 
@@ -75,15 +75,7 @@ def python_loop(scenario, model, grid, grid_inputs, p, start, substeps, forces, 
                                c0[None], p, start.state)[:, 0] - rest
             xc, u = ctrl.step(xc, y)
         command = np.broadcast_to(u, (times.shape[1], 12))
-        applied = np.clip(command, -limits, limits)
-        taken = applied[order] if lagged.any() else applied
-        for j in range(substeps if lagged.any() else 0):  # the lags' stage forces, as the compiled loop takes them
-            stages, (half, end) = lag_stages(lag, *command[2 * j:2 * j + 3], h / substeps, tau, limits)
-            applied[2 * j, lagged], applied[2 * j + 1, lagged], applied[2 * j + 2, lagged] = \
-                lag[lagged], half[lagged], end[lagged]
-            for k in range(4):
-                taken[4 * j + k, lagged] = stages[k][lagged]
-            lag = end
+        applied, taken, lag = held_interval(lag, command, order, substeps, h, tau, limits, lagged)
         inputs[i, :, acts] = applied
         stepped = inputs[i][order] if lagged.any() else inputs[i].copy()
         stepped[:, acts] = taken

@@ -21,7 +21,7 @@ from typing import Any
 import casadi as ca
 import numpy as np
 
-__all__ = ["clipped_stages", "crosses", "lag_rows", "lag_stages", "lag_weights"]
+__all__ = ["clipped_stages", "crosses", "held_interval", "lag_rows", "lag_stages", "lag_weights"]
 
 #: below this ``|z|`` the exponential's moments come down from the series of the fifth (16 terms: within 1e-16),
 #: above it up from the first (which divides by ``z``)
@@ -122,6 +122,26 @@ def lag_stages(f0: Any, u0: Any, um: Any, u1: Any, h: Any, tau: Any, limit: Any 
     b3 = 6 * moments[1] - b1 - b2
     b4 = 6 * moments[0] - b1 - 2 * b2 - 2 * b3
     return [b1, b2, b3, b4], [ends[len(ends) // 2 - 1], ends[-1]]
+
+
+def held_interval(lag: np.ndarray, command: np.ndarray, order: np.ndarray, substeps: int, h: float,
+                  tau: np.ndarray, limits: np.ndarray, lagged: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """One interval of ``substeps`` RK4 steps over ``h`` [s] with a command ``command`` (2 substeps + 1 grid nodes,
+    actuators) [N], the actuators' forces from ``lag`` [N] at its start, as the compiled loop takes them (its
+    reference in Python, for tests and benchmarks): the forces at the nodes (clipped; lagged where ``lagged``), the
+    forces each step's four stages take (``order``: the stages' nodes, by :func:`lag_stages` where lagged) and
+    the lags' forces at the end."""
+    applied = np.clip(command, -limits, limits)
+    taken = applied[order] if lagged.any() else applied
+    for j in range(substeps if lagged.any() else 0):
+        stages, (half, end) = lag_stages(lag, command[2 * j], command[2 * j + 1], command[2 * j + 2], h / substeps,
+                                         tau, limits)
+        applied[2 * j, lagged], applied[2 * j + 1, lagged], applied[2 * j + 2, lagged] = \
+            lag[lagged], half[lagged], end[lagged]
+        for k in range(4):
+            taken[4 * j + k, lagged] = stages[k][lagged]
+        lag = end
+    return applied, taken, lag
 
 
 def _flat(result: tuple[list[Any], list[Any]]) -> list[Any]:

@@ -22,7 +22,7 @@ from isolator.scenario.definitions import SIGNALS
 from isolator.simulation.actuation import ForceHistory, lag_constants
 from isolator.simulation.closed_loop import controller_factor, controller_law
 from isolator.simulation.discrete_controller import DiscreteController, ScheduleEntry
-from isolator.simulation.lag_steps import lag_stages
+from isolator.simulation.lag_steps import held_interval
 from isolator.simulation.stepping import rk4_stepper
 from sampled_loops import RATE, dynamic, geophone_data, names, pulse, settling
 
@@ -234,15 +234,7 @@ def python_loop(law):
             if ticks[i]:
                 u = np.asarray(law(float(grid.nodes[i]), motion), dtype=float)
             command = np.broadcast_to(u if commanded is None else commanded[i] + u, (times.shape[1], n_a))
-            applied = np.clip(command, -limits, limits)
-            taken = applied[order] if lagged.any() else applied
-            for j in range(substeps if lagged.any() else 0):  # each step's lagged forces by lag_stages
-                stages, (half, end) = lag_stages(lag, *command[2 * j:2 * j + 3], h / substeps, tau, limits)
-                applied[2 * j, lagged], applied[2 * j + 1, lagged], applied[2 * j + 2, lagged] = \
-                    lag[lagged], half[lagged], end[lagged]
-                for k in range(4):
-                    taken[4 * j + k, lagged] = stages[k][lagged]
-                lag = end
+            applied, taken, lag = held_interval(lag, command, order, substeps, h, tau, limits, lagged)
             inputs[i, :, acts] = applied
             stepped = inputs[i][order] if lagged.any() else inputs[i].copy()
             stepped[:, acts] = taken
