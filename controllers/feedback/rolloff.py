@@ -43,9 +43,19 @@ _CORNERS = 10
 
 
 def rigid_top(scenario: Scenario) -> Scenario:
-    """``scenario`` with its top rigid: the reduced model a bending top's designs are made on (the six rigid
-    modes of the modal file are ``[table]``'s mass and inertia, checked when it was read); a rigid top's
-    scenario itself."""
+    """``scenario`` with its top rigid: the reduced model a bending top's designs are made on.
+
+    Parameters
+    ----------
+    scenario : Scenario
+        Any scenario; the six rigid modes of a bending top's modal file are its ``[table]`` mass and inertia
+        (checked when it was read).
+
+    Returns
+    -------
+    Scenario
+        The same scenario without ``[table.flexible]`` (a rigid top's scenario itself).
+    """
     table = scenario.table
     if getattr(table, "flexible", None) is None:
         return scenario

@@ -151,6 +151,9 @@ class LinearModel:
     force_input : ndarray (ndof, 6 + n_a + modes)
         ``[Bw, Ba, Bm]``: a wrench at the mass centre, the actuator forces, and on a
         bending top the generalised forces on its modes.
+    realisation : Realisation
+        The system's matrices and signal names as arrays and strings (what ``system`` is built from, on first
+        use: python-control takes about a second to import).
     system : control.StateSpace
         States ``x, y, z, rx, ry, rz, vx, vy, vz, wx, wy, wz``; inputs
         ``ground:x .. ground:rz`` [m, rad], ``force:x .. torque:z`` [N, N m] and
