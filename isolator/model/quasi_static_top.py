@@ -89,11 +89,6 @@ class QuasiStaticTop:
         """The staged right-hand side (the top has no other)."""
         return self.staged_rhs
 
-    @property
-    def staged_inputs(self) -> None:
-        """None: the stage values come from :func:`stage_values`."""
-        return None
-
 
 @dataclass(frozen=True)
 class _Rows:

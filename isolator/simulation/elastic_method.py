@@ -12,7 +12,7 @@ controller) keep the modes dynamic: a loop can pump a mode, which a quasi-static
 from __future__ import annotations
 
 import dataclasses
-from typing import Any, Protocol
+from typing import Protocol
 
 import numpy as np
 
@@ -22,7 +22,7 @@ from isolator.model.parameters import ParameterLayout
 from isolator.model.quasi_static_top import QuasiStaticTop, quasi_static_top, rest_blocks, stage_values
 from isolator.numerics.dop853 import StepPlan
 from isolator.scenario.definitions import Scenario
-from isolator.simulation.stepping import STAGED_BYTES, Method, fastest_rate
+from isolator.simulation.stepping import STAGED_BYTES, Method, fastest_rate, keep_newest
 from isolator.simulation.time_grid import layout_inputs
 
 __all__ = ["ELASTIC_CHOICES", "MIN_RATIO", "QUASI_STATIC_RATIO", "QuasiStaticRun", "check_elastic",
@@ -32,7 +32,7 @@ __all__ = ["ELASTIC_CHOICES", "MIN_RATIO", "QUASI_STATIC_RATIO", "QuasiStaticRun
 ELASTIC_CHOICES = ("auto", "dynamic", "quasi-static")
 #: ``auto``: quasi-static when the lowest elastic mode is at least this many times the table's fastest rate
 QUASI_STATIC_RATIO = 10.0
-#: ``quasi-static`` asked for: refused below this ratio (the solve's sweeps and the dropped terms no longer small)
+#: ``quasi-static`` asked for: refused below this ratio (the dropped inertia and damping no longer small)
 MIN_RATIO = 3.0
 
 
@@ -98,21 +98,24 @@ class QuasiStaticRun:
         The run's parameters.
     start : Equilibrium
         The full model's initial rest.
-    cache : dict
-        What is kept across runs, per plan (or -1) and parameters (the simulator's).
+    values, rests : dict
+        What is kept across runs (the simulator's): the stage values per plan and run, and :func:`rest_blocks` per
+        run (its parameters and initial rest).
     """
 
     def __init__(self, sim: Stepping, p: np.ndarray, start: Equilibrium,
-                 cache: dict[tuple[int, bytes], Any]) -> None:
+                 values: dict[tuple[int, bytes], np.ndarray],
+                 rests: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]]) -> None:
         self.scenario, self.layout, self._sim = sim.scenario, sim.layout, sim
         self.model: QuasiStaticTop = quasi_static_top(sim.layout)
         self.p = np.asarray(p, dtype=float)
         self.start = dataclasses.replace(start, state=np.asarray(start.state[:13], dtype=float))
-        self._cache, self._key = cache, self.p.tobytes() + self.start.state.tobytes()
-        if (-1, self._key) not in cache:
-            cache[(-1, self._key)] = rest_blocks(self.model, self.layout.rest_inputs(start.positions), self.p,
-                                                 start.state)
-        self._rest = cache[(-1, self._key)]
+        self._cache, self._key = values, self.p.tobytes() + self.start.state.tobytes()
+        if self._key not in rests:
+            while len(rests) >= 16:
+                rests.pop(next(iter(rests)))
+            rests[self._key] = rest_blocks(self.model, self.layout.rest_inputs(start.positions), self.p, start.state)
+        self._rest = rests[self._key]
 
     def step_plan(self, key: int, switches: np.ndarray | None = None) -> StepPlan:
         """The simulator's plan."""
@@ -127,9 +130,7 @@ class QuasiStaticRun:
             inputs = layout_inputs(self.scenario, self.layout, *method.plan.stage_times())
             flat = stage_values(self.model, inputs.reshape(-1, inputs.shape[2]), self.p, self._rest)
             self._cache[key] = flat.reshape(*inputs.shape[:2], -1)
-            while len(self._cache) > 2 and sum(np.asarray(v[0] if isinstance(v, tuple) else v).nbytes
-                                               for v in self._cache.values()) > STAGED_BYTES // 4:
-                self._cache.pop(next(k for k in self._cache if k != key))  # the oldest first
+            keep_newest(self._cache, STAGED_BYTES // 4)
         return self._cache[key]
 
     def expand(self, times: np.ndarray, states: np.ndarray) -> np.ndarray:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
 from functools import cache
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
 
@@ -90,7 +90,8 @@ class Simulator(MethodChoice):
         self._loops: LoopGrids = {}  # the closed loops' grids and inputs
         self._plans: dict[int, StepPlan] = {}
         self._staged: dict[tuple[int, bytes], np.ndarray] = {}
-        self._quasi_values: dict[tuple[int, bytes], Any] = {}  # a quasi-static top's stage values
+        self._quasi_values: dict[tuple[int, bytes], np.ndarray] = {}  # a quasi-static top's stage values
+        self._quasi_rests: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # and its rests
         self._sample_inputs: np.ndarray | None = None
         self._tipping: dict[bytes, str] = {}
 
@@ -245,7 +246,8 @@ class Simulator(MethodChoice):
             final = np.asarray(feedback.final(final), dtype=float)
         hold = hold_time(end)
         if forces is None and feedback is None and controller is None and method.plan is not None:
-            quasi = QuasiStaticRun(self, p, start, self._quasi_values) if method.quasi_static else None
+            quasi = (QuasiStaticRun(self, p, start, self._quasi_values, self._quasi_rests) if method.quasi_static
+                     else None)
             stepping, first = (self, start) if quasi is None else (quasi, quasi.start)
             plan, (raw, step_peaks, deviations, polynomials, signals) = dense_run(stepping, method, p, first, final)
             if not np.all(np.isfinite(polynomials)):

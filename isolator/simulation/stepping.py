@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Any
 
 import casadi as ca
 import numpy as np
@@ -40,6 +41,7 @@ __all__ = [
     "fastest_input",
     "fastest_rate",
     "hold_time",
+    "keep_newest",
     "plan_stage_inputs",
     "rk4_stepper",
     "signal_width",
@@ -160,9 +162,15 @@ def plan_stage_inputs(scenario: Scenario, model: Model, method: Method, p: np.nd
         if method.plan is None:
             raise ValueError("plan_inputs: the method steps RK4 on the sample grid, it has no step plan")
         cache[key] = stage_inputs(scenario, model, method.plan, p)
-        while len(cache) > 1 and (len(cache) > 16 or sum(a.nbytes for a in cache.values()) > STAGED_BYTES):
-            cache.pop(next(iter(cache)))  # oldest first
+        keep_newest(cache, STAGED_BYTES)
     return cache[key]
+
+
+def keep_newest(cache: dict[Any, np.ndarray], budget: int, most: int = 16) -> None:
+    """Drop a cache's oldest arrays (insertion order) until at most ``most`` are left and together they take at
+    most ``budget`` bytes; the newest is always kept."""
+    while len(cache) > 1 and (len(cache) > most or sum(a.nbytes for a in cache.values()) > budget):
+        cache.pop(next(iter(cache)))
 
 
 def fastest_rate(scenario: Scenario, omega_max: float) -> float:
