@@ -104,6 +104,15 @@ class Model:
     staged_inputs: ca.Function | None = None
     staged_rhs: ca.Function | None = None
 
+    def __hash__(self) -> int:
+        return self._hash
+
+    @cached_property
+    def _hash(self) -> int:
+        """The hash of the fields that tell models apart (caches keyed by a model hash it on every call; the
+        dataclass's own hash went through seven casadi functions each time)."""
+        return hash((self.variant.name, self.layout, self.n_states))
+
     @cached_property
     def n_static(self) -> int:
         """Unknowns of the static residual: 6 (pose), plus 3 group pressures for pneumatic tables."""

@@ -33,7 +33,8 @@ from isolator.model.variants import Model
 from isolator.numerics.native import PLAIN_FLAGS, MappedFunction
 from isolator.scenario.definitions import SIGNALS
 
-__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeMotions", "FreeTail", "TailVerdict", "free_tail", "free_tails", "micro"]
+__all__ = ["NEGLIGIBLE", "STEP_ANGLE", "FreeMotions", "FreeTail", "RestModes", "TailVerdict", "free_tail", "free_tails",
+           "micro"]
 
 #: points per radian of the fastest mode that matters: the deviation is read every 0.2 rad of it
 STEP_ANGLE = 0.2
@@ -238,10 +239,42 @@ def free_tail(model: Model, p: np.ndarray, final_state: np.ndarray, positions: n
 
 
 def free_tails(model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
-               reference: np.ndarray, last: np.ndarray, end: float) -> list[FreeTail]:
-    """:func:`free_tail` of several runs at once, each argument but ``end`` stacked (runs, ...)."""
-    motions = FreeMotions.of(model, p, final_state, positions, reference, last, end)
+               reference: np.ndarray, last: np.ndarray, end: float, modes: RestModes | None = None
+               ) -> list[FreeTail]:
+    """:func:`free_tail` of several runs at once, each argument but ``end`` stacked (runs, ...); ``modes``: their
+    :class:`RestModes`, when the caller has them already."""
+    motions = FreeMotions.of(model, p, final_state, positions, reference, last, end, modes)
     return [motions.tail(k) for k in range(motions.count)]
+
+
+@dataclass(frozen=True)
+class RestModes:
+    """The linear model about several final rests, decomposed side by side (one mapped Jacobian call, one
+    stacked eigen-decomposition): what the free motion after a run's end needs of the rest, whatever the run
+    (a simulator keeps it with its rests, so that runs of the same table decompose it once).
+
+    Attributes
+    ----------
+    rates, vectors : ndarray (runs, n_states) and (runs, n_states, n_states) complex
+        Eigenvalues [1/s] and eigenvectors of the state Jacobians at the final rests.
+    signals : ndarray (runs, 6, n_states)
+        The signals' Jacobians there.
+    """
+
+    rates: np.ndarray
+    vectors: np.ndarray
+    signals: np.ndarray
+
+    @classmethod
+    def of(cls, model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray,
+           reference: np.ndarray) -> RestModes:
+        """The decompositions (arguments stacked (runs, ...) as :func:`free_tails` takes them)."""
+        state_jacobian, signal_jacobian = _jacobians(model)
+        inputs = np.array([model.layout.rest_inputs(q) for q in positions])
+        a = state_jacobian(final_state, inputs, np.asarray(p, dtype=float))[0]
+        c = signal_jacobian(final_state, np.asarray(reference, dtype=float))[0]
+        rates, vectors = np.linalg.eig(a)
+        return cls(rates, vectors, c)
 
 
 @dataclass(frozen=True)
@@ -273,14 +306,12 @@ class FreeMotions:
 
     @classmethod
     def of(cls, model: Model, p: np.ndarray, final_state: np.ndarray, positions: np.ndarray, reference: np.ndarray,
-           last: np.ndarray, end: float) -> FreeMotions:
-        """The decompositions (arguments as :func:`free_tails` takes them)."""
-        state_jacobian, signal_jacobian = _jacobians(model)
-        inputs = np.array([model.layout.rest_inputs(q) for q in positions])
-        a = state_jacobian(final_state, inputs, np.asarray(p, dtype=float))[0]
-        c = signal_jacobian(final_state, np.asarray(reference, dtype=float))[0]
-        rates, vectors = np.linalg.eig(a)
-        return cls(float(end), rates, vectors, c, np.asarray(last, dtype=float) - final_state, final_state)
+           last: np.ndarray, end: float, modes: RestModes | None = None) -> FreeMotions:
+        """The decompositions (arguments as :func:`free_tails` takes them; ``modes`` theirs, when known)."""
+        if modes is None:
+            modes = RestModes.of(model, p, final_state, positions, reference)
+        return cls(float(end), modes.rates, modes.vectors, modes.signals, np.asarray(last, dtype=float) - final_state,
+                   final_state)
 
     @property
     def count(self) -> int:

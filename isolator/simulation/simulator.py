@@ -6,7 +6,7 @@ controller ticking in the compiled loop (:mod:`isolator.simulation.closed_loop`)
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from functools import cache
+from functools import cache, cached_property
 from typing import Literal
 
 import numpy as np
@@ -43,7 +43,7 @@ from isolator.simulation.stepping import (
     plan_stage_inputs,
     rk4_stepper,
 )
-from isolator.simulation.tail_check import run_tail
+from isolator.simulation.tail_check import KnownRests, run_tail
 from isolator.simulation.time_grid import TimeGrid, grid_breakpoints, inputs_at, model_inputs, time_grid
 from isolator.simulation.valve_events import dense_run
 from isolator.simulation.window_random import with_random_margins
@@ -94,6 +94,7 @@ class Simulator(MethodChoice):
         self._quasi_rests: dict[bytes, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}  # and its rests
         self._sample_inputs: np.ndarray | None = None
         self._tipping: dict[bytes, str] = {}
+        self._rests: dict[bytes, KnownRests] = {}  # the newest parameter vectors' rests, for runs of the same table
 
     # -- parameters ------------------------------------------------------------
     def parameter_vector(self, changes: Mapping[str, float] | None = None) -> np.ndarray:
@@ -121,10 +122,27 @@ class Simulator(MethodChoice):
         return scaled_parameter_sets(self.layout, self.parameters, stiffness, damping)
 
     # -- pieces ----------------------------------------------------------------
+    @cached_property
+    def default_band(self) -> Band:
+        """The scenario's ``[settling]`` rule as a band (:meth:`Band.from_settling`), what a run measures by default."""
+        return Band.from_settling(self.scenario.settling)
+
     def equilibria(self, p: np.ndarray) -> tuple[Equilibrium, Equilibrium | None]:
-        """Initial and final static equilibria (final None if a carriage never stops)."""
-        start, end = self.equilibria_of(np.asarray(p, dtype=float)[None, :])
-        return start[0], end[0]
+        """Initial and final static equilibria (final None if a carriage never stops); those of the newest
+        parameter vectors are kept (read-only), for the runs of the same table."""
+        known = self.known_rests(p)
+        return known.start, known.end
+
+    def known_rests(self, p: np.ndarray) -> KnownRests:
+        """The rests of :meth:`equilibria` with what runs of that table share (kept for the newest 16 vectors)."""
+        p = np.asarray(p, dtype=float)
+        key = p.tobytes()
+        known = self._rests.get(key)
+        if known is None:
+            start, end = self.equilibria_of(p[None, :])
+            known = KnownRests(self.model, p.copy(), start[0], end[0])
+            self._rests = {**dict(list(self._rests.items())[-15:]), key: known}
+        return known
 
     def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
         first, last = self._positions
@@ -250,15 +268,19 @@ class Simulator(MethodChoice):
                      else None)
             stepping, first = (self, start) if quasi is None else (quasi, quasi.start)
             plan, (raw, step_peaks, deviations, polynomials, signals) = dense_run(stepping, method, p, first, final)
-            if not np.all(np.isfinite(polynomials)):
+            end_time = np.array([plan.end])
+            last = DenseStepper.states_at(plan, polynomials, end_time)
+            # a non-finite stage makes the next step's start, the end state or the peaks over the probes
+            # (NaN propagates) non-finite: those first, the whole dense output only then
+            if not (np.isfinite(polynomials[:, 0]).all() and np.isfinite(last).all() and np.isfinite(step_peaks).all()):
                 step = int(np.argmax(~np.all(np.isfinite(polynomials), axis=(1, 2))))
                 raise SimulationError(f"the run diverged: non-finite state at t = {plan.start[step]:.4g} s")
             runs = DenseRuns.of_run(plan, (raw, step_peaks, deviations, polynomials), first.state, stepping.model)
             x0, dense = start.state, polynomials
             expand = (lambda _, x: x) if quasi is None else quasi.expand  # the full model's states
-            end_time = np.array([plan.end])
-            free = run_tail(self.scenario, self.model, p, start, end,
-                            expand(end_time, DenseStepper.states_at(plan, dense, end_time))[0], plan.end)
+            known = self._rests.get(p.tobytes())
+            modes = known.modes if known is not None and known.start is start and known.end is end else None
+            free = run_tail(self.scenario, self.model, p, start, end, expand(end_time, last)[0], plan.end, modes)
 
             def measure(rule: Band) -> dict[str, SettlingResult]:
                 return run_metrics(runs, final, self.stop_time, rule, hold, self.grid.samples, signals, *free)
@@ -317,7 +339,7 @@ class Simulator(MethodChoice):
             return metrics, resolved, lambda: pneumatic_result(self.scenario, self.model, p, t, run_states(), signals,
                                                                start, peaks_all, hold, resolved, fine())
 
-        metrics, resolved, pneumatic = remeasure(Band.from_settling(self.scenario.settling) if band is None else band)
+        metrics, resolved, pneumatic = remeasure(self.default_band if band is None else band)
         points, windows = run_points(windowed, self.model.kind, start.state, None if end is None else end.state,
                                      self.stop_time, hold, fine, free)
 

@@ -5,20 +5,21 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from isolator.model.equilibrium import Equilibrium
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
-from isolator.simulation.free_tail import FreeMotions, FreeTail, free_tails
+from isolator.simulation.free_tail import FreeMotions, FreeTail, RestModes, free_tails
 from isolator.simulation.leveling import valve_note
 
-__all__ = ["RunTails", "run_tail", "run_tails"]
+__all__ = ["KnownRests", "RunTails", "run_tail", "run_tails"]
 
 
 def run_tail(scenario: Scenario, model: Model, p: np.ndarray, start: Equilibrium, end: Equilibrium | None,
-             last: np.ndarray, end_time: float) -> tuple[FreeTail | None, str]:
+             last: np.ndarray, end_time: float, modes: RestModes | None = None) -> tuple[FreeTail | None, str]:
     """The free motion after a run's end and what keeps a pneumatic table off its final rest.
 
     Parameters
@@ -33,6 +34,9 @@ def run_tail(scenario: Scenario, model: Model, p: np.ndarray, start: Equilibrium
         The run's state at its end.
     end_time : float
         The run's end [s].
+    modes : RestModes, optional
+        The linear model about ``end`` decomposed (:meth:`RestModes.of` with ``start`` the reference), when the
+        caller keeps it (computed here otherwise).
 
     Returns
     -------
@@ -42,13 +46,14 @@ def run_tail(scenario: Scenario, model: Model, p: np.ndarray, start: Equilibrium
     note : str
         Pneumatic tables with valves: where their sensors come to rest against the dead bands ("" else).
     """
-    return run_tails(scenario, model, np.asarray(p)[None], [start], [end], np.asarray(last)[None], end_time)[0]
+    return run_tails(scenario, model, np.asarray(p)[None], [start], [end], np.asarray(last)[None], end_time, modes)[0]
 
 
 def run_tails(scenario: Scenario, model: Model, params: np.ndarray, starts: Sequence[Equilibrium],
-              ends: Sequence[Equilibrium | None], last: np.ndarray, end_time: float
+              ends: Sequence[Equilibrium | None], last: np.ndarray, end_time: float, modes: RestModes | None = None
               ) -> list[tuple[FreeTail | None, str]]:
-    """:func:`run_tail` of several runs (``params``, ``last`` stacked (runs, ...)), their Jacobians at once."""
+    """:func:`run_tail` of several runs (``params``, ``last`` stacked (runs, ...)), their Jacobians at once
+    (``modes``: those of the runs with a final rest, when the caller has them)."""
     out: list[tuple[FreeTail | None, str]] = [(None, "")] * len(starts)
     rows = [k for k, e in enumerate(ends) if e is not None and np.all(np.isfinite(last[k]))]
     if not rows:
@@ -56,7 +61,7 @@ def run_tails(scenario: Scenario, model: Model, params: np.ndarray, starts: Sequ
     chosen = [ends[k] for k in rows]
     tails = free_tails(model, params[rows], np.array([e.state for e in chosen]),  # type: ignore[union-attr]
                        np.array([e.positions for e in chosen]),  # type: ignore[union-attr]
-                       np.array([starts[k].state for k in rows]), last[rows], end_time)
+                       np.array([starts[k].state for k in rows]), last[rows], end_time, modes)
     for k, tail in zip(rows, tails, strict=True):
         if not scenario.is_pneumatic:
             out[k] = (tail, "")
@@ -64,6 +69,40 @@ def run_tails(scenario: Scenario, model: Model, params: np.ndarray, starts: Sequ
         active, note = valve_note(scenario, model.layout.names, params[k], tail.rest, last[k])
         out[k] = (None, "") if active else (tail, note)
     return out
+
+
+@dataclass(frozen=True)
+class KnownRests:
+    """A table's two rests for a scenario's run and, built on first use, the free motion's decomposition about
+    the final one: what every run of that table shares, kept by a simulator per parameter vector (their arrays
+    made read-only, since runs share them).
+
+    Attributes
+    ----------
+    model : Model
+    p : ndarray
+        The parameter vector.
+    start, end : Equilibrium
+        The initial and final rests (``end`` None: a carriage never stops).
+    """
+
+    model: Model
+    p: np.ndarray
+    start: Equilibrium
+    end: Equilibrium | None
+
+    def __post_init__(self) -> None:
+        for rest in (self.start, self.end):
+            for array in () if rest is None else (rest.pose, rest.state, rest.positions, rest.eigenvalues):
+                array.flags.writeable = False
+
+    @cached_property
+    def modes(self) -> RestModes | None:
+        """The linear model about the final rest, decomposed (None without one)."""
+        if self.end is None:
+            return None
+        return RestModes.of(self.model, self.p[None], self.end.state[None], self.end.positions[None],
+                            self.start.state[None])
 
 
 @dataclass(frozen=True)
