@@ -138,18 +138,25 @@ extern "C" int DOP853_NAME(int steps, int per, int probes, const double* x0, con
       for (int i = n; i < GROUP; ++i) f[i] = 0.0;
       S values[6];
       slot_signals(x, coef, f, rows, Rs, xs, values);
+      V got[6][GROUP];  /* slot i's signals (one per run) */
+      for (int k = 0; k < 6; ++k) for (int i = 0; i < GROUP; ++i) got[k][i] = slot_value(values[k], i);
       for (int i = 0; i < n; ++i) {
-        const int slot = used[i];
-        V* out = (V*)sig + ((long)s * per + slot) * 6;
-        for (int k = 0; k < 6; ++k) out[k] = slot_value(values[k], i);
-        if (slot < counted) {
-          for (int k = 0; k < 6; ++k) { top[k] = worst(top[k], fabs(out[k])); off[k] = worst(off[k], fabs(out[k] - F[k])); }
-        }
-        if (samp && slot >= probes && sample < nsamp) {
-          ++sample;
-          for (int k = 0; k < 6; ++k) ((V*)samp)[(long)k * (nsamp + 1) + sample] = out[k];
-        }
+        V* out = (V*)sig + ((long)s * per + used[i]) * 6;
+        for (int k = 0; k < 6; ++k) out[k] = got[k][i];
       }
+      int peaks = 0, from = 0;  /* the slots are in order: the probes (counted) lead, the samples trail */
+      while (peaks < n && used[peaks] < counted) ++peaks;
+      while (from < n && used[from] < probes) ++from;
+      for (int k = 0; k < 6; ++k) for (int i = 0; i < peaks; ++i) {
+        top[k] = worst(top[k], fabs(got[k][i]));
+        off[k] = worst(off[k], fabs(got[k][i] - F[k]));
+      }
+      const int count = samp ? (n - from < nsamp - sample ? n - from : (int)(nsamp - sample)) : 0;
+      for (int k = 0; k < 6 && count > 0; ++k) {
+        V* to = (V*)samp + (long)k * (nsamp + 1) + sample + 1;
+        for (int i = 0; i < count; ++i) to[i] = got[k][from + i];
+      }
+      sample += count;
       n = 0;
     }
     for (int k = 0; k < 6; ++k) { ((V*)peak)[(long)s * 6 + k] = top[k]; ((V*)dev)[(long)s * 6 + k] = off[k]; }
