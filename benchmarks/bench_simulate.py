@@ -5,11 +5,16 @@ a plain numpy + scipy.solve_ivp implementation of the same equations, the
 MuJoCo multibody check, and this toolkit's own RK4 stepping on the sample
 grid (the method used before DOP853, still used for runs with actuator
 forces or feedback). Run:  python benchmarks/bench_simulate.py
+
+The compiled DOP853 loop of that run alone (issue 43 item 1), as a run calls it, with its probes only and
+with no slot at all (the stepping alone): min and median of ``--loop-calls`` calls each, alternated:
+python benchmarks/bench_simulate.py --loop
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import sys
 import tempfile
@@ -60,13 +65,58 @@ def _rate(
     return float(np.median(rates)), max(rates), out
 
 
+def loop_figures(sim: Simulator, calls: int) -> dict[str, tuple[float, float]]:
+    """Min and median [s] of the compiled loop of ``sim``'s run over ``calls`` calls each: the full plan (its
+    probes and output samples, written as a run writes them), its probes only, and no slots (the stepping)."""
+    p = sim.parameters
+    start, end = sim.equilibria(p)
+    method = sim.method_for(max(start.max_frequency, end.max_frequency))
+    plan, inputs, stepper = method.plan, sim.plan_inputs(method, p), stepping.dense_stepper(sim.model)
+    final = stepper.signal_values(end.state, start.state)
+    unused = np.full_like(plan.fraction, -1.0)
+    plans = {"full plan": plan, "probes only": plan.probes_only(),
+             "no slots": dataclasses.replace(plan, fraction=unused, sample_slots=plan.sample_slots[:0], probes=0)}
+    times: dict[str, list[float]] = {name: [] for name in plans}
+    for _ in range(calls):
+        for name, each in plans.items():
+            samples = np.zeros((6, each.sample_slots.size + 1))
+            t0 = time.perf_counter()
+            stepper.run_slots(start.state, each, inputs, p, start.state, with_states=True, final=final,
+                              samples=samples)
+            times[name].append(time.perf_counter() - t0)
+    return {name: (min(t), float(np.median(t))) for name, t in times.items()}
+
+
+def print_loop_figures(sim: Simulator, calls: int) -> None:
+    """Print :func:`loop_figures` with the plan's sizes."""
+    start, end = sim.equilibria(sim.parameters)
+    plan = sim.method_for(max(start.max_frequency, end.max_frequency)).plan
+    print(f"compiled loop alone ({plan.steps} steps, {plan.per_step} slots per step, {plan.probes} probes, "
+          f"{plan.sample_slots.size} samples; min / median of {calls} calls):")
+    for name, (best, median) in loop_figures(sim, calls).items():
+        print(f"  {name:12s} {best * 1e3:6.3f} ms / {median * 1e3:6.3f} ms")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--batch", type=int, default=1000, help="runs in the batch figure")
     parser.add_argument("--repeat", type=int, default=30, help="repeats of the single-run timing")
     parser.add_argument("--batch-repeat", type=int, default=3, help="repeats of the batch timing")
+    parser.add_argument("--loop", action="store_true", help="only the compiled loop's figures")
+    parser.add_argument("--loop-calls", type=int, default=300, help="calls of each loop figure")
     args = parser.parse_args()
     sc = load_scenario("paper-table-3-2")
+    if args.loop:
+        sim = Simulator(sc)
+        sim.run()
+        print_loop_figures(sim, args.loop_calls)
+        times = []
+        for _ in range(args.loop_calls):
+            t0 = time.perf_counter()
+            sim.run()
+            times.append(time.perf_counter() - t0)
+        print(f"  whole run    {min(times) * 1e3:6.3f} ms / {float(np.median(times)) * 1e3:6.3f} ms")
+        return
 
     with tempfile.TemporaryDirectory() as cache:
         os.environ["ISOLATOR_CACHE"] = cache
@@ -99,6 +149,7 @@ def main() -> None:
     t_sim = float(np.median(times))
     print(f"simulation, exact model, 12 s at 1 kHz: median {t_sim * 1e3:6.2f} ms, best {min(times) * 1e3:6.2f} ms "
           f"(of {args.repeat})")
+    print_loop_figures(sim, 10 * args.repeat)
 
     rk4 = simmod.Method(method.substeps)
     p = sim.parameters

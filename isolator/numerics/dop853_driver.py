@@ -9,7 +9,10 @@ coefficients, unrolled as macros, through the template ``cpp/dop853_driver.cpp.j
 ``casadi_real`` a vector of ``lanes`` doubles (GCC/Clang vector extensions), the same source steps
 ``lanes`` runs that share a step plan and staged inputs, such as the runs of
 a batch whose isolators differ, with one instruction stream. With AVX, four
-runs cost little more than one.
+runs cost little more than one. A single run (``lanes=1``) steps in plain doubles and
+computes the signals of its sample slots :func:`~isolator.numerics.native.vector_lanes` at a
+time instead: the signals' code generated apart from the right-hand side's, with ``casadi_real`` a
+vector of slots (the slots' dense output and signals were a third of a run's loop computed one at a time).
 
 Layouts (C order): per-run arrays are interleaved by lane, ``(values, lanes)``;
 shared arrays (stage inputs, step lengths, sample fractions) are plain.
@@ -23,7 +26,7 @@ import casadi as ca
 import numpy as np
 
 from isolator.numerics.dop853_tableau import STAGES, dop853_tableau
-from isolator.numerics.native import FLAGS, compiled_library
+from isolator.numerics.native import FLAGS, compiled_library, vector_lanes
 from isolator.numerics.rendering import render
 from isolator.numerics.step_plan import StepPlan
 from isolator.numerics.systems import SteppedSystem, stepped_rhs
@@ -50,8 +53,8 @@ def _sized(function: ca.Function) -> dict[str, int]:
 
 def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: int) -> str:
     """The C++ source of :class:`Dop853Driver`: ``cpp/lanes.hpp``, casadi's code for the right-hand
-    side and the signals, the definitions the loop expects (sizes, names, the unrolled stages and
-    dense output), then ``cpp/dop853_loop.cpp``.
+    side and the signals (for one run, the signals' apart, in vectors of slots), the definitions the loop
+    expects (sizes, names, the unrolled stages and dense output), then ``cpp/dop853_loop.cpp``.
 
     Parameters
     ----------
@@ -75,9 +78,14 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
         else:
             mx = f.mx_in()
             functions.append(ca.Function(f"{name}_{suffix}", mx, f.call(mx)))
-    generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
-    for f in functions:
-        generator.add(f)
+    # one run: the signals apart, computed in vectors of slots (one file name, so one prefix: the helper macros
+    # they repeat are the same); runs side by side: both in one piece, computed in vectors of runs
+    code = []
+    for part in ([functions[:1], functions[1:]] if lanes == 1 else [functions]):
+        generator = ca.CodeGenerator(f"{name}.c", {"with_header": False})
+        for f in part:
+            generator.add(f)
+        code.append(generator.dump())
     rows = signal_rows(signals, nx)
     others = [j for j in range(nx) if j not in rows]
     defines = {"NX": nx, "NU": rhs.size1_in(1), "ST": STAGES, "DEG": tab.dense.shape[1], "END": tab.end,
@@ -87,8 +95,9 @@ def driver_source(name: str, model: SteppedSystem, signals: ca.Function, lanes: 
     defines |= {"DOP853_NAME": name, "DOP853_RHS": f"{name}_rhs", "DOP853_SIGNALS": f"{name}_signals",
                 "DOP853_METRICS": f"{name}_metrics", "DOP853_SIGNAL_VALUES": f"{name}_signal_values",
                 "DOP853_ROWS": ", ".join(map(str, rows)), "DOP853_OTHERS": ", ".join(map(str, others or [0]))}
-    return render("isolator.numerics", "cpp/dop853_driver.cpp.j2", lanes=lanes, casadi=generator.dump(),
-                  defines=defines, stages=[_nonzero(tab.a[i, :i]) for i in range(1, STAGES)], end=tab.end,
+    return render("isolator.numerics", "cpp/dop853_driver.cpp.j2", lanes=lanes, slots=vector_lanes(),
+                  casadi=code[0], signals=code[1] if lanes == 1 else "", defines=defines,
+                  stages=[_nonzero(tab.a[i, :i]) for i in range(1, STAGES)], end=tab.end,
                   dense=[_nonzero(tab.dense[:, d]) for d in range(tab.dense.shape[1])])
 
 

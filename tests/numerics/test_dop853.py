@@ -9,8 +9,12 @@ one call per row.
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.linalg import expm
 
 from conftest import asymmetric_3d_dict, base_dict
@@ -172,6 +176,59 @@ def test_four_runs_side_by_side_step_like_casadis_evaluator_one_at_a_time(kind):
     assert np.abs(sig[plan.sample_slots, :, 0] - sig[plan.sample_slots, :, 3]).max() > 1e-3 * scale
     with pytest.raises(ValueError, match="lanes"):
         lanes.run_slots(x0[0], plan, inputs, params[0], x0[0])
+
+
+@pytest.fixture(scope="module")
+def one_run():
+    """A short run of the exact model (one carriage's move) and its compiled single-run stepper."""
+    from isolator.model.signals import signal_function
+    from isolator.numerics.dop853 import DenseStepper
+
+    data = base_dict()
+    data["simulation"] = {"duration": 2.7, "sample_rate": 200.0}
+    sim = Simulator(scenario_from_dict(data))
+    p = sim.parameters
+    start, end = sim.equilibria(p)
+    method = sim.method_for(max(start.max_frequency, end.max_frequency))
+    stepper = DenseStepper(sim.model, signal_function(EXACT, 13))
+    assert stepper.native
+    return stepper, method.plan, sim.plan_inputs(method, p), p, start.state, end.state
+
+
+@settings(max_examples=25, deadline=None)
+@given(per=st.integers(1, 21), probes=st.integers(0, 21), used=st.floats(0.0, 1.0), seed=st.integers(0, 2**31))
+def test_one_runs_slots_in_vectors_are_each_slots_signals(one_run, per, probes, used, seed):
+    """The single-run loop computes its slots' signals several at a time: any pattern of used slots (a step's
+    last group part full), with or without probes, gives each used slot the signals of its own state (numpy's,
+    from the dense output), the peaks over its probes and the samples in order."""
+    from isolator.model.signals import table_signals
+    from isolator.numerics.dop853 import DenseStepper
+
+    stepper, plan, inputs, p, x0, rest = one_run
+    probes = min(probes, per)
+    rng = np.random.default_rng(seed)
+    rows = plan.fraction.shape[0]
+    fraction = np.where(rng.random((rows, per)) < used, rng.random((rows, per)), -1.0)
+    fraction[plan.steps:] = -1.0
+    flat = np.flatnonzero((fraction >= 0).ravel())
+    samples_at = flat[flat % per >= probes]
+    trial = dataclasses.replace(plan, fraction=fraction, sample_slots=samples_at, probes=probes)
+    final = stepper.signal_values(rest, x0)
+    samples = np.full((6, samples_at.size + 1), np.nan)
+    sig, peaks, deviations, polys = stepper.run_slots(x0, trial, inputs, p, x0, with_states=True, final=final,
+                                                      samples=samples)
+    assert polys is not None
+    want = table_signals(DenseStepper.states(dataclasses.replace(trial, sample_slots=flat), polys), x0).T
+    scale = max(np.abs(want).max(initial=0.0), 1e-9)
+    np.testing.assert_allclose(sig[flat], want, rtol=0, atol=1e-10 * scale)
+    np.testing.assert_array_equal(samples[:, 1:], sig[samples_at].T)
+    counted = flat[(flat % per < probes) | (probes == 0)]
+    for s in range(plan.steps):
+        mine = counted[counted // per == s]
+        top = np.abs(sig[mine]).max(axis=0, initial=0.0)
+        off = np.abs(sig[mine] - final).max(axis=0, initial=0.0)
+        np.testing.assert_array_equal(peaks[s], top)
+        np.testing.assert_array_equal(deviations[s], off)
 
 
 def test_a_compiler_error_is_one_line_naming_the_library(tmp_path, monkeypatch):

@@ -1,8 +1,9 @@
 /* Peaks and settling instants of the runs just stepped, from their dense output: the numbers of
    isolator/simulation/dense_metrics.py (its numpy functions are the reference and the fallback), computed
    here so that no polynomial goes through numpy. Included after dop853_loop.cpp (its definitions, rhs,
-   signals). LANES runs side by side: each lane's points are at its own times, so a point's state is
-   gathered lane by lane from its own step's polynomial and the signals are evaluated for all lanes at once.
+   signals_of). LANES runs side by side: each lane's points are at its own times, so a point's state is
+   gathered lane by lane from its own step's polynomial and the signals are evaluated for all lanes at once;
+   one run: SLOTS of its points at once, a point in each lane of S.
 
    The rules (per signal k and lane l):
    - peak: the largest probe's step (the first largest), its largest probe; the signal at PEAK_POINTS points
@@ -20,22 +21,6 @@
 
 static const int metric_rows[NROWS + 1] = {DOP853_ROWS};
 
-/* the six signals of every lane l at its own (step[l], fraction f[l]) of the dense output poly */
-static void signals_at(const double* poly, const int* step, const double* f, const V* R, V* out) {
-  V xs[NX];
-  for (int j = 0; j < NX; ++j) xs[j] = 0.0;
-  for (int r = 0; r < NROWS; ++r) {
-    const int j = metric_rows[r];
-    for (int l = 0; l < LANES; ++l) {
-      const double* c = poly + ((long)step[l] * (DEG + 1) * NX + j) * LANES + l;
-      double acc = c[(long)DEG * NX * LANES];
-      for (int d = DEG - 1; d >= 0; --d) acc = c[(long)d * NX * LANES] + f[l] * acc;
-      set_lane(xs[j], l, acc);
-    }
-  }
-  signals(xs, R, out);
-}
-
 /* the step holding time t and the fraction of it (as StepPlan.locate) */
 static void locate(const double* start, const double* length, int steps, double t, int* step, double* f) {
   int lo = 0, hi = steps;  /* the number of starts <= t */
@@ -51,15 +36,36 @@ static void locate(const double* start, const double* length, int steps, double 
   *f = x < 0.0 ? 0.0 : (x > 1.0 ? 1.0 : x);
 }
 
-/* signal k of every lane at times t[l] */
-static void signal_k_at(const double* poly, const double* start, const double* length, int steps, const V* R,
-                        int k, const double* t, double* value) {
-  int step[LANES];
-  double f[LANES];
-  V out[6];
-  for (int l = 0; l < LANES; ++l) locate(start, length, steps, t[l], &step[l], &f[l]);
-  signals_at(poly, step, f, R, out);
-  for (int l = 0; l < LANES; ++l) value[l] = lane_of(out[k], l);
+/* lanes of S: a point of one run each (LANES == 1), or a run each at one point */
+#define S_LANES (LANES == 1 ? SLOTS : LANES)
+
+/* signal k of every lane at count points: t and value (count, LANES); GROUP points at once, each lane's state
+   gathered from its own step's polynomial (a last group padded with the last point) */
+static void signal_k_at(const double* poly, const double* start, const double* length, int steps, const S* R,
+                        int k, int count, const double* t, double* value) {
+  S xs[NX], out[6];
+  for (int j = 0; j < NX; ++j) xs[j] = 0.0;
+  for (int first = 0; first < count; first += GROUP) {
+    for (int q = 0; q < S_LANES; ++q) {
+      const int i = LANES == 1 && first + q < count ? first + q : (LANES == 1 ? count - 1 : first);
+      const int l = LANES == 1 ? 0 : q;
+      int step;
+      double f;
+      locate(start, length, steps, t[(long)i * LANES + l], &step, &f);
+      for (int r = 0; r < NROWS; ++r) {
+        const int j = metric_rows[r];
+        const double* c = poly + ((long)step * (DEG + 1) * NX + j) * LANES + l;
+        double acc = c[(long)DEG * NX * LANES];
+        for (int d = DEG - 1; d >= 0; --d) acc = c[(long)d * NX * LANES] + f * acc;
+        set_lane(xs[j], q, acc);
+      }
+    }
+    signals_of(xs, R, out);
+    for (int q = 0; q < S_LANES; ++q) {
+      const int i = first + (LANES == 1 ? q : 0);
+      if (i < count) value[(long)i * LANES + (LANES == 1 ? 0 : q)] = lane_of(out[k], q);
+    }
+  }
 }
 
 static inline double probe_time(const double* start, const double* length, int probes, int s, int j) {
@@ -76,7 +82,8 @@ extern "C" int DOP853_METRICS(int steps, int per, int probes, const double* star
                               const double* poly, const double* ref, const double* target, double stop_time,
                               double fraction, const double* fixed, const double* hold, double* out_peak,
                               double* out_time, double* out_short) {
-  const V* R = (const V*)ref;
+  S R[NX];
+  for (int j = 0; j < NX; ++j) R[j] = ((const V*)ref)[j];
   int ok[LANES];
   double top[6][LANES], refined[6][LANES];
   for (int l = 0; l < LANES; ++l) ok[l] = 1;
@@ -104,19 +111,17 @@ extern "C" int DOP853_METRICS(int steps, int per, int probes, const double* star
   }
   /* the refinement about each signal's largest probe */
   for (int k = 0; k < 6; ++k) {
-    double values[PEAK_POINTS][LANES];
+    double values[PEAK_POINTS][LANES], t[PEAK_POINTS][LANES];
     for (int i = 0; i < PEAK_POINTS; ++i) {
-      double t[LANES];
       for (int l = 0; l < LANES; ++l) {
         const int s = at_step[k][l];
         const double centre = probe_time(start, length, probes, s, at_probe[k][l]);
         const double x = centre + (length[s] / probes) * (-1.0 + 0.125 * i);
-        t[l] = ok[l] ? (x < 0.0 ? 0.0 : (x > end ? end : x)) : 0.0;
+        t[i][l] = ok[l] ? (x < 0.0 ? 0.0 : (x > end ? end : x)) : 0.0;
       }
-      double v[LANES];
-      signal_k_at(poly, start, length, steps, R, k, t, v);
-      for (int l = 0; l < LANES; ++l) values[i][l] = fabs(v[l]);
     }
+    signal_k_at(poly, start, length, steps, R, k, PEAK_POINTS, t[0], values[0]);
+    for (int i = 0; i < PEAK_POINTS; ++i) for (int l = 0; l < LANES; ++l) values[i][l] = fabs(values[i][l]);
     for (int l = 0; l < LANES; ++l) {
       if (!ok[l]) { refined[k][l] = top[k][l]; continue; }
       int i = 0;
@@ -173,10 +178,11 @@ extern "C" int DOP853_METRICS(int steps, int per, int probes, const double* star
     if (!settles) continue;
     double tc[CROSSING_POINTS][LANES], gap[CROSSING_POINTS][LANES];
     for (int i = 0; i < CROSSING_POINTS; ++i) {
-      double v[LANES];
       for (int l = 0; l < LANES; ++l) tc[i][l] = ta[l] + (tb[l] - ta[l]) * (i / (double)(CROSSING_POINTS - 1));
-      signal_k_at(poly, start, length, steps, R, k, tc[i], v);
-      for (int l = 0; l < LANES; ++l) gap[i][l] = fabs(v[l] - target[(long)k * LANES + l]) - band[l];
+    }
+    signal_k_at(poly, start, length, steps, R, k, CROSSING_POINTS, tc[0], gap[0]);
+    for (int i = 0; i < CROSSING_POINTS; ++i) {
+      for (int l = 0; l < LANES; ++l) gap[i][l] = fabs(gap[i][l] - target[(long)k * LANES + l]) - band[l];
     }
     for (int l = 0; l < LANES; ++l) {
       const long kl = (long)k * LANES + l;
