@@ -166,32 +166,41 @@ def _actuators(m: int, substeps: int) -> ca.Function:
     plus feedforward at the stage times, clipped; what acts at the stage times, and what each RK4 stage takes (a
     lag's force through :func:`~isolator.simulation.lag_steps.lag_stages`). The clipping's kinks inside a step
     are followed only in an interval where a command crosses its limit (a conditional call; elsewhere the two
-    halves of the clipped command give the same numbers at a fraction of the cost)."""
+    halves of the clipped command give the same numbers at a fraction of the cost). One substep's lag is a small
+    function called once per substep: written out for every substep, a bending top's 39 substeps of twelve
+    actuators were 20 MB of C that the compiler could not hold in 24 GB."""
     sym = ca.SX.sym
     stages = 2 * substeps + 1
-    hold, ff, h, lag = sym("hold", m), sym("ff", m, stages), sym("h"), sym("lag", m)
-    limits, tau, lagged = sym("limits", m), sym("tau", m), sym("lagged", m)
-    args = [hold, ff, h, lag, limits, tau, lagged]
+    r, u = [sym(f"r{k}", m) for k in range(3)], [sym(f"u{k}", m) for k in range(3)]
+    hs, lag, limits, tau, lagged = sym("h"), sym("lag", m), sym("limits", m), sym("tau", m), sym("lagged", m)
+    steps = []
+    for cut in (False, True):  # one substep: what its four stages take, the forces at its middle and end, the lag
+        ramps = r if cut else u
+        stage, (half, end) = lag_stages(lag, ramps[0], ramps[1], ramps[2], hs, tau, limits if cut else None)
+        taken = [ca.if_else(lagged, b, u[k]) for b, k in zip(stage, BY_TIME, strict=True)]
+        steps.append(ca.Function("lag_cut" if cut else "lag", [*r, *u, hs, lag, limits, tau, lagged],
+                                 [ca.horzcat(*taken), ca.if_else(lagged, half, u[1]), ca.if_else(lagged, end, u[2]),
+                                  end]))
+    one_kink = ca.Function("kinks", [*r, limits], [ca.sum1(crosses(r[0], r[1], r[2], limits))])
+    mx = ca.MX.sym
+    hold, ff, h, lag0 = mx("hold", m), mx("ff", m, stages), mx("h"), mx("lag", m)
+    limits_m, tau_m, lagged_m = mx("limits", m), mx("tau", m), mx("lagged", m)
+    args = [hold, ff, h, lag0, limits_m, tau_m, lagged_m]
     raw = [hold + ff[:, j] for j in range(stages)]
-    u = [ca.fmin(ca.fmax(r, -limits), limits) for r in raw]
+    clipped = [ca.fmin(ca.fmax(v, -limits_m), limits_m) for v in raw]
     branches = []
-    for cut in (False, True):
-        lags, applied, taken = lag, [ca.if_else(lagged, lag, u[0])], []
+    for cut, step in zip((False, True), steps, strict=True):
+        lags, applied, taken = lag0, [ca.if_else(lagged_m, lag0, clipped[0])], []
         for j in range(substeps):
-            ramps = raw if cut else u
-            stage, (half, end) = lag_stages(lags, ramps[2 * j], ramps[2 * j + 1], ramps[2 * j + 2], h / substeps, tau,
-                                            limits if cut else None)
-            held = [u[2 * j + k] for k in BY_TIME]
-            taken += [ca.if_else(lagged, b, v) for b, v in zip(stage, held, strict=True)]
-            applied += [ca.if_else(lagged, half, u[2 * j + 1]), ca.if_else(lagged, end, u[2 * j + 2])]
-            lags = end
+            nodes = slice(2 * j, 2 * j + 3)
+            four, half, end, lags = step(*raw[nodes], *clipped[nodes], h / substeps, lags, limits_m, tau_m, lagged_m)
+            taken.append(four)
+            applied += [half, end]
         branches.append(ca.Function("actuators_cut" if cut else "actuators", args,
                                     [ca.horzcat(*applied), ca.horzcat(*taken), lags]))
-    kinks = ca.vertcat(*[crosses(raw[2 * j], raw[2 * j + 1], raw[2 * j + 2], limits) for j in range(substeps)])
-    which = ca.Function("crossing", args, [ca.sum1(kinks)])
+    which = ca.Function("crossing", args, [sum(one_kink(*raw[2 * j:2 * j + 3], limits_m) for j in range(substeps))])
     switch = ca.Function.conditional("actuators_switch", [branches[0]], branches[1])
-    mx = [ca.MX.sym(f"a{i}", *a.shape) for i, a in enumerate(args)]
-    return ca.Function("actuators", mx, [*switch(which(*mx) > 0, *mx)])
+    return ca.Function("actuators", args, [*switch(which(*args) > 0, *args)])
 
 
 def _interval(model: Model, substeps: int, actuators: slice, shape: tuple[int, int, int, int],
