@@ -37,6 +37,15 @@ from isolator import Scenario, scenario_from_dict
 settings.register_profile("ci", max_examples=15, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.register_profile("thorough", max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
+
+
+def pytest_xdist_auto_num_workers(config: pytest.Config) -> int:
+    """Workers for ``-n auto`` (pyproject's addopts): one per core this process may use, at most four (each
+    worker compiles and holds its own models)."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    return max(1, min(cores, 4))
+
+
 # no "compiling the model ..." line on stderr: tests count the command's stderr lines (subprocesses inherit it)
 os.environ.setdefault("ISOLATOR_QUIET", "1")
 
