@@ -15,7 +15,7 @@ import itertools
 import numpy as np
 
 from isolator.errors import UnstableTableError
-from isolator.model.equilibrium import RockingStiffness, rocking_stiffness, static_equilibrium
+from isolator.model.equilibrium import RockingStiffness, rocking_stiffness, static_equilibria, static_equilibrium
 from isolator.model.variants import Model
 from isolator.scenario.definitions import Scenario
 
@@ -36,15 +36,19 @@ def travel_configurations(scenario: Scenario) -> np.ndarray:
 
 
 def rocking_over(model: Model, p: np.ndarray, configs: np.ndarray) -> tuple[RockingStiffness, ...]:
-    """The rocking stiffness at rest in each configuration (rows of ``configs``) of the exact ``model``."""
-    rocking = []
-    for q in configs:
-        try:
-            pose = static_equilibrium(model, p, q, check=False).pose
-        except UnstableTableError:  # no equilibrium near upright: judge the upright pose
-            pose = np.zeros(6)
-        rocking.append(rocking_stiffness(model, p, q, pose))
-    return tuple(rocking)
+    """The rocking stiffness at rest in each configuration (rows of ``configs``) of the exact ``model`` (the rests
+    solved side by side, each row's Newton iterations its own; one by one when one of them has none)."""
+    try:
+        poses = [rest.pose for rest in static_equilibria(model, np.asarray(p, dtype=float)[None], configs,
+                                                         check=False)]
+    except UnstableTableError:
+        poses = []
+        for q in configs:
+            try:
+                poses.append(static_equilibrium(model, p, q, check=False).pose)
+            except UnstableTableError:  # no equilibrium near upright: judge the upright pose
+                poses.append(np.zeros(6))
+    return tuple(rocking_stiffness(model, p, q, pose) for q, pose in zip(configs, poses, strict=True))
 
 
 def tipping_verdict(configs: np.ndarray, rocking: tuple[RockingStiffness, ...]) -> tuple[bool, int, str]:
