@@ -1,8 +1,8 @@
-"""Two source trees of the toolkit side by side in one run (issue 36): one 12 s transient (the same table again,
-and a new table each run), a batch of 1,000 runs on one thread, and a 20,000-design ``isolator sweep`` end to end; and (issue 43) ``isolator simulate
---forces`` and ``--controller`` on the geophone table end to end, and the plant FMUs' ``doStep`` loop in FMPy
-(the geophone and the passive table, 7 s at 1 ms); each tree in its own processes with its own compiled-model
-cache, alternating, with wall and CPU times and whether the results are the same.
+"""Two source trees of the toolkit side by side in one run (issue 36): one 12 s transient (the same table again, and a
+new table each run), a batch of 1,000 runs on one thread, and a 20,000-design ``isolator sweep`` end to end; and
+(issue 43) ``isolator simulate --forces`` and ``--controller`` on the geophone table end to end, and the plant
+FMUs' ``doStep`` loop in FMPy (the geophone and the passive table, 7 s at 1 ms); each tree in its own processes
+with its own compiled-model cache, alternating, with wall and CPU times and whether the results are the same.
 
     git worktree add /tmp/old-7d06676 7d06676
     python benchmarks/compare_trees.py /tmp/old-7d06676 .          # --rounds 3 --designs 20000

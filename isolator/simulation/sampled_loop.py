@@ -190,14 +190,14 @@ def _actuators(m: int, substeps: int) -> ca.Function:
     clipped = [ca.fmin(ca.fmax(v, -limits_m), limits_m) for v in raw]
     branches = []
     for cut, step in zip((False, True), steps, strict=True):
-        lags, applied, taken = lag0, [ca.if_else(lagged_m, lag0, clipped[0])], []
+        lags, acting, stage_forces = lag0, [ca.if_else(lagged_m, lag0, clipped[0])], []
         for j in range(substeps):
             nodes = slice(2 * j, 2 * j + 3)
             four, half, end, lags = step(*raw[nodes], *clipped[nodes], h / substeps, lags, limits_m, tau_m, lagged_m)
-            taken.append(four)
-            applied += [half, end]
+            stage_forces.append(four)
+            acting += [half, end]
         branches.append(ca.Function("actuators_cut" if cut else "actuators", args,
-                                    [ca.horzcat(*applied), ca.horzcat(*taken), lags]))
+                                    [ca.horzcat(*acting), ca.horzcat(*stage_forces), lags]))
     which = ca.Function("crossing", args, [sum(one_kink(*raw[2 * j:2 * j + 3], limits_m) for j in range(substeps))])
     switch = ca.Function.conditional("actuators_switch", [branches[0]], branches[1])
     return ca.Function("actuators", args, [*switch(which(*args) > 0, *args)])

@@ -53,7 +53,8 @@ def test_the_kept_decomposition_gives_the_free_motion_computed_afresh(sim):
     last = end.state + 1e-6 * np.linspace(-1.0, 1.0, end.state.size)  # a run ending off its rest
     kept, _ = run_tail(sim.scenario, sim.model, p, start, end, last, 12.0, known.modes)
     fresh, _ = run_tail(sim.scenario, sim.model, p, start, end, last, 12.0)
-    assert kept is not None and fresh is not None
+    assert kept is not None
+    assert fresh is not None
     np.testing.assert_array_equal(kept.rates, fresh.rates)
     np.testing.assert_array_equal(kept.weights, fresh.weights)
     np.testing.assert_array_equal(kept.offset, fresh.offset)
