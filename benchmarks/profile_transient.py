@@ -2,9 +2,11 @@
 paper scenario, warm (compiled, planned), each stage's functions wrapped with a timer as
 ``profile_stages.py`` wraps a batch's: the parameter vector and the tipping check, the two static rests,
 the step plan, the staged inputs, the compiled loop, the end state, the free-motion judgement after the
-run's end, the metrics, the points and windows, the response, and the rest (Python between them).
+run's end, the metrics, the points and windows, the response, and the rest (Python between them). An older
+tree's (one without some of these names) with ``PYTHONPATH=<tree>``.
 
     python benchmarks/profile_transient.py             # --runs 2000 --scenario paper-table-3-2
+    PYTHONPATH=/tmp/old python benchmarks/profile_transient.py
 """
 
 from __future__ import annotations
@@ -20,20 +22,28 @@ from isolator.numerics.dop853 import DenseStepper
 from isolator.simulation.response import Response
 
 
+def _wrap(owner: object, name: str, stage: str, static: bool = False) -> None:
+    """Time ``owner.name`` as ``stage`` (nothing when an older tree has no such name)."""
+    if hasattr(owner, name):
+        timed = _timed(stage, getattr(owner, name))
+        setattr(owner, name, staticmethod(timed) if static else timed)
+
+
 def _instrument() -> None:
-    Simulator.parameter_vector = _timed("parameters and the tipping check", Simulator.parameter_vector)
-    Simulator.check_tipping = _timed("parameters and the tipping check", Simulator.check_tipping)
-    Simulator.equilibria = _timed("equilibria (static rests, both ends)", Simulator.equilibria)
-    Simulator.method_of = _timed("step plan (the method's choice)", Simulator.method_of)
-    Simulator.plan_inputs = _timed("staging (stage inputs)", Simulator.plan_inputs)
-    DenseStepper.run_slots = _timed("stepping (compiled loop, samples and probes)", DenseStepper.run_slots)
-    DenseStepper.signal_values = _timed("final rest's signals", DenseStepper.signal_values)
-    DenseStepper.states_at = staticmethod(_timed("end state (dense output)", DenseStepper.states_at))
-    simmod.run_tail = _timed("free-motion judgement: Jacobians, modes", simmod.run_tail)
-    simmod.run_metrics = _timed("metrics on the dense output and the free motion", simmod.run_metrics)
-    simmod.run_points = _timed("points and windows", simmod.run_points)
-    simmod.with_random_margins = _timed("points and windows", simmod.with_random_margins)
-    simmod.sensor_history = _timed("the response (sensors, columns)", simmod.sensor_history)
+    for name in ("parameter_vector", "check_tipping"):
+        _wrap(Simulator, name, "parameters and the tipping check")
+    _wrap(Simulator, "equilibria", "equilibria (static rests, both ends)")
+    _wrap(Simulator, "method_of" if hasattr(Simulator, "method_of") else "method_for",
+          "step plan (the method's choice)")
+    _wrap(Simulator, "plan_inputs", "staging (stage inputs)")
+    _wrap(DenseStepper, "run_slots", "stepping (compiled loop, samples and probes)")
+    _wrap(DenseStepper, "signal_values", "final rest's signals")
+    _wrap(DenseStepper, "states_at", "end state (dense output)", static=True)
+    _wrap(simmod, "run_tail", "free-motion judgement: Jacobians, modes")
+    _wrap(simmod, "run_metrics", "metrics on the dense output and the free motion")
+    for name in ("run_points", "with_random_margins"):
+        _wrap(simmod, name, "points and windows")
+    _wrap(simmod, "sensor_history", "the response (sensors, columns)")
     simmod.Response = _timed("the response (sensors, columns)", Response)  # type: ignore[assignment]
 
 
