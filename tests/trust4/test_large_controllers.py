@@ -17,7 +17,7 @@ from conftest import run_command
 from isolator import ParameterError, load_scenario
 from isolator.simulation.controller_schema import MAX_STATES, check_controller_data
 from isolator.simulation.discrete_controller import DiscreteController
-from isolator.simulation.sampled_loop import _tick
+from isolator.simulation.sampled_loop import _actuators, _tick
 
 GEOPHONES = "paper-table-3-2-geophones"
 
@@ -88,3 +88,17 @@ def test_a_large_controller_s_tick_does_not_grow_with_it():
     small, large = (_tick((n, 12, 12, 1)) for n in (200, MAX_STATES))
     assert isinstance(small, ca.Function)
     assert large.n_instructions() == small.n_instructions()
+
+
+def _code_size(fn: ca.Function) -> int:
+    generator = ca.CodeGenerator("size.c", {"with_header": False})
+    generator.add(fn)
+    return len(generator.dump())
+
+
+def test_the_actuators_lag_code_grows_by_calls_not_copies_with_the_substeps():
+    """A bending top's 39 RK4 substeps per sample of twelve lagged actuators: each substep calls one small lag
+    function. Written out whole, the lag was 20 MB of C, which the compiler could not hold in 24 GB."""
+    one, many = (_code_size(_actuators(12, substeps)) for substeps in (1, 39))
+    assert many < 1_000_000
+    assert many - one < 38 * 6_000  # a substep adds a few calls (~4 kB), not a copy of the formulas (~500 kB)
