@@ -92,9 +92,10 @@ class KnownRests:
     end: Equilibrium | None
 
     def __post_init__(self) -> None:
+        self.p.flags.writeable = False
         for rest in (self.start, self.end):
             for array in () if rest is None else (rest.pose, rest.state, rest.positions, rest.eigenvalues):
-                array.flags.writeable = False
+                array.flags.writeable = False  # positions may be the simulator's own: read-only there too
 
     @cached_property
     def modes(self) -> RestModes | None:

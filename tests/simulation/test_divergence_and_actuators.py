@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from conftest import base_dict, make
@@ -41,3 +42,26 @@ def test_actuators_are_parsed_and_checked():
     data["actuators"].append(dict(data["actuators"][0]))
     with pytest.raises(ScenarioError, match=r"^actuators\[1\]\.name: 'z-fl' is used twice"):
         make(data)
+
+
+def test_a_non_finite_dense_output_anywhere_is_reported_with_its_step(monkeypatch):
+    """A stage that feeds only the dense output (DOP853's last three), in a row the signals do not read (a
+    velocity): no later step's start and no peak shows it, the run's check of its whole dense output does."""
+    import isolator.simulation.simulator as simulator_module
+    from isolator import Simulator, load_scenario
+
+    real = simulator_module.dense_run
+    spoiled = 287
+
+    def dense_run(*args):
+        plan, (raw, peaks, deviations, polynomials, signals) = real(*args)
+        polynomials = polynomials.copy()
+        polynomials[spoiled, -1, 7:13] = np.nan
+        return plan, (raw, peaks, deviations, polynomials, signals)
+
+    monkeypatch.setattr(simulator_module, "dense_run", dense_run)
+    sim = Simulator(load_scenario("paper-table-3-2"))
+    plan = sim.method_of(*sim.equilibria(sim.parameters)).plan
+    when = f"{plan.start[spoiled]:.4g}"
+    with pytest.raises(SimulationError, match=rf"^the run diverged: non-finite state at t = {when} s"):
+        sim.run()

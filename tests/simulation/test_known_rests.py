@@ -79,3 +79,21 @@ def test_a_table_one_rounding_away_is_another_table(sim):
     q = p.copy()
     q[np.argmax(np.abs(q))] = np.nextafter(q[np.argmax(np.abs(q))], np.inf)
     assert sim.equilibria(q)[0] is not sim.equilibria(p)[0]
+
+
+def test_a_second_run_of_a_table_decomposes_nothing_again(sim, monkeypatch):
+    calls = []
+    real = RestModes.of.__func__
+
+    def counted(cls, *args):
+        calls.append(args)
+        return real(cls, *args)
+
+    monkeypatch.setattr(RestModes, "of", classmethod(counted))
+    p = sim.scaled_parameters(0.95, 1.7)
+    sim.run(p=p)
+    assert len(calls) == 1  # the first run decomposes the final rest
+    sim.run(p=p)
+    assert len(calls) == 1  # the second reuses it
+    sim.run(p=sim.scaled_parameters(0.96, 1.7))
+    assert len(calls) == 2
