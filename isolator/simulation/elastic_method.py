@@ -112,9 +112,8 @@ class QuasiStaticRun:
         self.start = dataclasses.replace(start, state=np.asarray(start.state[:13], dtype=float))
         self._cache, self._key = values, self.p.tobytes() + self.start.state.tobytes()
         if self._key not in rests:
-            while len(rests) >= 16:
-                rests.pop(next(iter(rests)))
             rests[self._key] = rest_blocks(self.model, self.layout.rest_inputs(start.positions), self.p, start.state)
+            keep_newest(rests, None)
         self._rest = rests[self._key]
 
     def step_plan(self, key: int, switches: np.ndarray | None = None) -> StepPlan:

@@ -40,6 +40,7 @@ from isolator.simulation.stepping import (
     check_turn,
     dense_stepper,
     hold_time,
+    keep_newest,
     plan_stage_inputs,
     rk4_stepper,
 )
@@ -140,8 +141,8 @@ class Simulator(MethodChoice):
         known = self._rests.get(key)
         if known is None:
             start, end = self.equilibria_of(p[None, :])
-            known = KnownRests(self.model, p.copy(), start[0], end[0])
-            self._rests = {**dict(list(self._rests.items())[-15:]), key: known}
+            known = self._rests[key] = KnownRests(self.model, p.copy(), start[0], end[0])
+            keep_newest(self._rests, None)
         return known
 
     def equilibria_of(self, params: np.ndarray) -> tuple[list[Equilibrium], list[Equilibrium | None]]:
@@ -165,7 +166,8 @@ class Simulator(MethodChoice):
         if key not in self._tipping:
             configs = travel_configurations(self.scenario)
             stable, _, line = tipping_verdict(configs, rocking_over(get_model(self.layout, "exact"), p, configs))
-            self._tipping = {**dict(list(self._tipping.items())[-63:]), key: "" if stable else line}
+            self._tipping[key] = "" if stable else line
+            keep_newest(self._tipping, None, 64)
         if self._tipping[key]:
             raise UnstableTableError(self._tipping[key])
 

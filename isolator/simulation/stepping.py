@@ -166,10 +166,11 @@ def plan_stage_inputs(scenario: Scenario, model: Model, method: Method, p: np.nd
     return cache[key]
 
 
-def keep_newest(cache: dict[Any, np.ndarray], budget: int, most: int = 16) -> None:
-    """Drop a cache's oldest arrays (insertion order) until at most ``most`` are left and together they take at
-    most ``budget`` bytes; the newest is always kept."""
-    while len(cache) > 1 and (len(cache) > most or sum(a.nbytes for a in cache.values()) > budget):
+def keep_newest(cache: dict[Any, Any], budget: int | None, most: int = 16) -> None:
+    """Drop a cache's oldest entries (insertion order) until at most ``most`` are left and, unless ``budget`` is
+    None, their arrays together take at most ``budget`` bytes; the newest is always kept."""
+    while len(cache) > 1 and (len(cache) > most or (
+            budget is not None and sum(a.nbytes for a in cache.values()) > budget)):
         cache.pop(next(iter(cache)))
 
 
