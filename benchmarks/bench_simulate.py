@@ -34,6 +34,7 @@ import isolator.simulation.simulator as simmod
 import isolator.simulation.stepping as stepping
 from isolator import Simulator, load_scenario
 from isolator.model.signals import table_signals
+from isolator.numerics.step_plan import StepPlan
 from isolator.validation.multibody import MujocoTable, mujoco_available
 from studies.paper import relative_rms
 
@@ -65,12 +66,13 @@ def _rate(
     return float(np.median(rates)), max(rates), out
 
 
-def loop_figures(sim: Simulator, calls: int) -> dict[str, tuple[float, float]]:
-    """Min and median [s] of the compiled loop of ``sim``'s run over ``calls`` calls each: the full plan (its
-    probes and output samples, written as a run writes them), its probes only, and no slots (the stepping)."""
+def loop_figures(sim: Simulator, calls: int) -> tuple[StepPlan, dict[str, tuple[float, float]]]:
+    """The plan of ``sim``'s run, and the min and median [s] of its compiled loop over ``calls`` calls each: the
+    full plan (its probes and output samples, written as a run writes them), its probes only, and no slots (the
+    stepping)."""
     p = sim.parameters
     start, end = sim.equilibria(p)
-    method = sim.method_for(max(start.max_frequency, end.max_frequency))
+    method = sim.method_of(start, end)
     plan, inputs, stepper = method.plan, sim.plan_inputs(method, p), stepping.dense_stepper(sim.model)
     final = stepper.signal_values(end.state, start.state)
     unused = np.full_like(plan.fraction, -1.0)
@@ -84,16 +86,15 @@ def loop_figures(sim: Simulator, calls: int) -> dict[str, tuple[float, float]]:
             stepper.run_slots(start.state, each, inputs, p, start.state, with_states=True, final=final,
                               samples=samples)
             times[name].append(time.perf_counter() - t0)
-    return {name: (min(t), float(np.median(t))) for name, t in times.items()}
+    return plan, {name: (min(t), float(np.median(t))) for name, t in times.items()}
 
 
 def print_loop_figures(sim: Simulator, calls: int) -> None:
     """Print :func:`loop_figures` with the plan's sizes."""
-    start, end = sim.equilibria(sim.parameters)
-    plan = sim.method_for(max(start.max_frequency, end.max_frequency)).plan
+    plan, figures = loop_figures(sim, calls)
     print(f"compiled loop alone ({plan.steps} steps, {plan.per_step} slots per step, {plan.probes} probes, "
           f"{plan.sample_slots.size} samples; min / median of {calls} calls):")
-    for name, (best, median) in loop_figures(sim, calls).items():
+    for name, (best, median) in figures.items():
         print(f"  {name:12s} {best * 1e3:6.3f} ms / {median * 1e3:6.3f} ms")
 
 
